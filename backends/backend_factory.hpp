@@ -1,0 +1,21 @@
+#pragma once
+// The one place that knows the backends exist.
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string_view>
+#include <vector>
+
+#include "core/backend.hpp"
+
+namespace confpack::backends {
+
+/// Names accepted by makeBackend, in a stable order: {"nscd", "bullet"}.
+const std::vector<std::string_view>& backendNames();
+
+/// Builds a backend by name. `options` holds backend-specific settings (documented by each
+/// backend; unknown keys are refused); missing keys take their defaults.
+/// Throws std::invalid_argument for an unknown name or a bad option.
+std::unique_ptr<core::ContactBackend> makeBackend(std::string_view name, const core::SystemDef& system,
+                                                  const nlohmann::json& options = nlohmann::json::object());
+
+}  // namespace confpack::backends

@@ -1,0 +1,81 @@
+#pragma once
+// The contact backend interface (SPEC 5). Deposition, the run pipeline and analysis only see this;
+// `makeBackend("nscd" | "bullet", ...)` in backends/backend_factory.hpp picks the implementation.
+//
+// A backend is built once from a SystemDef (grains at rest, boundaries, gravity), advanced with
+// step(dt), and after every step exposes the poses and velocities, the contact list of that
+// step (forces = impulse / dt, conventions in core/contact.hpp) and a StepProfile.
+#include <array>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string_view>
+#include <vector>
+
+#include "core/box.hpp"
+#include "core/contact.hpp"
+#include "core/grain.hpp"
+
+namespace confpack::core {
+
+/// Everything a backend needs to build its world.
+struct SystemDef {
+  BoxDef box;
+  std::vector<Grain> grains;          ///< initial poses; velocities start at zero
+  Vec3 gravity = Vec3(0.0, 0.0, -1.0);///< [g]
+  double density = 1.0;               ///< grain density rho
+};
+
+struct BodyState {
+  Vec3 position = Vec3::Zero();        ///< centroid, wrapped into the box [d_L]
+  Quat orientation = Quat::Identity();
+  Vec3 velocity = Vec3::Zero();        ///< [sqrt(g d_L)]
+  Vec3 angularVelocity = Vec3::Zero(); ///< world frame [1/t0]
+};
+
+/// Named phases of one step (STYLE "One step = named phases", after Box2D's solver stages).
+/// A backend fills the phases it has and leaves the others at zero.
+enum class Phase : int {
+  UpdatePairs,     ///< broad phase
+  Collide,         ///< narrow phase
+  PrepareContacts, ///< Delassus blocks, frames, constraint rows
+  WarmStart,       ///< apply cached impulses
+  Solve,           ///< Gauss-Seidel / sequential impulses
+  Integrate,       ///< velocities and positions
+  StoreImpulses,   ///< contact cache for the next step, contact list
+  Count
+};
+
+std::string_view toString(Phase p);  ///< "update_pairs", "collide", ... (JSON keys)
+
+struct StepProfile {
+  std::array<double, static_cast<int>(Phase::Count)> seconds{};  ///< wall time of each phase [s]
+  int iterations = 0;        ///< Gauss-Seidel sweeps or solver iterations this step
+  double residual = 0.0;     ///< final convergence measure of the solver (backend-defined, documented)
+  int contactPoints = 0;     ///< active contact points (rows) solved this step
+  double& operator[](Phase p) { return seconds[static_cast<int>(p)]; }
+  double operator[](Phase p) const { return seconds[static_cast<int>(p)]; }
+  double total() const {
+    double s = 0.0;
+    for (double t : seconds) s += t;
+    return s;
+  }
+};
+
+class ContactBackend {
+ public:
+  virtual ~ContactBackend() = default;
+  /// "nscd" or "bullet".
+  virtual std::string_view name() const = 0;
+  /// Advances the system by dt [t0].
+  virtual void step(double dt) = 0;
+  /// Poses and velocities after the last step, one per grain, in the SystemDef's order.
+  virtual const std::vector<BodyState>& states() const = 0;
+  /// Contacts of the last step with their forces.
+  virtual const std::vector<Contact>& contacts() const = 0;
+  /// Timing and solver statistics of the last step.
+  virtual const StepProfile& profile() const = 0;
+  /// The fully resolved solver settings (written into result.json).
+  virtual nlohmann::json settings() const = 0;
+};
+
+}  // namespace confpack::core

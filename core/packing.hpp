@@ -1,0 +1,22 @@
+#pragma once
+// A packing: the box, the grains and, optionally, their contacts with forces (SPEC 8.2).
+// This is the snapshot that analysis reads and that `confpack analyze` loads from a file.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/box.hpp"
+#include "core/contact.hpp"
+#include "core/grain.hpp"
+
+namespace confpack::core {
+
+struct Packing {
+  BoxDef box;
+  std::vector<Grain> grains;
+  /// Contacts with forces, as written by a run; empty optional = file had none (analysis then
+  /// uses geometric contacts).
+  std::optional<std::vector<Contact>> contacts;
+};
+
+}  // namespace confpack::core

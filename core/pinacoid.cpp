@@ -1,0 +1,78 @@
+#include "core/pinacoid.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <stdexcept>
+
+namespace confpack::core {
+
+void PinacoidParams::validate() const {
+  if (!(widthRatio > 0.0) || !(heightRatio > 0.0))
+    throw std::invalid_argument(fmt::format("pinacoid: G and E must be positive (got G={}, E={})", widthRatio, heightRatio));
+  if (!(alphaDeg > 0.0 && alphaDeg < 90.0))
+    throw std::invalid_argument(fmt::format("pinacoid: alpha_deg must be in (0, 90) (got {})", alphaDeg));
+  const double l = pinacoidRidgeHalfLength(1.0, *this);
+  if (!(l > 0.0))
+    throw std::invalid_argument(fmt::format(
+        "pinacoid: with E={} and alpha={} deg the ridge half-length l = L/2 - (E/2)/tan(alpha) is {} <= 0",
+        heightRatio, alphaDeg, l));
+}
+
+void to_json(nlohmann::json& j, const PinacoidParams& p) {
+  j = {{"G", p.widthRatio}, {"E", p.heightRatio}, {"alpha_deg", p.alphaDeg}};
+}
+
+void from_json(const nlohmann::json& j, PinacoidParams& p) {
+  PinacoidParams d;
+  p.widthRatio = j.value("G", d.widthRatio);
+  p.heightRatio = j.value("E", d.heightRatio);
+  p.alphaDeg = j.value("alpha_deg", d.alphaDeg);
+}
+
+double pinacoidRidgeHalfLength(double length, const PinacoidParams& p) {
+  const double e = p.heightRatio * length;
+  return 0.5 * length - 0.5 * e / std::tan(p.alphaDeg * std::numbers::pi / 180.0);
+}
+
+ConvexPolyhedron makePinacoid(double length, const PinacoidParams& p) {
+  p.validate();
+  const double a = 0.5 * length;
+  const double g = 0.5 * p.widthRatio * length;
+  const double e = 0.5 * p.heightRatio * length;
+  const double l = pinacoidRidgeHalfLength(length, p);
+  // 0..3: mid-plane rectangle, 4..7: ridge ends (top ridge 4,5; bottom ridge 6,7).
+  std::vector<Vec3> v = {{a, g, 0},  {-a, g, 0}, {-a, -g, 0}, {a, -g, 0},
+                         {l, 0, e},  {-l, 0, e}, {l, 0, -e},  {-l, 0, -e}};
+  std::vector<std::vector<int>> f = {
+      {0, 1, 5, 4},  // top trapezoid, y > 0
+      {2, 3, 4, 5},  // top trapezoid, y < 0
+      {1, 0, 6, 7},  // bottom trapezoid, y > 0
+      {3, 2, 7, 6},  // bottom trapezoid, y < 0
+      {3, 0, 4},     // top triangle, x > 0
+      {1, 2, 5},     // top triangle, x < 0
+      {0, 3, 6},     // bottom triangle, x > 0
+      {2, 1, 7},     // bottom triangle, x < 0
+  };
+  return ConvexPolyhedron(std::move(v), std::move(f));
+}
+
+MassProperties pinacoidMassProperties(double length, const PinacoidParams& p) {
+  // SPEC 2.2 with A = L/2, B = L/2 - l, g = G/2.
+  const double L = length;
+  const double G = p.widthRatio * L;
+  const double E = p.heightRatio * L;
+  const double l = pinacoidRidgeHalfLength(L, p);
+  const double A = 0.5 * L, B = 0.5 * L - l, g = 0.5 * G;
+  MassProperties mp;
+  mp.volume = E * G * (L + l) / 3.0;
+  const double xx = 4.0 / 3.0 * E * g * (A * A * A / 2 - A * A * B / 2 + A * B * B / 4 - B * B * B / 20);
+  const double yy = 4.0 / 3.0 * E * g * g * g * (A / 4 - B / 20);
+  const double zz = E * E * E * g * (A / 12 - B / 20);
+  mp.secondMoment = Vec3(xx, yy, zz).asDiagonal();
+  return mp;
+}
+
+}  // namespace confpack::core

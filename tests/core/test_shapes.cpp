@@ -1,0 +1,110 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <set>
+
+#include "core/grain.hpp"
+#include "core/pinacoid.hpp"
+
+using namespace confpack::core;
+
+TEST_CASE("pinacoid has 8 vertices, 14 edges, 4 triangles and 4 trapezoids") {
+  const ConvexPolyhedron p = makePinacoid(1.0, PinacoidParams{});
+  CHECK(p.vertices().size() == 8);
+  CHECK(p.edges().size() == 14);
+  CHECK(p.faces().size() == 8);
+  int triangles = 0, quads = 0;
+  for (const auto& f : p.faces()) (f.size() == 3 ? triangles : quads)++;
+  CHECK(triangles == 4);
+  CHECK(quads == 4);
+  // Euler characteristic of a convex polyhedron.
+  CHECK(p.vertices().size() - p.edges().size() + p.faces().size() == 2);
+}
+
+TEST_CASE("pinacoid ridge half-length follows l = L/2 - (E/2)/tan(alpha)") {
+  CHECK(pinacoidRidgeHalfLength(1.0, PinacoidParams{}) == Approx(0.5 - 0.5 / std::sqrt(3.0)).epsilon(1e-14));
+  CHECK(pinacoidRidgeHalfLength(1.0, PinacoidParams{}) == Approx(0.2113).margin(5e-5));
+}
+
+TEST_CASE("pinacoid has three mirror planes") {
+  PinacoidParams params{0.8, 0.7, 55.0};
+  const ConvexPolyhedron p = makePinacoid(1.3, params);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const Vec3& v : p.vertices()) {
+      Vec3 m = v;
+      m[axis] = -m[axis];
+      double best = 1e9;
+      for (const Vec3& w : p.vertices()) best = std::min(best, (w - m).norm());
+      CHECK(best < 1e-14);
+    }
+  }
+}
+
+TEST_CASE("pinacoid triangles and trapezoids are isosceles") {
+  const ConvexPolyhedron p = makePinacoid(1.0, PinacoidParams{0.9, 0.8, 62.0});
+  const auto& v = p.vertices();
+  for (const auto& f : p.faces()) {
+    if (f.size() == 3) {
+      // Two of the three sides are equal.
+      const double a = (v[f[0]] - v[f[1]]).norm(), b = (v[f[1]] - v[f[2]]).norm(), c = (v[f[2]] - v[f[0]]).norm();
+      CHECK((std::abs(a - b) < 1e-12 || std::abs(b - c) < 1e-12 || std::abs(c - a) < 1e-12));
+    } else {
+      // Legs (sides 1 and 3 of the loop) of equal length, bases parallel.
+      const double leg1 = (v[f[1]] - v[f[2]]).norm(), leg2 = (v[f[3]] - v[f[0]]).norm();
+      CHECK(leg1 == Approx(leg2).epsilon(1e-12));
+      const Vec3 b1 = (v[f[1]] - v[f[0]]).normalized(), b2 = (v[f[2]] - v[f[3]]).normalized();
+      CHECK(std::abs(b1.dot(b2)) == Approx(1.0).epsilon(1e-12));
+    }
+  }
+}
+
+TEST_CASE("pinacoid mass properties: closed forms equal the divergence theorem") {
+  for (const PinacoidParams& params : {PinacoidParams{}, PinacoidParams{0.7, 0.5, 45.0}, PinacoidParams{1.2, 0.9, 70.0}}) {
+    for (double L : {1.0, 0.5, 1.37}) {
+      const MassProperties closed = pinacoidMassProperties(L, params);
+      const MassProperties numeric = makePinacoid(L, params).massProperties();
+      CHECK(numeric.volume == Approx(closed.volume).epsilon(1e-12));
+      CHECK(numeric.centroid.norm() < 1e-13 * L);
+      CHECK((numeric.secondMoment - closed.secondMoment).norm() < 1e-12 * closed.secondMoment.norm());
+      // V = E G (L + l) / 3.
+      const double l = pinacoidRidgeHalfLength(L, params);
+      CHECK(closed.volume == Approx(params.heightRatio * L * params.widthRatio * L * (L + l) / 3.0).epsilon(1e-14));
+    }
+  }
+}
+
+TEST_CASE("divergence-theorem mass properties of a unit cube") {
+  std::vector<Vec3> v;
+  for (int i = 0; i < 8; ++i) v.emplace_back(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5);
+  // Faces CCW from outside.
+  std::vector<std::vector<int>> f = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const MassProperties mp = ConvexPolyhedron(v, f).massProperties();
+  CHECK(mp.volume == Approx(1.0));
+  CHECK((mp.inertia() - Mat3::Identity() / 6.0).norm() < 1e-14);
+}
+
+TEST_CASE("a badly oriented face is refused") {
+  std::vector<Vec3> v = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  std::vector<std::vector<int>> good = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  CHECK_NOTHROW(ConvexPolyhedron(v, good));
+  auto bad = good;
+  std::swap(bad[0][1], bad[0][2]);
+  CHECK_THROWS_AS(ConvexPolyhedron(v, bad), std::invalid_argument);
+}
+
+TEST_CASE("sphere grain volume and inertia") {
+  Grain g;
+  g.size = 2.0;
+  CHECK(g.volume() == Approx(4.0 / 3.0 * M_PI));
+  CHECK(g.bodyInertia()(0, 0) == Approx(0.4 * g.volume() * 1.0));
+  CHECK(g.boundingRadius() == 1.0);
+}
+
+TEST_CASE("pinacoid bounding radius is the farthest vertex") {
+  Grain g;
+  g.shape = ShapeKind::Pinacoid;
+  g.size = 1.1;
+  double r = 0;
+  const ConvexPolyhedron poly = g.polyhedron();
+  for (const Vec3& v : poly.vertices()) r = std::max(r, v.norm());
+  CHECK(g.boundingRadius() == Approx(r).epsilon(1e-14));
+}
