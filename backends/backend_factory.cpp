@@ -5,6 +5,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "backends/bullet/bullet_backend.hpp"
+#include "backends/nscd/nscd_backend.hpp"
+
 namespace confpack::backends {
 
 const std::vector<std::string_view>& backendNames() {
@@ -14,10 +17,9 @@ const std::vector<std::string_view>& backendNames() {
 
 std::unique_ptr<core::ContactBackend> makeBackend(std::string_view name, const core::SystemDef& system,
                                                   const nlohmann::json& options) {
-  (void)system;
-  (void)options;
-  // Filled in by the backend issues: nscd::makeNscdBackend, bullet::makeBulletBackend.
-  throw std::invalid_argument(fmt::format("backend '{}' is not available yet in this build", name));
+  if (name == "nscd") return nscd::makeNscdBackend(system, options);
+  if (name == "bullet") return bullet::makeBulletBackend(system, options);
+  throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
 }
 
 }  // namespace confpack::backends

@@ -1,0 +1,45 @@
+#pragma once
+// Geometric deposition (SPEC 4.1-4.2). Placeholder spheres, each circumscribing the largest
+// possible grain, are dropped one at a time at a random (x, y); each falls to the free surface of
+// the pile below and is moved to rest on three supports that locally minimise its altitude
+// (placeholders with their periodic images, the floor, the side walls), overlapping nothing.
+// The real grains, in random order, then replace the placeholders (centre on centre).
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json_fwd.hpp>
+#include <vector>
+
+#include "core/box.hpp"
+#include "core/population.hpp"
+
+namespace confpack::core {
+
+struct DepositionDef {
+  /// Solid fraction expected after compaction [-]. With the target height h it sets the grain
+  /// volume to draw: V = phi_expected * L_x * W * h.
+  double expectedSolidFraction = 0.60;
+  /// Number of grains to deposit; 0 = derive it from the box height and expectedSolidFraction.
+  std::size_t grainCount = 0;
+};
+
+void to_json(nlohmann::json& j, const DepositionDef& d);
+void from_json(const nlohmann::json& j, DepositionDef& d);
+
+struct Deposit {
+  std::vector<Grain> grains;       ///< real grains, centred on the placeholders (substitution done)
+  std::vector<Vec3> placeholders;  ///< placeholder centres, same order as grains
+  double placeholderDiameter = 0.0;///< [d_L]
+  double pileHeight = 0.0;         ///< top of the highest placeholder [d_L]
+  double placeholderSolidFraction = 0.0; ///< placeholder volume / (L_x W pileHeight)
+  double solidFraction = 0.0;      ///< real grain volume / (L_x W pileHeight)
+  double seconds = 0.0;            ///< wall time of the deposition [s]
+};
+
+/// Called now and then with (placeholders placed, total).
+using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
+
+/// Deposits a pile for this box and population. Reproducible from `seed` bit for bit.
+Deposit deposit(const BoxDef& box, const PopulationDef& population, const DepositionDef& def,
+                std::uint64_t seed, const ProgressFn& progress = {});
+
+}  // namespace confpack::core
