@@ -1,0 +1,50 @@
+#pragma once
+// One run of the protocol of SPEC section 4: deposit, compact with a backend until equilibrium
+// (SPEC 6.1) or the time limit, analyse, write. The CLI's `run`, the sweeps and the benchmark all
+// call this; none of them knows which backend runs.
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/backend.hpp"
+#include "core/deposition.hpp"
+#include "core/packing.hpp"
+#include "core/run_config.hpp"
+
+namespace confpack::app {
+
+/// Progress of a long run: fraction done in [0, 1] (of the time limit) and a short status line.
+using RunProgressFn = std::function<void(double fraction, const std::string& status)>;
+
+/// SPEC 4 time step: a grain should not move more than d_L/100 per step with
+/// v_max = sqrt(2 g dh), dh the expected drop of the free surface:
+///   dt = (1/100) sqrt(d_L / (2 dh)) sqrt(d_L / g).
+/// dh = pile height - (grain volume / (L_x W phi_expected)), floored at one grain size.
+double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit);
+
+struct CompactionOutcome {
+  core::Packing packing;                  ///< final poses with the last step's contacts and forces
+  std::vector<core::BodyState> states;    ///< final velocities
+  nlohmann::json equilibrium;             ///< SPEC 8.3 equilibrium block
+  nlohmann::json timing;                  ///< wall_s, steps, iterations, phases, ...
+  nlohmann::json backendSettings;         ///< resolved backend settings
+  double dt = 0.0;
+  bool reached = false;
+};
+
+/// Compacts a deposit with cfg.backend. Writes ParaView frames into `vtkDir` when it is not empty.
+CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit,
+                          const std::filesystem::path& vtkDir = {}, const RunProgressFn& progress = {});
+
+/// The result.json of a run (SPEC 8.3): analysis of the final packing + equilibrium, timing,
+/// backend, seed and the resolved configuration.
+nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out);
+
+/// Deposit + compact + analyse, writing into `outDir` (created by the caller's policy):
+/// result.json, packing.json (with contacts), config.json, profiles (*.csv), vtk/.
+/// Files are written atomically; result.json last, so its presence means the run finished.
+nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
+                           const RunProgressFn& progress = {});
+
+}  // namespace confpack::app
