@@ -41,10 +41,11 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
 /// backend, seed and the resolved configuration.
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out);
 
-/// Deposit + compact + analyse, writing into `outDir` (created by the caller's policy):
-/// result.json, packing.json (with contacts), config.json, profiles (*.csv), vtk/.
-/// Files are written atomically; result.json last, so its presence means the run finished.
+/// Deposit (unless `shared` is given: sweeps compact one deposit with both backends) + compact +
+/// analyse, writing into `outDir` (which must exist): result.json, packing.json (final, with
+/// contacts), profiles (*.csv), vtk/. Files are written atomically; result.json last, so its
+/// presence means the run finished.
 nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
-                           const RunProgressFn& progress = {});
+                           const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr);
 
 }  // namespace confpack::app
