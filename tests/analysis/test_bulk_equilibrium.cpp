@@ -1,0 +1,201 @@
+// Free surface, bulk region and the equilibrium test of SPEC 6.1 against exact static forces.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+#include "analysis/bulk_region.hpp"
+#include "analysis/equilibrium.hpp"
+#include "analysis/sphere_geometry.hpp"
+#include "lattices.hpp"
+
+using namespace confpack;
+using analysis::testing::column;
+using analysis::testing::simpleCubic;
+
+TEST_CASE("sphere slab volume is the spherical segment", "[analysis][sphere]") {
+  const double r = 0.7;
+  // Cap of height h: pi h^2 (3r - h)/3.
+  const double h = 0.3;
+  CHECK(analysis::sphereSlabVolume(r, 2.0, 2.0 + r - h, 10.0) ==
+        Approx(std::numbers::pi * h * h * (3 * r - h) / 3.0).epsilon(1e-13));
+  CHECK(analysis::sphereSlabVolume(r, 0.0, -1.0, 1.0) == Approx(4.0 / 3.0 * std::numbers::pi * r * r * r));
+  CHECK(analysis::sphereSlabVolume(r, 0.0, -1.0, 0.0) == Approx(2.0 / 3.0 * std::numbers::pi * r * r * r));
+  CHECK(analysis::sphereSlabVolume(r, 0.0, 0.8, 1.0) == 0.0);
+  // Thin slices reproduce the disc area pi (r^2 - z^2).
+  const double dz = 1e-4;
+  for (double z : {-0.6, -0.2, 0.0, 0.35, 0.69}) {
+    const double v = analysis::sphereSlabVolume(r, 0.0, z - dz / 2, z + dz / 2) / dz;
+    CHECK(v == Approx(std::numbers::pi * (r * r - z * z)).epsilon(1e-6));
+  }
+  // A partition of the axis sums to the sphere.
+  double sum = 0.0;
+  for (double lo = -1.0; lo < 1.0; lo += 0.13) sum += analysis::sphereSlabVolume(r, 0.05, lo, lo + 0.13);
+  CHECK(sum == Approx(analysis::sphereVolume(r)).epsilon(1e-13));
+}
+
+TEST_CASE("sphere lens volume", "[analysis][sphere]") {
+  // Equal spheres: two caps of height h = r - d/2: 2 pi h^2 (3r - h)/3.
+  const double r = 0.5, d = 0.8, h = r - d / 2;
+  CHECK(analysis::sphereLensVolume(r, r, d) == Approx(2 * std::numbers::pi * h * h * (3 * r - h) / 3).epsilon(1e-13));
+  CHECK(analysis::sphereLensVolume(r, r, 1.0) == 0.0);
+  CHECK(analysis::sphereLensVolume(0.5, 0.2, 0.1) == Approx(analysis::sphereVolume(0.2)));
+  // Unequal radii: caps from the radical plane at x = (d^2 + r1^2 - r2^2) / (2d) from centre 1.
+  const double r1 = 0.5, r2 = 0.3, dd = 0.6;
+  const double x = (dd * dd + r1 * r1 - r2 * r2) / (2 * dd);
+  const double h1 = r1 - x, h2 = r2 - (dd - x);
+  const double expected = std::numbers::pi * h1 * h1 * (3 * r1 - h1) / 3 + std::numbers::pi * h2 * h2 * (3 * r2 - h2) / 3;
+  CHECK(analysis::sphereLensVolume(r1, r2, dd) == Approx(expected).epsilon(1e-13));
+}
+
+TEST_CASE("free surface and bulk region of a flat lattice", "[analysis][bulk]") {
+  const core::Packing p = simpleCubic(6, 4, 10);
+  const analysis::BulkRegion r = analysis::bulkRegion(p);
+  CHECK(r.freeSurface == Approx(10.0));
+  CHECK(r.zLow == 3.0);
+  CHECK(r.zHigh == Approx(7.0));
+  CHECK(r.contains(5.5));
+  CHECK_FALSE(r.contains(2.5));
+  CHECK_FALSE(r.contains(7.5));
+  CHECK(r.volume(p.box) == Approx(6 * 4 * 4.0));
+
+  // One loose grain on top moves the mean by (1 / number of cells) of its height only.
+  core::Packing q = p;
+  core::Grain extra = q.grains.front();
+  extra.position = core::Vec3(0.5, 0.5, 10.5);
+  q.grains.push_back(extra);
+  analysis::BulkRegionDef def;
+  def.cellSize = 2.0;  // 3 x 2 cells
+  CHECK(analysis::freeSurfaceHeight(q, def.cellSize) == Approx(10.0 + 1.0 / 6.0));
+
+  def.cellSize = -1.0;
+  CHECK_THROWS_AS(analysis::bulkRegion(p, def), std::invalid_argument);
+}
+
+namespace {
+// A column of n beads on the floor with the exact static forces: the k-th contact from the top
+// carries k m g (SPEC 5.1 rigid chain).
+core::Packing loadedColumn(int n, double d = 1.0) {
+  core::Packing p;
+  p.box.lengthX = 5.0;
+  p.box.width = 5.0;
+  p.grains = column(n, 2.5, 2.5, d);
+  const double mg = p.grains[0].volume();
+  std::vector<core::Contact> contacts;
+  core::Contact floor;
+  floor.a = 0;
+  floor.b = static_cast<int>(core::WallId::Floor);
+  floor.normal = -core::Vec3::UnitZ();
+  floor.points.push_back({core::Vec3(2.5, 2.5, 0.0), n * mg});
+  contacts.push_back(floor);
+  for (int k = 0; k + 1 < n; ++k) {
+    core::Contact c;
+    c.a = k;
+    c.b = k + 1;
+    c.normal = core::Vec3::UnitZ();
+    c.points.push_back({core::Vec3(2.5, 2.5, (k + 1) * d), (n - k - 1) * mg});
+    contacts.push_back(c);
+  }
+  p.contacts = contacts;
+  return p;
+}
+}  // namespace
+
+TEST_CASE("equilibrium of a column with exact forces", "[analysis][equilibrium]") {
+  const core::Vec3 g(0, 0, -1);
+  core::Packing p = loadedColumn(8);
+  const auto rep = analysis::equilibrium(p, {}, g, 1.0);
+  CHECK(rep.reached);
+  CHECK(rep.maxForceRatio < 1e-12);
+  CHECK(rep.maxMomentRatio < 1e-12);
+  CHECK(rep.maxKineticRatio == 0.0);
+  // Bulk slab 3 < z < 5 holds beads 3 and 4. Bead i carries, in zz, r ((n-i) + (n-i-1)) m g
+  // from its two contacts: 9 + 7 = 16 r m g over V = L_x W 2.
+  CHECK(rep.pressureFromBulk);
+  const double mg = std::numbers::pi / 6;
+  CHECK(rep.pressure == Approx(0.5 * 16 * mg / (3 * 25.0 * 2.0)));
+  // A column too low for a bulk: all beads, sum over i of r (2n - 2i - 1) m g = r n^2 m g,
+  // over V = L_x W h_free.
+  const auto low = analysis::equilibrium(loadedColumn(4), {}, g, 1.0);
+  CHECK(low.reached);
+  CHECK_FALSE(low.pressureFromBulk);
+  CHECK(low.pressure == Approx(0.5 * 16 * mg / (3 * 25.0 * 4.0)));
+
+  SECTION("a wrong force breaks it") {
+    (*p.contacts)[3].points[0].normalForce *= 1.01;
+    const auto bad = analysis::equilibrium(p, {}, g, 1.0);
+    CHECK_FALSE(bad.reached);
+    CHECK(bad.maxForceRatio > 1e-2);
+    CHECK((bad.worstGrain == 2 || bad.worstGrain == 3));
+  }
+  SECTION("an off-centre point gives a moment") {
+    (*p.contacts)[2].points[0].position.x() += 0.1;
+    const auto bad = analysis::equilibrium(p, {}, g, 1.0);
+    CHECK_FALSE(bad.reached);
+    CHECK(bad.maxForceRatio < 1e-12);
+    CHECK(bad.maxMomentRatio > 1e-2);
+  }
+  SECTION("a moving grain breaks it") {
+    std::vector<core::BodyState> states(p.grains.size());
+    states[4].velocity = core::Vec3(0, 1e-2, 0);
+    const auto bad = analysis::equilibrium(p, states, g, 1.0);
+    CHECK_FALSE(bad.reached);
+    // E_k = m v^2 / 2 over d^3 P.
+    CHECK(bad.maxKineticRatio == Approx(0.5 * mg * 1e-4 / rep.pressure));
+    states[4].velocity.setZero();
+    states[4].angularVelocity = core::Vec3(0.3, 0, 0);
+    const auto spin = analysis::equilibrium(p, states, g, 1.0);
+    // I = m d^2 / 10 for a sphere.
+    CHECK(spin.maxKineticRatio == Approx(0.5 * 0.1 * mg * 0.09 / rep.pressure));
+    std::vector<core::BodyState> wrongSize(3);
+    CHECK_THROWS_AS(analysis::equilibrium(p, wrongSize, g, 1.0), std::invalid_argument);
+  }
+}
+
+TEST_CASE("a single sphere resting on the floor is at equilibrium", "[analysis][equilibrium]") {
+  core::Packing p;
+  p.box.lengthX = 3;
+  p.box.width = 3;
+  p.grains = column(1, 1.0, 1.0, 1.2);
+  core::Contact c;
+  c.a = 0;
+  c.b = static_cast<int>(core::WallId::Floor);
+  c.normal = -core::Vec3::UnitZ();
+  c.points.push_back({core::Vec3(1.0, 1.0, 0.0), p.grains[0].volume()});
+  p.contacts = std::vector<core::Contact>{c};
+  CHECK(analysis::equilibrium(p, {}, core::Vec3(0, 0, -1), 1.0).reached);
+  // A rattler (no contact) in the same box fails: gravity is unbalanced.
+  core::Grain loose = p.grains[0];
+  loose.position = core::Vec3(2.5, 2.5, 0.9);
+  p.grains.push_back(loose);
+  const auto rep = analysis::equilibrium(p, {}, core::Vec3(0, 0, -1), 1.0);
+  CHECK_FALSE(rep.reached);
+  CHECK(rep.worstGrain == 1);
+  // No contact list at all is refused.
+  p.contacts.reset();
+  CHECK_THROWS_AS(analysis::equilibrium(p, {}, core::Vec3(0, 0, -1), 1.0), std::invalid_argument);
+}
+
+TEST_CASE("contact stress of a periodic pair uses the minimum image", "[analysis][equilibrium]") {
+  // Two spheres touching across the x boundary, squeezed by a force f: sigma_xx = f d / V.
+  core::Packing p;
+  p.box.lengthX = 4;
+  p.box.width = 2;
+  p.box.periodicY = true;
+  p.grains = column(1, 3.75, 1.0, 0.5);
+  p.grains.push_back(p.grains[0]);
+  p.grains[0].position.z() = 5.0;
+  p.grains[1].position = core::Vec3(0.25, 1.0, 5.0);
+  core::Contact c;
+  c.a = 0;
+  c.b = 1;
+  c.normal = core::Vec3::UnitX();
+  c.points.push_back({core::Vec3(4.0, 1.0, 5.0), 2.0});
+  p.contacts = std::vector<core::Contact>{c};
+  analysis::BulkRegion region{10.0, 3.0, 7.0};
+  bool bulk = false;
+  const core::Mat3 s = analysis::contactStress(p, region, &bulk);
+  CHECK(bulk);
+  CHECK(s(0, 0) == Approx(2.0 * 0.5 / (4 * 2 * 4.0)));
+  CHECK(std::abs(s(1, 1)) < 1e-15);
+  CHECK(std::abs(s(0, 2)) < 1e-15);
+}
