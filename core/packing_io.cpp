@@ -1,0 +1,469 @@
+#include "core/packing_io.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+namespace confpack::core {
+
+namespace {
+
+using nlohmann::json;
+
+// Orientations and normals are stored as given when they are unit to this tolerance, so that
+// written files read back bit for bit; anything else is normalised (a hand-written file with
+// "[0.577, 0.577, 0.577]" is fine). Below kMinNorm a direction carries no information.
+constexpr double kUnitTolerance = 1e-12;
+constexpr double kMinNorm = 1e-6;
+// point_forces must add up to normal_force; both are written from the same sum, so only a file
+// edited by hand (or a foreign writer with its own rounding) can differ by more than this.
+constexpr double kForceSumTolerance = 1e-9;
+
+[[noreturn]] void fail(std::string_view source, std::string_view where, std::string_view what) {
+  throw std::invalid_argument(fmt::format("{}: {}: {}", source, where, what));
+}
+
+std::string typeName(const json& j) { return j.type_name(); }
+
+/// A field reader for one JSON object, carrying the "grains[3]" path for messages.
+class ObjectReader {
+ public:
+  ObjectReader(const json& j, std::string_view source, std::string where)
+      : j_(j), source_(source), where_(std::move(where)) {
+    if (!j_.is_object())
+      fail(source_, where_.empty() ? "document" : where_, fmt::format("must be an object (got {})", typeName(j_)));
+  }
+
+  /// Refuses keys outside `allowed`: a typo ("orientaion") must not silently drop data.
+  void onlyKeys(std::initializer_list<std::string_view> allowed) const {
+    for (const auto& [key, value] : j_.items()) {
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+        std::string list;
+        for (auto a : allowed) list += fmt::format("{}{}", list.empty() ? "" : ", ", a);
+        fail(source_, field(key), fmt::format("unknown key (allowed: {})", list));
+      }
+    }
+  }
+
+  bool has(std::string_view key) const { return j_.contains(key); }
+  std::string field(std::string_view key) const {
+    return where_.empty() ? std::string(key) : fmt::format("{}.{}", where_, key);
+  }
+  const json& at(std::string_view key) const {
+    if (!j_.contains(key)) fail(source_, field(key), "missing");
+    return j_.at(std::string(key));
+  }
+
+  double number(std::string_view key) const { return toNumber(at(key), field(key)); }
+  bool boolean(std::string_view key) const {
+    const json& v = at(key);
+    if (!v.is_boolean()) fail(source_, field(key), fmt::format("must be true or false (got {})", v.dump()));
+    return v.get<bool>();
+  }
+  int integer(std::string_view key) const {
+    const json& v = at(key);
+    if (!v.is_number_integer())
+      fail(source_, field(key), fmt::format("must be an integer (got {})", v.dump()));
+    const auto i = v.get<std::int64_t>();
+    if (i < -1000000000 || i > 1000000000) fail(source_, field(key), fmt::format("out of range (got {})", i));
+    return static_cast<int>(i);
+  }
+  std::string string(std::string_view key) const {
+    const json& v = at(key);
+    if (!v.is_string()) fail(source_, field(key), fmt::format("must be a string (got {})", v.dump()));
+    return v.get<std::string>();
+  }
+  Vec3 vec3(std::string_view key) const { return toVec3(at(key), field(key)); }
+  const json& array(std::string_view key) const {
+    const json& v = at(key);
+    if (!v.is_array()) fail(source_, field(key), fmt::format("must be an array (got {})", typeName(v)));
+    return v;
+  }
+
+  double toNumber(const json& v, const std::string& where) const {
+    // NaN and infinities have no JSON spelling; nlohmann writes them as null, so a null here
+    // usually means a non-finite value was written.
+    if (!v.is_number())
+      fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
+    return x;
+  }
+  Vec3 toVec3(const json& v, const std::string& where) const {
+    if (!v.is_array() || v.size() != 3)
+      fail(source_, where, fmt::format("must be an array of 3 numbers (got {})", v.dump()));
+    return Vec3(toNumber(v[0], where + "[0]"), toNumber(v[1], where + "[1]"), toNumber(v[2], where + "[2]"));
+  }
+
+  std::string_view source() const { return source_; }
+
+ private:
+  const json& j_;
+  std::string_view source_;
+  std::string where_;
+};
+
+json toJsonVec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+Vec3 unitOrFail(Vec3 v, std::string_view source, const std::string& where) {
+  const double n = v.norm();
+  if (!(n > kMinNorm)) fail(source, where, fmt::format("cannot be normalised (norm {})", n));
+  if (std::abs(n - 1.0) > kUnitTolerance) v /= n;
+  return v;
+}
+
+Grain readGrain(const json& j, std::string_view source, std::size_t index) {
+  ObjectReader r(j, source, fmt::format("grains[{}]", index));
+  r.onlyKeys({"shape", "size", "params", "position", "orientation"});
+  Grain g;
+  const std::string shape = r.string("shape");
+  if (shape == "sphere") {
+    g.shape = ShapeKind::Sphere;
+    if (r.has("params")) fail(source, r.field("params"), "only pinacoids have params");
+  } else if (shape == "pinacoid") {
+    g.shape = ShapeKind::Pinacoid;
+    ObjectReader p(r.at("params"), source, r.field("params"));
+    p.onlyKeys({"G", "E", "alpha_deg"});
+    g.params.widthRatio = p.number("G");
+    g.params.heightRatio = p.number("E");
+    g.params.alphaDeg = p.number("alpha_deg");
+  } else {
+    fail(source, r.field("shape"), fmt::format("unknown shape '{}' (expected sphere or pinacoid)", shape));
+  }
+  g.size = r.number("size");
+  g.position = r.vec3("position");
+  const json& q = r.at("orientation");
+  if (!q.is_array() || q.size() != 4)
+    fail(source, r.field("orientation"), fmt::format("must be [w, x, y, z] (got {})", q.dump()));
+  const std::string qw = r.field("orientation");
+  Eigen::Vector4d c(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"), r.toNumber(q[2], qw + "[2]"),
+                    r.toNumber(q[3], qw + "[3]"));
+  const double n = c.norm();
+  if (!(n > kMinNorm)) fail(source, qw, fmt::format("cannot be normalised (norm {})", n));
+  if (std::abs(n - 1.0) > kUnitTolerance) c /= n;
+  g.orientation = Quat(c[0], c[1], c[2], c[3]);
+  return g;
+}
+
+std::vector<double> readNumbers(const ObjectReader& r, std::string_view key, std::size_t count) {
+  const json& a = r.array(key);
+  if (a.size() != count)
+    fail(r.source(), r.field(key), fmt::format("must have one entry per point ({}; got {})", count, a.size()));
+  std::vector<double> out;
+  for (std::size_t i = 0; i < a.size(); ++i) out.push_back(r.toNumber(a[i], fmt::format("{}[{}]", r.field(key), i)));
+  return out;
+}
+
+Contact readContact(const json& j, std::string_view source, std::size_t index) {
+  ObjectReader r(j, source, fmt::format("contacts[{}]", index));
+  r.onlyKeys({"a", "b", "type", "points", "normal", "normal_force", "point_forces", "point_gaps", "tangent_force",
+              "point_tangent_forces"});
+  Contact c;
+  c.a = r.integer("a");
+  c.b = r.integer("b");
+  const std::string type = r.string("type");
+  if (type == "simple") c.type = ContactType::Simple;
+  else if (type == "double") c.type = ContactType::Double;
+  else if (type == "triple") c.type = ContactType::Triple;
+  else fail(source, r.field("type"), fmt::format("unknown contact type '{}' (expected simple, double or triple)", type));
+  c.normal = unitOrFail(r.vec3("normal"), source, r.field("normal"));
+
+  const json& pts = r.array("points");
+  if (pts.empty()) fail(source, r.field("points"), "must hold at least one point");
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ContactPoint p;
+    p.position = r.toVec3(pts[i], fmt::format("{}[{}]", r.field("points"), i));
+    c.points.push_back(p);
+  }
+  const std::size_t n = c.points.size();
+
+  // Normal forces: per point when given (they must add up to normal_force), else the total is
+  // shared equally between the points (the best guess when a writer only knows the sum).
+  if (r.has("point_forces")) {
+    const auto f = readNumbers(r, "point_forces", n);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      c.points[i].normalForce = f[i];
+      sum += f[i];
+    }
+    if (r.has("normal_force")) {
+      const double total = r.number("normal_force");
+      if (std::abs(total - sum) > kForceSumTolerance * std::max(1.0, std::abs(total)))
+        fail(source, r.field("normal_force"),
+             fmt::format("must equal the sum of point_forces ({}; got {})", sum, total));
+    }
+  } else {
+    const double total = r.number("normal_force");
+    for (auto& p : c.points) p.normalForce = total / static_cast<double>(n);
+  }
+  if (r.has("point_gaps")) {
+    const auto g = readNumbers(r, "point_gaps", n);
+    for (std::size_t i = 0; i < n; ++i) c.points[i].gap = g[i];
+  }
+  // Friction: per point when given, else the total is shared in proportion to the normal forces
+  // (equally if they are all zero), which keeps the resultant exact.
+  if (r.has("point_tangent_forces")) {
+    const json& a = r.array("point_tangent_forces");
+    if (a.size() != n)
+      fail(source, r.field("point_tangent_forces"),
+           fmt::format("must have one entry per point ({}; got {})", n, a.size()));
+    Vec3 sum = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+      c.points[i].tangentForce = r.toVec3(a[i], fmt::format("{}[{}]", r.field("point_tangent_forces"), i));
+      sum += c.points[i].tangentForce;
+    }
+    if (r.has("tangent_force")) {
+      const Vec3 total = r.vec3("tangent_force");
+      if ((total - sum).norm() > kForceSumTolerance * std::max(1.0, total.norm()))
+        fail(source, r.field("tangent_force"), "must equal the sum of point_tangent_forces");
+    }
+  } else if (r.has("tangent_force")) {
+    const Vec3 total = r.vec3("tangent_force");
+    const double fn = c.normalForce();
+    for (auto& p : c.points)
+      p.tangentForce = fn > 0.0 ? Vec3(total * (p.normalForce / fn)) : Vec3(total / static_cast<double>(n));
+  }
+  return c;
+}
+
+/// Top-level layout: the header keys on their own lines, one grain or contact per line. Written by
+/// hand because json::dump either puts everything on one line or every number on its own line;
+/// the numbers themselves still come from nlohmann's shortest round-trip formatting.
+std::string layout(const json& j) {
+  std::string out = "{\n";
+  const char* order[] = {"format", "version", "box", "grains", "contacts"};
+  bool first = true;
+  for (const char* key : order) {
+    if (!j.contains(key)) continue;
+    if (!first) out += ",\n";
+    first = false;
+    const json& v = j.at(key);
+    out += fmt::format(" \"{}\": ", key);
+    if (v.is_array()) {
+      out += "[";
+      for (std::size_t i = 0; i < v.size(); ++i) out += fmt::format("{}\n  {}", i ? "," : "", v[i].dump());
+      out += v.empty() ? "]" : "\n ]";
+    } else {
+      out += v.dump();
+    }
+  }
+  out += "\n}\n";
+  return out;
+}
+
+}  // namespace
+
+void validatePacking(const Packing& p, std::string_view source) {
+  try {
+    p.box.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
+  }
+  if (p.grains.empty()) fail(source, "grains", "must hold at least one grain");
+  const BoxDef& box = p.box;
+  for (std::size_t i = 0; i < p.grains.size(); ++i) {
+    const Grain& g = p.grains[i];
+    const std::string where = fmt::format("grains[{}]", i);
+    if (!std::isfinite(g.size) || !(g.size > 0.0))
+      fail(source, where + ".size", fmt::format("must be > 0 (got {})", g.size));
+    if (g.shape == ShapeKind::Pinacoid) {
+      try {
+        g.params.validate();
+      } catch (const std::invalid_argument& e) {
+        fail(source, where + ".params", e.what());
+      }
+    }
+    const Vec3& x = g.position;
+    if (!x.allFinite()) fail(source, where + ".position", "must be finite");
+    if (!(x.x() >= 0.0 && x.x() < box.lengthX))
+      fail(source, where + ".position[0]", fmt::format("x must be in [0, length_x = {}) (got {})", box.lengthX, x.x()));
+    if (box.periodicY) {
+      if (!(x.y() >= 0.0 && x.y() < box.width))
+        fail(source, where + ".position[1]",
+             fmt::format("y must be in [0, width = {}) with periodic_y (got {})", box.width, x.y()));
+    } else if (!(x.y() >= 0.0 && x.y() <= box.width)) {
+      fail(source, where + ".position[1]",
+           fmt::format("y must lie between the side walls, in [0, width = {}] (got {})", box.width, x.y()));
+    }
+    // A centre below the floor would mean a grain more than half sunk into it.
+    if (!(x.z() >= 0.0)) fail(source, where + ".position[2]", fmt::format("z must be >= 0, above the floor (got {})", x.z()));
+    const double qn = g.orientation.coeffs().norm();
+    if (!std::isfinite(qn) || std::abs(qn - 1.0) > 1e-9)
+      fail(source, where + ".orientation", fmt::format("must be a unit quaternion (norm {})", qn));
+  }
+  if (!p.contacts) return;
+  const int n = static_cast<int>(p.grains.size());
+  for (std::size_t k = 0; k < p.contacts->size(); ++k) {
+    const Contact& c = (*p.contacts)[k];
+    const std::string where = fmt::format("contacts[{}]", k);
+    if (!(c.a >= 0 && c.a < n)) fail(source, where + ".a", fmt::format("must be a grain index in [0, {}) (got {})", n, c.a));
+    const bool wall = isWall(c.b);
+    if (wall) {
+      if (c.b < -3) fail(source, where + ".b", fmt::format("wall ids are -1 (floor), -2 (y = 0), -3 (y = W) (got {})", c.b));
+      if (box.periodicY && c.b != static_cast<int>(WallId::Floor))
+        fail(source, where + ".b", fmt::format("no side wall {} in a box with periodic_y", c.b));
+    } else {
+      if (c.b >= n) fail(source, where + ".b", fmt::format("must be a grain index in [0, {}) or a wall id (got {})", n, c.b));
+      if (c.b == c.a) fail(source, where + ".b", fmt::format("a grain cannot touch itself (a = b = {})", c.a));
+    }
+    if (!c.normal.allFinite() || std::abs(c.normal.norm() - 1.0) > 1e-9)
+      fail(source, where + ".normal", fmt::format("must be a unit vector (norm {})", c.normal.norm()));
+    if (c.points.empty()) fail(source, where + ".points", "must hold at least one point");
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+      const ContactPoint& pt = c.points[i];
+      if (!pt.position.allFinite()) fail(source, fmt::format("{}.points[{}]", where, i), "must be finite");
+      if (!std::isfinite(pt.normalForce) || pt.normalForce < 0.0)
+        fail(source, fmt::format("{}.point_forces[{}]", where, i),
+             fmt::format("must be a finite force >= 0 (got {})", pt.normalForce));
+      if (!std::isfinite(pt.gap)) fail(source, fmt::format("{}.point_gaps[{}]", where, i), "must be finite");
+      if (!pt.tangentForce.allFinite())
+        fail(source, fmt::format("{}.point_tangent_forces[{}]", where, i), "must be finite");
+    }
+  }
+}
+
+json toJson(const Packing& p) {
+  validatePacking(p, "packing");
+  json j;
+  j["format"] = std::string(kPackingFormat);
+  j["version"] = kPackingVersion;
+  j["box"] = p.box;
+  json grains = json::array();
+  for (const Grain& g : p.grains) {
+    json e = {{"shape", std::string(toString(g.shape))},
+              {"size", g.size},
+              {"position", toJsonVec(g.position)},
+              {"orientation", json::array({g.orientation.w(), g.orientation.x(), g.orientation.y(), g.orientation.z()})}};
+    if (g.shape == ShapeKind::Pinacoid) e["params"] = g.params;
+    grains.push_back(std::move(e));
+  }
+  j["grains"] = std::move(grains);
+  if (p.contacts) {
+    json contacts = json::array();
+    for (const Contact& c : *p.contacts) {
+      json points = json::array(), forces = json::array(), gaps = json::array(), tangents = json::array();
+      Vec3 tangent = Vec3::Zero();
+      for (const ContactPoint& pt : c.points) {
+        points.push_back(toJsonVec(pt.position));
+        forces.push_back(pt.normalForce);
+        gaps.push_back(pt.gap);
+        tangents.push_back(toJsonVec(pt.tangentForce));
+        tangent += pt.tangentForce;
+      }
+      json e = {{"a", c.a},
+                {"b", c.b},
+                {"type", std::string(toString(c.type))},
+                {"points", std::move(points)},
+                {"normal", toJsonVec(c.normal)},
+                {"normal_force", c.normalForce()},
+                {"point_forces", std::move(forces)},
+                {"point_gaps", std::move(gaps)}};
+      // Grain-grain contacts are frictionless (SPEC 1): only wall contacts carry a tangent force.
+      if (isWall(c.b)) {
+        e["tangent_force"] = toJsonVec(tangent);
+        e["point_tangent_forces"] = std::move(tangents);
+      }
+      contacts.push_back(std::move(e));
+    }
+    j["contacts"] = std::move(contacts);
+  }
+  return j;
+}
+
+Packing packingFromJson(const json& j, std::string_view source) {
+  ObjectReader top(j, source, "");
+  // Format and version first: a file of another kind gets that message, not a field complaint.
+  if (!j.is_object() || !j.contains("format")) fail(source, "format", fmt::format("missing (expected \"{}\")", kPackingFormat));
+  if (!j["format"].is_string() || j["format"].get<std::string>() != kPackingFormat)
+    fail(source, "format", fmt::format("must be \"{}\" (got {})", kPackingFormat, j["format"].dump()));
+  if (!j.contains("version")) fail(source, "version", "missing");
+  if (!j["version"].is_number_integer() || j["version"].get<std::int64_t>() != kPackingVersion)
+    fail(source, "version", fmt::format("unsupported version {} (this build reads version {})", j["version"].dump(),
+                                        kPackingVersion));
+  top.onlyKeys({"format", "version", "box", "grains", "contacts", "metadata"});
+
+  Packing p;
+  ObjectReader b(top.at("box"), source, "box");
+  b.onlyKeys({"length_x", "width", "periodic_y", "wall_friction", "height"});
+  p.box.lengthX = b.number("length_x");
+  p.box.width = b.number("width");
+  p.box.periodicY = b.has("periodic_y") ? b.boolean("periodic_y") : false;
+  p.box.wallFriction = b.has("wall_friction") ? b.number("wall_friction") : 0.0;
+
+  const json& grains = top.array("grains");
+  for (std::size_t i = 0; i < grains.size(); ++i) p.grains.push_back(readGrain(grains[i], source, i));
+
+  if (b.has("height")) {
+    p.box.height = b.number("height");
+  } else {
+    // A foreign writer may not know the target height: use the top of the pile.
+    double pileTop = 0.0;
+    for (const Grain& g : p.grains) pileTop = std::max(pileTop, g.position.z() + g.boundingRadius());
+    p.box.height = pileTop;
+  }
+
+  if (top.has("contacts")) {
+    const json& contacts = top.array("contacts");
+    p.contacts.emplace();
+    for (std::size_t k = 0; k < contacts.size(); ++k) p.contacts->push_back(readContact(contacts[k], source, k));
+  }
+  validatePacking(p, source);
+  return p;
+}
+
+void writePacking(const Packing& packing, const std::filesystem::path& path) {
+  writeFileAtomically(path, layout(toJson(packing)));
+}
+
+Packing readPacking(const std::filesystem::path& path) {
+  const std::string source = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the packing file", source));
+  std::ostringstream text;
+  text << in.rdbuf();
+  json j;
+  try {
+    j = json::parse(text.str());
+  } catch (const json::parse_error& e) {
+    throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", source, e.what()));
+  }
+  return packingFromJson(j, source);
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
+  static std::atomic<unsigned> counter{0};
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  const std::filesystem::path tmp =
+      dir / fmt::format(".{}.tmp-{}-{}", path.filename().string(), ::getpid(), counter++);
+  // No fsync: rename() already guarantees that readers see the old file or the whole new one,
+  // which is the property we need; durability across a power cut is not worth a disk flush per
+  // VTK frame.
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot create ({})", tmp.string(), std::strerror(errno)));
+  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const bool closed = std::fclose(f) == 0;
+  std::error_code ec;
+  if (!written || !closed) {
+    std::filesystem::remove(tmp, ec);
+    throw std::runtime_error(fmt::format("{}: write failed", path.string()));
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw std::runtime_error(fmt::format("{}: cannot rename the temporary file ({})", path.string(), ec.message()));
+  }
+}
+
+}  // namespace confpack::core
