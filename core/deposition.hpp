@@ -20,6 +20,9 @@ struct DepositionDef {
   double expectedSolidFraction = 0.60;
   /// Number of grains to deposit; 0 = derive it from the box height and expectedSolidFraction.
   std::size_t grainCount = 0;
+
+  /// Throws std::invalid_argument naming the bad field.
+  void validate() const;
 };
 
 void to_json(nlohmann::json& j, const DepositionDef& d);
@@ -33,10 +36,32 @@ struct Deposit {
   double placeholderSolidFraction = 0.0; ///< placeholder volume / (L_x W pileHeight)
   double solidFraction = 0.0;      ///< real grain volume / (L_x W pileHeight)
   double seconds = 0.0;            ///< wall time of the deposition [s]
+  /// Placeholders that found no stable seat within the move budget and were left at the lowest
+  /// overlap-free position they visited (0 in a healthy deposit).
+  std::size_t unsettledCount = 0;
+  double meanMoves = 0.0;          ///< mean number of analytic moves (fall/roll) per placeholder
 };
 
 /// Called now and then with (placeholders placed, total).
 using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
+
+/// Placeholder pile of SPEC 4.1 alone (no grains): `count` equal spheres of diameter `diameter`
+/// [d_L] dropped at random (x, y) drawn from `rng`, each settled by analytic falls and rolls.
+struct PlaceholderPile {
+  std::vector<Vec3> centres;        ///< in deposition order, wrapped into the box [d_L]
+  std::size_t unsettledCount = 0;   ///< see Deposit::unsettledCount
+  double meanMoves = 0.0;           ///< see Deposit::meanMoves
+};
+
+/// Builds the placeholder pile; throws std::invalid_argument if the box cannot hold a placeholder.
+PlaceholderPile depositPlaceholders(const BoxDef& box, double diameter, std::size_t count, Rng& rng,
+                                    const ProgressFn& progress = {});
+
+/// Drops one placeholder of diameter `diameter` at (x, y) onto the given centres and returns its
+/// seat (wrapped into the box); `settled`, if given, tells whether a stable seat was found. For
+/// tests and tools: it rebuilds the neighbour grid, O(pile size) per call.
+Vec3 dropPlaceholder(const BoxDef& box, double diameter, const std::vector<Vec3>& pile, double x, double y,
+                     bool* settled = nullptr);
 
 /// Deposits a pile for this box and population. Reproducible from `seed` bit for bit.
 Deposit deposit(const BoxDef& box, const PopulationDef& population, const DepositionDef& def,
