@@ -1,0 +1,720 @@
+#include "core/polyhedron_contact.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace confpack::core {
+
+std::vector<Vec3> PlacedPolyhedron::worldVertices() const {
+  std::vector<Vec3> out;
+  out.reserve(shape->vertices().size());
+  for (const Vec3& v : shape->vertices()) out.push_back(toWorld(v));
+  return out;
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Lengths below kRelativeLengthTol x (size of the pair) are zero: a contact region thinner than
+// that is a segment, shorter than that a point. Far above rounding (1e-16), far below any physical
+// length of the problem (the alert distance is ~1e-3 to 1e-2 d).
+constexpr double kRelativeLengthTol = 1e-9;
+// Edge pairs whose cross product is shorter than this (relative, i.e. sin of their angle) give no
+// separating axis: the face axes already cover parallel edges.
+constexpr double kParallelEdgeSin = 1e-9;
+
+// A polyhedron in world coordinates with the topology the narrow phase needs.
+struct WorldPoly {
+  const ConvexPolyhedron* shape = nullptr;
+  std::vector<Vec3> v;                       // world vertices
+  std::vector<Vec3> n;                       // world outward face normals
+  std::vector<double> off;                   // n.x = off on the face
+  std::vector<std::array<int, 2>> edgeFaces; // the two faces adjacent to each edge
+  Vec3 centre = Vec3::Zero();                // an interior point (vertex mean)
+  double radius = 0.0;                       // bounding radius of the shape
+
+  explicit WorldPoly(const PlacedPolyhedron& p, bool withTopology = true) : shape(p.shape) {
+    if (shape == nullptr) throw std::invalid_argument("PlacedPolyhedron.shape is null");
+    v.reserve(shape->vertices().size());
+    for (const Vec3& x : shape->vertices()) {
+      v.push_back(p.toWorld(x));
+      centre += v.back();
+    }
+    centre /= static_cast<double>(v.size());
+    radius = shape->boundingRadius();
+    const auto& bn = shape->faceNormals();
+    n.reserve(bn.size());
+    off.reserve(bn.size());
+    for (std::size_t f = 0; f < bn.size(); ++f) {
+      n.push_back(p.rotation * bn[f]);
+      // The body offset is n_b.x_b; in world n_w.(R x_b + t) = n_b.x_b + n_w.t.
+      off.push_back(shape->faceOffsets()[f] + n.back().dot(p.position));
+    }
+    if (withTopology) {
+      const auto& edges = shape->edges();
+      edgeFaces.assign(edges.size(), {-1, -1});
+      for (std::size_t f = 0; f < shape->faces().size(); ++f) {
+        const auto& loop = shape->faces()[f];
+        for (std::size_t k = 0; k < loop.size(); ++k) {
+          const int e = edgeIndex(loop[k], loop[(k + 1) % loop.size()]);
+          if (e >= 0) edgeFaces[e][edgeFaces[e][0] < 0 ? 0 : 1] = static_cast<int>(f);
+        }
+      }
+    }
+  }
+
+  int edgeIndex(int i, int j) const {
+    const int lo = std::min(i, j), hi = std::max(i, j);
+    const auto& edges = shape->edges();
+    for (std::size_t e = 0; e < edges.size(); ++e)
+      if (edges[e][0] == lo && edges[e][1] == hi) return static_cast<int>(e);
+    return -1;
+  }
+  double maxAlong(const Vec3& d) const {
+    double m = -kInf;
+    for (const Vec3& x : v) m = std::max(m, d.dot(x));
+    return m;
+  }
+  double minAlong(const Vec3& d) const {
+    double m = kInf;
+    for (const Vec3& x : v) m = std::min(m, d.dot(x));
+    return m;
+  }
+  // Tolerance on heights for the support feature: a face tilted by angleTol spans at most
+  // sin(angleTol) x (its diameter <= 2R) in height.
+  double featureEps(double angleTol) const { return std::sin(angleTol) * 2.0 * radius; }
+};
+
+// Closest points of segments p1-q1 and p2-q2 (Ericson, Real-Time Collision Detection, 5.1.9).
+// Returns squared distance; s, t are the parameters on each segment.
+double closestSegmentSegment(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2, double& s, double& t,
+                             Vec3& c1, Vec3& c2) {
+  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const double tiny = 1e-300;
+  if (a <= tiny && e <= tiny) {
+    s = t = 0.0;
+  } else if (a <= tiny) {
+    s = 0.0;
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= tiny) {
+      t = 0.0;
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 1e-30 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  c1 = p1 + s * d1;
+  c2 = p2 + t * d2;
+  return (c1 - c2).squaredNorm();
+}
+
+// True if the projection of x on the plane of face f lies inside the face polygon (closed).
+bool projectsInsideFace(const WorldPoly& w, int f, const Vec3& x) {
+  const auto& loop = w.shape->faces()[f];
+  const Vec3& nf = w.n[f];
+  for (std::size_t k = 0; k < loop.size(); ++k) {
+    const Vec3& a = w.v[loop[k]];
+    const Vec3& b = w.v[loop[(k + 1) % loop.size()]];
+    // CCW loop around nf: inside is to the left of every edge.
+    if ((b - a).cross(x - a).dot(nf) < 0.0) return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Separating-axis test.
+
+struct SatResult {
+  double sep = -kInf;  // largest separation over the axes [d_L]
+  Vec3 axis = Vec3::UnitZ();  // from a towards b
+};
+
+// Gauss-map test (Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013):
+// edges of A (adjacent face normals a, b) and of B (c, d) build a face of the Minkowski
+// difference A - B iff the arcs a-b and (-c)-(-d) cross on the unit sphere. Only those edge
+// pairs can carry the minimum-penetration axis, and for them the supports along the axis are
+// the edges themselves, so sep costs one dot product.
+bool isMinkowskiFace(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 bxa = b.cross(a);
+  const Vec3 dxc = d.cross(c);
+  const double cba = c.dot(bxa), dba = d.dot(bxa), adc = a.dot(dxc), bdc = b.dot(dxc);
+  return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
+}
+
+// Returns the best axis; stops early (with sep > stopAbove) once an axis proves separation
+// beyond stopAbove.
+SatResult separatingAxis(const WorldPoly& A, const WorldPoly& B, double stopAbove) {
+  SatResult best;
+  const double tieTol = kRelativeLengthTol * (A.radius + B.radius);
+  for (std::size_t f = 0; f < A.n.size(); ++f) {
+    const double s = B.minAlong(A.n[f]) - A.off[f];
+    if (s > best.sep) best = {s, A.n[f]};
+    if (s > stopAbove) return best;
+  }
+  for (std::size_t f = 0; f < B.n.size(); ++f) {
+    const double s = A.minAlong(B.n[f]) - B.off[f];
+    // Face of B: axis from a towards b is -n_B. Ties keep A's face (deterministic).
+    if (s > best.sep + tieTol) best = {s, -B.n[f]};
+    if (s > stopAbove) return best;
+  }
+  const auto& eA = A.shape->edges();
+  const auto& eB = B.shape->edges();
+  for (std::size_t i = 0; i < eA.size(); ++i) {
+    const Vec3& pa = A.v[eA[i][0]];
+    const Vec3 da = A.v[eA[i][1]] - pa;
+    const Vec3& na0 = A.n[A.edgeFaces[i][0]];
+    const Vec3& na1 = A.n[A.edgeFaces[i][1]];
+    for (std::size_t j = 0; j < eB.size(); ++j) {
+      const Vec3& nb0 = B.n[B.edgeFaces[j][0]];
+      const Vec3& nb1 = B.n[B.edgeFaces[j][1]];
+      if (!isMinkowskiFace(na0, na1, -nb0, -nb1)) continue;
+      const Vec3& pb = B.v[eB[j][0]];
+      const Vec3 db = B.v[eB[j][1]] - pb;
+      Vec3 u = da.cross(db);
+      const double len = u.norm();
+      if (len <= kParallelEdgeSin * da.norm() * db.norm()) continue;
+      u /= len;
+      if (u.dot(pa - A.centre) < 0.0) u = -u;  // outward from A at its edge
+      const double s = u.dot(pb - pa);
+      // Edge axes must beat the face axes clearly: an edge pair lying in a face gives the face
+      // normal again, and the face reading is the one that classifies the contact correctly.
+      if (s > best.sep + tieTol) best = {s, u};
+      if (s > stopAbove) return best;
+    }
+  }
+  return best;
+}
+
+// Exact distance of two disjoint convex polyhedra: the closest pair is vertex-face (the vertex
+// projecting inside the face) or edge-edge (which includes vertex-edge and vertex-vertex).
+// Returns the distance and the unit direction from A to B; face-based pairs return the exact
+// face normal (preferred on ties, so parallel faces give the face normal, not a rounded one).
+struct DistanceResult {
+  double distance = kInf;
+  Vec3 normal = Vec3::UnitZ();
+};
+
+DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B) {
+  DistanceResult r;
+  const double tieTol = kRelativeLengthTol * (A.radius + B.radius);
+  for (std::size_t f = 0; f < A.n.size(); ++f)
+    for (const Vec3& x : B.v) {
+      const double d = A.n[f].dot(x) - A.off[f];
+      if (d >= 0.0 && d < r.distance && projectsInsideFace(A, static_cast<int>(f), x)) r = {d, A.n[f]};
+    }
+  for (std::size_t f = 0; f < B.n.size(); ++f)
+    for (const Vec3& x : A.v) {
+      const double d = B.n[f].dot(x) - B.off[f];
+      if (d >= 0.0 && d < r.distance - tieTol && projectsInsideFace(B, static_cast<int>(f), x)) r = {d, -B.n[f]};
+    }
+  const auto& eA = A.shape->edges();
+  const auto& eB = B.shape->edges();
+  for (const auto& ea : eA)
+    for (const auto& eb : eB) {
+      double s, t;
+      Vec3 c1, c2;
+      const double d2 = closestSegmentSegment(A.v[ea[0]], A.v[ea[1]], B.v[eb[0]], B.v[eb[1]], s, t, c1, c2);
+      const double d = std::sqrt(d2);
+      if (d < r.distance - tieTol && d > 0.0) r = {d, (c2 - c1) / d};
+    }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contact features and region.
+
+struct SupportSet {
+  std::vector<int> verts;  // indices within eps of the support plane
+  Feature feature{};
+};
+
+// Support feature of w along dir (unit): vertices with dir.x >= max - eps.
+SupportSet supportSet(const WorldPoly& w, const Vec3& dir, double eps) {
+  SupportSet s;
+  const double h = w.maxAlong(dir);
+  for (int i = 0; i < static_cast<int>(w.v.size()); ++i)
+    if (dir.dot(w.v[i]) >= h - eps) s.verts.push_back(i);
+  if (s.verts.size() == 1) {
+    s.feature = {FeatureKind::Vertex, s.verts[0]};
+  } else if (s.verts.size() == 2) {
+    s.feature = {FeatureKind::Edge, w.edgeIndex(s.verts[0], s.verts[1])};
+  } else {
+    int best = 0;
+    for (int f = 1; f < static_cast<int>(w.n.size()); ++f)
+      if (w.n[f].dot(dir) > w.n[best].dot(dir)) best = f;
+    s.feature = {FeatureKind::Face, best};
+  }
+  return s;
+}
+
+using Vec2 = Eigen::Vector2d;
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+double polygonArea(const std::vector<Vec2>& p) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
+  return 0.5 * a;
+}
+
+// Sutherland-Hodgman: subject polygon clipped by a convex CCW clip polygon.
+std::vector<Vec2> clipPolygon(std::vector<Vec2> subject, const std::vector<Vec2>& clipper) {
+  std::vector<Vec2> out;
+  for (std::size_t k = 0; k < clipper.size() && !subject.empty(); ++k) {
+    const Vec2& a = clipper[k];
+    const Vec2 e = clipper[(k + 1) % clipper.size()] - a;
+    out.clear();
+    for (std::size_t i = 0; i < subject.size(); ++i) {
+      const Vec2& p = subject[i];
+      const Vec2& q = subject[(i + 1) % subject.size()];
+      const double dp = cross2(e, p - a), dq = cross2(e, q - a);  // >= 0 inside
+      if (dp >= 0.0) out.push_back(p);
+      if ((dp >= 0.0) != (dq >= 0.0)) out.push_back(p + dp / (dp - dq) * (q - p));
+    }
+    subject.swap(out);
+  }
+  return subject;
+}
+
+// Clips segment p-q to the convex CCW polygon (Cyrus-Beck). Returns false if nothing is left.
+bool clipSegment(Vec2& p, Vec2& q, const std::vector<Vec2>& poly) {
+  double t0 = 0.0, t1 = 1.0;
+  const Vec2 d = q - p;
+  for (std::size_t k = 0; k < poly.size(); ++k) {
+    const Vec2& a = poly[k];
+    const Vec2 e = poly[(k + 1) % poly.size()] - a;
+    const double num = cross2(e, p - a);  // >= 0 inside at t = 0
+    const double den = cross2(e, d);
+    if (std::abs(den) < 1e-300) {
+      if (num < 0.0) return false;
+      continue;
+    }
+    const double t = -num / den;
+    if (den > 0.0) t0 = std::max(t0, t);
+    else t1 = std::min(t1, t);
+    if (t0 > t1) return false;
+  }
+  const Vec2 p0 = p;
+  p = p0 + t0 * d;
+  q = p0 + t1 * d;
+  return true;
+}
+
+// The 4 vertices of a convex polygon spanning the largest area (brute force over ordered
+// 4-subsets; a face-face polygon of two pinacoid faces has at most 8 vertices: 70 subsets).
+std::vector<Vec2> reduceToFour(const std::vector<Vec2>& poly) {
+  const int n = static_cast<int>(poly.size());
+  if (n <= 4) return poly;
+  double best = -1.0;
+  std::array<int, 4> pick{0, 1, 2, 3};
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      for (int k = j + 1; k < n; ++k)
+        for (int l = k + 1; l < n; ++l) {
+          const double a = polygonArea({poly[i], poly[j], poly[k], poly[l]});
+          if (a > best) {
+            best = a;
+            pick = {i, j, k, l};
+          }
+        }
+  return {poly[pick[0]], poly[pick[1]], poly[pick[2]], poly[pick[3]]};
+}
+
+// Height (coordinate along n) of a body's contact feature above the lateral point x.
+struct FeatureSurface {
+  FeatureKind kind = FeatureKind::Vertex;
+  Vec3 p0 = Vec3::Zero(), p1 = Vec3::Zero();  // vertex, or edge ends
+  Vec3 faceN = Vec3::UnitZ();
+  double faceOff = 0.0;
+};
+
+struct Frame {
+  Vec3 n, u, v;  // n = u x v
+  Vec2 lateral(const Vec3& x) const { return {u.dot(x), v.dot(x)}; }
+  Vec3 world(const Vec2& x, double h) const { return x.x() * u + x.y() * v + h * n; }
+};
+
+double heightAt(const FeatureSurface& s, const Frame& fr, const Vec2& x) {
+  switch (s.kind) {
+    case FeatureKind::Vertex: return fr.n.dot(s.p0);
+    case FeatureKind::Edge: {
+      const Vec2 a = fr.lateral(s.p0), b = fr.lateral(s.p1);
+      const Vec2 d = b - a;
+      const double dd = d.squaredNorm();
+      const double t = dd > 1e-300 ? std::clamp((x - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+      return fr.n.dot(s.p0 + t * (s.p1 - s.p0));
+    }
+    case FeatureKind::Face: {
+      // On the face plane: faceN.(u x_u + v x_v + h n) = faceOff.
+      const double dn = s.faceN.dot(fr.n);
+      const Vec3 lat = fr.world(x, 0.0);
+      if (std::abs(dn) < 1e-12) return fr.n.dot(lat);
+      return (s.faceOff - s.faceN.dot(lat)) / dn;
+    }
+  }
+  return 0.0;
+}
+
+struct Region {
+  ContactType type = ContactType::Simple;
+  std::vector<Vec2> points;
+};
+
+// The contact region of feature sets sa (of A, near max along n) and sb (of B, near min along n)
+// projected on the contact plane; its dimension gives the contact type.
+Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& B, const SupportSet& sb,
+                     const Frame& fr, FeatureSurface& surfA, FeatureSurface& surfB) {
+  const double lenTol = kRelativeLengthTol * (A.radius + B.radius);
+  auto surfaceOf = [&](const WorldPoly& w, const SupportSet& s, FeatureSurface& out, std::vector<Vec2>& poly,
+                       bool ccwAlongN) {
+    out.kind = s.feature.kind;
+    if (s.feature.kind == FeatureKind::Vertex) {
+      out.p0 = w.v[s.verts[0]];
+      poly = {fr.lateral(out.p0)};
+    } else if (s.feature.kind == FeatureKind::Edge) {
+      out.p0 = w.v[s.verts[0]];
+      out.p1 = w.v[s.verts[1]];
+      poly = {fr.lateral(out.p0), fr.lateral(out.p1)};
+    } else {
+      const int f = s.feature.index;
+      out.faceN = w.n[f];
+      out.faceOff = w.off[f];
+      poly.clear();
+      for (int i : w.shape->faces()[f]) poly.push_back(fr.lateral(w.v[i]));
+      // A's face (normal ~ +n) is CCW in (u, v); B's face (normal ~ -n) is CW: reverse it.
+      if (!ccwAlongN) std::reverse(poly.begin(), poly.end());
+    }
+  };
+  std::vector<Vec2> pa, pb;
+  surfaceOf(A, sa, surfA, pa, true);
+  surfaceOf(B, sb, surfB, pb, false);
+
+  Region r;
+  const FeatureKind ka = sa.feature.kind, kb = sb.feature.kind;
+  auto finishSegmentOrPoint = [&](const std::vector<Vec2>& pts) {
+    // Reduce a degenerate region to its two most distant points (segment) or one point.
+    if (pts.empty()) return;
+    std::size_t bi = 0, bj = 0;
+    double best = -1.0;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      for (std::size_t j = i; j < pts.size(); ++j)
+        if ((pts[i] - pts[j]).squaredNorm() > best) {
+          best = (pts[i] - pts[j]).squaredNorm();
+          bi = i;
+          bj = j;
+        }
+    if (std::sqrt(best) > lenTol) {
+      r.type = ContactType::Double;
+      r.points = {pts[bi], pts[bj]};
+    } else {
+      r.type = ContactType::Simple;
+      r.points = {0.5 * (pts[bi] + pts[bj])};
+    }
+  };
+
+  if (ka == FeatureKind::Vertex && kb == FeatureKind::Vertex) {
+    r.points = {0.5 * (pa[0] + pb[0])};
+  } else if (ka == FeatureKind::Vertex) {
+    r.points = {pa[0]};
+  } else if (kb == FeatureKind::Vertex) {
+    r.points = {pb[0]};
+  } else if (ka == FeatureKind::Edge && kb == FeatureKind::Edge) {
+    const Vec2 da = pa[1] - pa[0], db = pb[1] - pb[0];
+    const double sinAngle = std::abs(cross2(da, db)) / std::max(da.norm() * db.norm(), 1e-300);
+    if (sinAngle > kParallelEdgeSin * 1e3) {
+      // Crossing edges: one point, where the closest points of the 3D segments project.
+      double s, t;
+      Vec3 c1, c2;
+      closestSegmentSegment(surfA.p0, surfA.p1, surfB.p0, surfB.p1, s, t, c1, c2);
+      r.points = {0.5 * (fr.lateral(c1) + fr.lateral(c2))};
+    } else {
+      // Parallel edges: overlap of their projections on A's edge line (a line contact).
+      const Vec2 dir = da.normalized();
+      const double a0 = 0.0, a1 = da.norm();
+      const double b0 = dir.dot(pb[0] - pa[0]), b1 = dir.dot(pb[1] - pa[0]);
+      const double lo = std::max(a0, std::min(b0, b1)), hi = std::min(a1, std::max(b0, b1));
+      // The two lines may be offset laterally by rounding or tilt: put points midway across.
+      const Vec2 offset = 0.5 * ((pb[0] - pa[0]) - dir * dir.dot(pb[0] - pa[0]));
+      if (hi >= lo) finishSegmentOrPoint({pa[0] + lo * dir + offset, pa[0] + hi * dir + offset});
+      else r.points = {pa[0] + 0.5 * (lo + hi) * dir + offset};
+    }
+  } else if (ka == FeatureKind::Edge || kb == FeatureKind::Edge) {
+    const std::vector<Vec2>& seg = ka == FeatureKind::Edge ? pa : pb;
+    const std::vector<Vec2>& face = ka == FeatureKind::Edge ? pb : pa;
+    Vec2 p = seg[0], q = seg[1];
+    if (clipSegment(p, q, face)) finishSegmentOrPoint({p, q});
+    else finishSegmentOrPoint({0.5 * (seg[0] + seg[1])});  // rounding miss: centre of the edge
+  } else {
+    std::vector<Vec2> poly = clipPolygon(pa, pb);
+    if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
+      r.type = ContactType::Triple;
+      r.points = reduceToFour(poly);
+    } else if (!poly.empty()) {
+      finishSegmentOrPoint(poly);
+    } else {
+      // Rounding miss: the faces' projections do not overlap; use the midpoint of their centres.
+      Vec2 ca = Vec2::Zero(), cb = Vec2::Zero();
+      for (const Vec2& x : pa) ca += x / static_cast<double>(pa.size());
+      for (const Vec2& x : pb) cb += x / static_cast<double>(pb.size());
+      r.points = {0.5 * (ca + cb)};
+    }
+  }
+  return r;
+}
+
+Frame frameFor(const Vec3& n) {
+  Frame fr;
+  fr.n = n;
+  fr.u = n.unitOrthogonal();
+  fr.v = n.cross(fr.u);
+  return fr;
+}
+
+// Features, region, type and points of a pair for a given normal (a -> b).
+PolyhedronContact buildContact(const WorldPoly& A, const WorldPoly& B, const Vec3& normal, double gap,
+                               double angleTol) {
+  PolyhedronContact c;
+  c.normal = normal;
+  c.gap = gap;
+  const SupportSet sa = supportSet(A, normal, A.featureEps(angleTol));
+  const SupportSet sb = supportSet(B, -normal, B.featureEps(angleTol));
+  c.featureA = sa.feature;
+  c.featureB = sb.feature;
+  const Frame fr = frameFor(normal);
+  FeatureSurface surfA, surfB;
+  const Region region = contactRegion(A, sa, B, sb, fr, surfA, surfB);
+  c.type = region.type;
+  for (const Vec2& x : region.points) {
+    const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
+    c.points.push_back(fr.world(x, 0.5 * (ha + hb)));
+    c.pointGaps.push_back(hb - ha);
+  }
+  return c;
+}
+
+// Normal and gap of a pair: SAT for overlap, exact closest features when disjoint.
+// Returns false if the distance certainly exceeds alert.
+bool pairNormal(const WorldPoly& A, const WorldPoly& B, double alert, Vec3& normal, double& gap) {
+  const SatResult sat = separatingAxis(A, B, alert);
+  if (sat.sep > alert) return false;
+  if (sat.sep <= 0.0) {
+    normal = sat.axis;
+    gap = sat.sep;
+    return true;
+  }
+  const DistanceResult d = exactDistance(A, B);
+  if (d.distance > alert) return false;
+  normal = d.normal;
+  gap = d.distance;
+  return true;
+}
+
+std::vector<Vec2> convexHull2(std::vector<Vec2> p) {
+  // Andrew's monotone chain; CCW output. Used for the (at most 8) points of a wall contact.
+  if (p.size() < 3) return p;
+  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::vector<Vec2> h(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross2(h[k - 1] - h[k - 2], p[i] - h[k - 2]) <= 0.0) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross2(h[k - 1] - h[k - 2], p[i - 1] - h[k - 2]) <= 0.0) --k;
+    h[k++] = p[i - 1];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+void checkAlert(double alert, const char* who) {
+  if (!(alert >= 0.0)) throw std::invalid_argument(fmt::format("{}: alert must be >= 0 (got {})", who, alert));
+}
+
+Vec3 unitOrThrow(const Vec3& n, const char* who) {
+  const double len = n.norm();
+  if (!(len > 0.0) || !std::isfinite(len)) throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
+  return n / len;
+}
+
+}  // namespace
+
+std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,
+                                                  double angleTol) {
+  checkAlert(alert, "collidePolyhedra");
+  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("collidePolyhedra: PlacedPolyhedron.shape is null");
+  // Bounding spheres first: most broad-phase pairs end here.
+  const double reach = a.shape->boundingRadius() + b.shape->boundingRadius() + alert;
+  if ((b.position - a.position).squaredNorm() > reach * reach) return std::nullopt;
+  const WorldPoly A(a), B(b);
+  Vec3 normal;
+  double gap;
+  if (!pairNormal(A, B, alert, normal, gap)) return std::nullopt;
+  return buildContact(A, B, normal, gap, angleTol);
+}
+
+std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron& a, const Vec3& centre, double radius,
+                                                         double alert, double angleTol) {
+  checkAlert(alert, "collidePolyhedronSphere");
+  if (!(radius > 0.0)) throw std::invalid_argument(fmt::format("collidePolyhedronSphere: radius must be positive (got {})", radius));
+  if (a.shape == nullptr) throw std::invalid_argument("collidePolyhedronSphere: PlacedPolyhedron.shape is null");
+  const double reach = a.shape->boundingRadius() + radius + alert;
+  if ((centre - a.position).squaredNorm() > reach * reach) return std::nullopt;
+  (void)angleTol;  // a sphere touches through one point whatever the polyhedron's feature
+  const WorldPoly A(a, false);
+
+  PolyhedronContact c;
+  c.type = ContactType::Simple;
+  c.featureB = {FeatureKind::Vertex, 0};
+  // Signed distances of the centre to the face planes; inside iff all <= 0.
+  int nearestFace = 0;
+  double maxD = -kInf;
+  for (std::size_t f = 0; f < A.n.size(); ++f) {
+    const double d = A.n[f].dot(centre) - A.off[f];
+    if (d > maxD) {
+      maxD = d;
+      nearestFace = static_cast<int>(f);
+    }
+  }
+  Vec3 closest = centre;
+  if (maxD <= 0.0) {
+    // Centre inside: the nearest surface point is on the nearest face plane (convexity).
+    c.normal = A.n[nearestFace];
+    closest = centre - maxD * c.normal;
+    c.gap = maxD - radius;
+    c.featureA = {FeatureKind::Face, nearestFace};
+  } else {
+    // Outside: the closest point is the projection on a face (if it falls inside it) or on an edge.
+    double best = kInf;
+    for (std::size_t f = 0; f < A.n.size(); ++f) {
+      const double d = A.n[f].dot(centre) - A.off[f];
+      if (d >= 0.0 && d < best && projectsInsideFace(A, static_cast<int>(f), centre)) {
+        best = d;
+        c.normal = A.n[f];
+        closest = centre - d * A.n[f];
+        c.featureA = {FeatureKind::Face, static_cast<int>(f)};
+      }
+    }
+    const auto& edges = A.shape->edges();
+    const double tieTol = kRelativeLengthTol * A.radius;
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const Vec3& p = A.v[edges[e][0]];
+      const Vec3 d = A.v[edges[e][1]] - p;
+      const double t = std::clamp((centre - p).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      const Vec3 q = p + t * d;
+      const double dist = (centre - q).norm();
+      if (dist < best - tieTol) {
+        best = dist;
+        closest = q;
+        c.normal = (centre - q) / dist;
+        if (t <= 0.0) c.featureA = {FeatureKind::Vertex, edges[e][0]};
+        else if (t >= 1.0) c.featureA = {FeatureKind::Vertex, edges[e][1]};
+        else c.featureA = {FeatureKind::Edge, static_cast<int>(e)};
+      }
+    }
+    c.gap = best - radius;
+  }
+  if (c.gap > alert) return std::nullopt;
+  // Midway between the polyhedron surface point and the sphere surface point.
+  const Vec3 onSphere = centre - radius * c.normal;
+  c.points = {0.5 * (closest + onSphere)};
+  c.pointGaps = {c.gap};
+  return c;
+}
+
+std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& a, const Vec3& planePoint,
+                                                        const Vec3& inwardNormal, double alert, double angleTol) {
+  checkAlert(alert, "collidePolyhedronPlane");
+  if (a.shape == nullptr) throw std::invalid_argument("collidePolyhedronPlane: PlacedPolyhedron.shape is null");
+  const Vec3 m = unitOrThrow(inwardNormal, "collidePolyhedronPlane");
+  if (m.dot(a.position - planePoint) - a.shape->boundingRadius() > alert) return std::nullopt;
+  const WorldPoly A(a);
+  std::vector<double> h(A.v.size());
+  double gap = kInf;
+  for (std::size_t i = 0; i < A.v.size(); ++i) {
+    h[i] = m.dot(A.v[i] - planePoint);
+    gap = std::min(gap, h[i]);
+  }
+  if (gap > alert) return std::nullopt;
+
+  PolyhedronContact c;
+  c.normal = -m;
+  c.gap = gap;
+  const SupportSet sa = supportSet(A, c.normal, A.featureEps(angleTol));
+  c.featureA = sa.feature;
+  c.featureB = {FeatureKind::Face, 0};
+  c.type = sa.feature.kind == FeatureKind::Vertex ? ContactType::Simple
+           : sa.feature.kind == FeatureKind::Edge ? ContactType::Double
+                                                   : ContactType::Triple;
+  // Points: every vertex within alert, and every vertex of the support feature (so a Triple
+  // contact always has >= 3 points even if the alert is smaller than its tilt).
+  const double reachH = std::max(alert, gap + A.featureEps(angleTol));
+  const Frame fr = frameFor(c.normal);
+  std::vector<Vec2> lat;
+  std::vector<int> idx;
+  for (std::size_t i = 0; i < A.v.size(); ++i)
+    if (h[i] <= reachH) {
+      lat.push_back(fr.lateral(A.v[i]));
+      idx.push_back(static_cast<int>(i));
+    }
+  std::vector<Vec2> keep = lat;
+  if (lat.size() > 4) keep = reduceToFour(convexHull2(lat));
+  for (const Vec2& x : keep) {
+    // Find the vertex this lateral point came from (hull and reduction keep input points).
+    std::size_t k = 0;
+    for (std::size_t j = 0; j < lat.size(); ++j)
+      if ((lat[j] - x).squaredNorm() < (lat[k] - x).squaredNorm()) k = j;
+    const int i = idx[k];
+    c.points.push_back(A.v[i] - 0.5 * h[i] * m);
+    c.pointGaps.push_back(h[i]);
+  }
+  return c;
+}
+
+Feature supportFeature(const PlacedPolyhedron& p, const Vec3& dir, double angleTol) {
+  const WorldPoly w(p, false);
+  return supportSet(w, unitOrThrow(dir, "supportFeature"), w.featureEps(angleTol)).feature;
+}
+
+ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double angleTol) {
+  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
+  const WorldPoly A(a), B(b);
+  Vec3 normal;
+  double gap;
+  pairNormal(A, B, kInf, normal, gap);
+  return buildContact(A, B, normal, gap, angleTol).type;
+}
+
+ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal,
+                            double angleTol) {
+  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
+  const WorldPoly A(a), B(b);
+  return buildContact(A, B, unitOrThrow(normal, "classifyContact"), 0.0, angleTol).type;
+}
+
+ContactType classifyPlaneContact(const PlacedPolyhedron& a, const Vec3& inwardNormal, double angleTol) {
+  const Feature f = supportFeature(a, -unitOrThrow(inwardNormal, "classifyPlaneContact"), angleTol);
+  return f.kind == FeatureKind::Vertex ? ContactType::Simple
+         : f.kind == FeatureKind::Edge ? ContactType::Double
+                                        : ContactType::Triple;
+}
+
+}  // namespace confpack::core
