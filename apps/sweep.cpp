@@ -1,0 +1,585 @@
+#include "apps/sweep.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "apps/deposit_store.hpp"
+#include "backends/backend_factory.hpp"
+#include "core/packing_io.hpp"
+
+namespace confpack::app {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+[[noreturn]] void bad(std::string_view source, std::string_view field, std::string_view what) {
+  throw std::invalid_argument(fmt::format("{}: {}: {}", source, field, what));
+}
+
+// A list value may be given as a scalar for convenience ("backend": "nscd").
+json asList(const json& v) { return v.is_array() ? v : json::array({v}); }
+
+// Keys of `given` that the resolved configuration does not know are typos: refuse them rather
+// than silently running the default. Recurses where both sides are objects.
+void checkKnownKeys(const json& given, const json& resolved, const std::string& path, std::string_view source) {
+  for (const auto& [key, value] : given.items()) {
+    const std::string here = path.empty() ? key : path + "." + key;
+    if (!resolved.contains(key)) bad(source, here, "unknown key");
+    if (value.is_object() && resolved.at(key).is_object()) checkKnownKeys(value, resolved.at(key), here, source);
+  }
+}
+
+core::RunConfig resolveBase(const json& base, std::string_view source) {
+  json merged;
+  core::to_json(merged, core::RunConfig{});
+  merged.merge_patch(base);
+  core::RunConfig cfg;
+  try {
+    core::from_json(merged, cfg);
+  } catch (const json::exception& e) {
+    bad(source, "base", fmt::format("cannot be read as a run configuration ({})", e.what()));
+  }
+  json back;
+  core::to_json(back, cfg);
+  checkKnownKeys(base, back, "base", source);
+  return cfg;
+}
+
+SweepGroup parseGroup(const json& g, const std::string& where, std::string_view source) {
+  if (!g.is_object()) bad(source, where, "expected an object of value lists");
+  SweepGroup out;
+  for (const auto& [key, raw] : g.items()) {
+    const std::string field = where + "." + key;
+    if (key == "replicas") continue;
+    const json list = asList(raw);
+    if (list.empty()) bad(source, field, "empty list");
+    if (key == "width") {
+      for (const json& v : list) {
+        if (v.is_string() && v.get<std::string>() == "biperiodic") {
+          out.widths.push_back({0.0, true});  // period filled in by parseSweepSpec
+        } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
+          out.widths.push_back({v.get<double>(), false});
+        } else {
+          bad(source, field, fmt::format("expected a positive number or \"biperiodic\" (got {})", v.dump()));
+        }
+      }
+    } else if (key == "shape") {
+      for (const json& v : list) {
+        if (!v.is_string()) bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", v.dump()));
+        try {
+          out.shapes.push_back(core::shapeFromString(v.get<std::string>()));
+        } catch (const std::invalid_argument&) {
+          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", v.dump()));
+        }
+      }
+    } else if (key == "small_fraction") {
+      for (const json& v : list) {
+        if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 100.0))
+          bad(source, field, fmt::format("x_S must be a number in [0, 100] (got {})", v.dump()));
+        out.smallFractions.push_back(v.get<double>());
+      }
+    } else if (key == "wall_friction") {
+      for (const json& v : list) {
+        if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
+          bad(source, field, fmt::format("mu_w must be a number >= 0 (got {})", v.dump()));
+        out.wallFrictions.push_back(v.get<double>());
+      }
+    } else if (key == "seed") {
+      for (const json& v : list) {
+        if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
+          bad(source, field, fmt::format("seeds must be non-negative integers (got {})", v.dump()));
+        out.seeds.push_back(v.get<std::uint64_t>());
+      }
+    } else if (key == "backend") {
+      const auto& names = backends::backendNames();
+      for (const json& v : list) {
+        if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
+          bad(source, field, fmt::format("unknown backend {} (known: nscd, bullet)", v.dump()));
+        out.backends.push_back(v.get<std::string>());
+      }
+    } else {
+      bad(source, field,
+          "unknown key (known: width, shape, small_fraction, wall_friction, seed, replicas, backend)");
+    }
+  }
+  if (g.contains("replicas")) {
+    if (g.contains("seed")) bad(source, where + ".replicas", "give either seed or replicas, not both");
+    const json& r = g.at("replicas");
+    if (!r.is_number_integer() || r.get<std::int64_t>() < 1)
+      bad(source, where + ".replicas", fmt::format("expected an integer >= 1 (got {})", r.dump()));
+    // Replicas are seeds 1..n, so that "replicas": 3 and "seed": [1, 2, 3] name the same runs.
+    for (std::int64_t s = 1; s <= r.get<std::int64_t>(); ++s) out.seeds.push_back(static_cast<std::uint64_t>(s));
+  }
+  return out;
+}
+
+// What the deposition sees: the box without its wall friction (placement is purely geometric),
+// the population, the deposition settings and the seed. Runs with equal keys share a deposit.
+std::string depositKey(const core::RunConfig& cfg) {
+  json box, pop, dep;
+  core::BoxDef b = cfg.box;
+  b.wallFriction = 0.0;
+  core::to_json(box, b);
+  core::to_json(pop, cfg.population);
+  core::to_json(dep, cfg.deposition);
+  return json{{"box", box}, {"population", pop}, {"deposition", dep}, {"seed", cfg.seed}}.dump();
+}
+
+json readJsonFile(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open", path.string()));
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw std::invalid_argument(fmt::format("{}: not valid JSON ({})", path.string(), e.what()));
+  }
+}
+
+std::string trimNumber(double v) { return fmt::format("{:g}", v); }
+
+std::string utcNow() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+json runTableJson(const std::vector<SweepRun>& runs) {
+  json table = json::array();
+  for (const SweepRun& r : runs) {
+    json cfg;
+    core::to_json(cfg, r.config);
+    table.push_back({{"name", r.name}, {"deposit", r.depositName()}, {"label", r.label()}, {"config", cfg}});
+  }
+  return table;
+}
+
+// Serialises progress output of the workers: finished-run lines, and on a terminal one live line
+// that is redrawn in place (carriage return + erase-line) with the state of the running runs.
+class ProgressPrinter {
+ public:
+  ProgressPrinter(std::ostream& out, bool quiet, bool live) : out_(out), quiet_(quiet), live_(live) {}
+
+  void finished(const std::string& line) {
+    if (quiet_) return;
+    std::lock_guard lock(mutex_);
+    if (live_) out_ << "\r\033[K";
+    out_ << line << '\n';
+    drawLocked();
+    out_.flush();
+  }
+
+  void update(const std::string& run, double fraction, const std::string& status) {
+    if (quiet_ || !live_) return;
+    std::lock_guard lock(mutex_);
+    active_[run] = fmt::format("{} {:3.0f}% {}", run, 100.0 * std::clamp(fraction, 0.0, 1.0), status);
+    const auto now = std::chrono::steady_clock::now();
+    if (now - lastDraw_ < std::chrono::milliseconds(250)) return;  // a terminal needs no more
+    lastDraw_ = now;
+    drawLocked();
+    out_.flush();
+  }
+
+  void remove(const std::string& run) {
+    std::lock_guard lock(mutex_);
+    active_.erase(run);
+  }
+
+ private:
+  void drawLocked() {
+    if (!live_ || active_.empty()) return;
+    std::string line;
+    for (const auto& [name, s] : active_) line += (line.empty() ? "" : " | ") + s;
+    if (line.size() > 150) line.resize(150);
+    out_ << "\r\033[K" << line;
+  }
+
+  std::ostream& out_;
+  bool quiet_;
+  bool live_;
+  std::mutex mutex_;
+  std::map<std::string, std::string> active_;
+  std::chrono::steady_clock::time_point lastDraw_{};
+};
+
+// One deposit shared by the runs of its group: made or read back once, under the slot's lock, and
+// released when the last run of the group in this task has finished.
+struct DepositSlot {
+  std::mutex mutex;
+  std::shared_ptr<const core::Deposit> deposit;
+  std::size_t remaining = 0;
+};
+
+}  // namespace
+
+std::string SweepRun::depositName() const { return fmt::format("d{:04d}", depositIndex); }
+
+std::string familyName(const core::RunConfig& cfg) {
+  const bool bidisperse = cfg.population.smallFraction > 0.0;
+  const char* grains = cfg.population.shape == core::ShapeKind::Sphere ? "SP" : "PP";
+  return fmt::format("{}{}", bidisperse ? "B" : "M", grains);
+}
+
+std::string SweepRun::label() const {
+  const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
+                                             : trimNumber(config.box.width);
+  return fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config), trimNumber(config.population.smallFraction),
+                     w, trimNumber(config.box.wallFriction), config.seed, config.backend);
+}
+
+std::string_view toString(RunStatus s) {
+  switch (s) {
+    case RunStatus::Pending: return "pending";
+    case RunStatus::Incomplete: return "incomplete";
+    case RunStatus::Failed: return "failed";
+    case RunStatus::Done: return "done";
+  }
+  return "?";
+}
+
+SweepSpec parseSweepSpec(const json& doc, std::string_view source) {
+  if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
+  static const std::set<std::string> known = {"format", "version", "name", "base", "biperiodic_width", "vary",
+                                              "groups", "description"};
+  for (const auto& [key, v] : doc.items())
+    if (!known.count(key))
+      bad(source, key, "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups)");
+  if (doc.contains("format") && doc.at("format") != kSweepFormat)
+    bad(source, "format", fmt::format("expected \"{}\"", kSweepFormat));
+  if (doc.contains("version") && doc.at("version") != kSweepVersion)
+    bad(source, "version", fmt::format("expected {}", kSweepVersion));
+
+  SweepSpec spec;
+  spec.source = doc;
+  if (doc.contains("name")) {
+    if (!doc.at("name").is_string() || doc.at("name").get<std::string>().empty())
+      bad(source, "name", "expected a non-empty string");
+    spec.name = doc.at("name").get<std::string>();
+  }
+  if (doc.contains("base")) {
+    if (!doc.at("base").is_object()) bad(source, "base", "expected an object (a run configuration)");
+    spec.base = doc.at("base");
+  }
+  resolveBase(spec.base, source);  // refuse a bad base before anything else
+  if (doc.contains("biperiodic_width")) {
+    const json& w = doc.at("biperiodic_width");
+    if (!w.is_number() || !(w.get<double>() > 0.0))
+      bad(source, "biperiodic_width", fmt::format("expected a positive number (got {})", w.dump()));
+    spec.biperiodicWidth = w.get<double>();
+  }
+  if (doc.contains("vary") == doc.contains("groups"))
+    bad(source, "vary", "give exactly one of \"vary\" (one product) or \"groups\" (a list of products)");
+  if (doc.contains("vary")) {
+    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", source));
+  } else {
+    const json& groups = doc.at("groups");
+    if (!groups.is_array() || groups.empty()) bad(source, "groups", "expected a non-empty list of objects");
+    for (std::size_t i = 0; i < groups.size(); ++i)
+      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), source));
+  }
+  for (SweepGroup& g : spec.groups)
+    for (WidthChoice& w : g.widths)
+      if (w.periodicY) w.width = spec.biperiodicWidth;
+  return spec;
+}
+
+SweepSpec readSweepSpec(const fs::path& path) { return parseSweepSpec(readJsonFile(path), path.string()); }
+
+std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
+  const core::RunConfig base = resolveBase(spec.base, "sweep");
+  std::vector<SweepRun> runs;
+  std::set<std::string> seen;
+  std::map<std::string, std::size_t> deposits;
+
+  for (const SweepGroup& g : spec.groups) {
+    // An empty list takes the base value; writing it as a one-element list keeps one loop nest.
+    const auto shapes = g.shapes.empty() ? std::vector{base.population.shape} : g.shapes;
+    const auto fractions = g.smallFractions.empty() ? std::vector{base.population.smallFraction} : g.smallFractions;
+    const auto widths =
+        g.widths.empty() ? std::vector{WidthChoice{base.box.width, base.box.periodicY}} : g.widths;
+    const auto frictions = g.wallFrictions.empty() ? std::vector{base.box.wallFriction} : g.wallFrictions;
+    const auto seeds = g.seeds.empty() ? std::vector{base.seed} : g.seeds;
+    const auto backendList = g.backends.empty() ? std::vector{base.backend} : g.backends;
+    for (core::ShapeKind shape : shapes)
+      for (double xs : fractions)
+        for (const WidthChoice& w : widths)
+          for (double mu : frictions)
+            for (std::uint64_t seed : seeds)
+              for (const std::string& backend : backendList) {
+                SweepRun r;
+                r.config = base;
+                r.config.population.shape = shape;
+                r.config.population.smallFraction = xs;
+                r.config.box.width = w.width;
+                r.config.box.periodicY = w.periodicY;
+                // A biperiodic box has no side walls: mu_w is meaningless there, and keeping it
+                // would make mu_w variants of the reference distinct runs of the same physics.
+                r.config.box.wallFriction = w.periodicY ? 0.0 : mu;
+                r.config.seed = seed;
+                r.config.backend = backend;
+                json key;
+                core::to_json(key, r.config);
+                if (!seen.insert(key.dump()).second) continue;
+                r.index = runs.size();
+                const auto [it, inserted] = deposits.try_emplace(depositKey(r.config), deposits.size());
+                r.depositIndex = it->second;
+                runs.push_back(std::move(r));
+              }
+  }
+  const int digits = std::max<int>(4, static_cast<int>(std::to_string(runs.empty() ? 0 : runs.size() - 1).size()));
+  for (SweepRun& r : runs) {
+    r.name = fmt::format("r{:0{}d}", r.index, digits);
+    try {
+      r.config.validate();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("sweep run {} ({}): {}", r.name, r.label(), e.what()));
+    }
+  }
+  return runs;
+}
+
+std::vector<std::size_t> sliceRuns(const std::vector<SweepRun>& runs, std::size_t taskIndex, std::size_t taskCount) {
+  if (taskCount == 0) throw std::invalid_argument("--task-count must be >= 1");
+  if (taskIndex >= taskCount)
+    throw std::invalid_argument(fmt::format("--task-index must be in [0, {}) (got {})", taskCount, taskIndex));
+  std::vector<std::size_t> out;
+  for (const SweepRun& r : runs)
+    if (r.depositIndex % taskCount == taskIndex) out.push_back(r.index);
+  return out;
+}
+
+RunStatus runStatus(const fs::path& runDir) {
+  if (fs::exists(runDir / kDoneMarker)) return RunStatus::Done;
+  if (fs::exists(runDir / kFailedMarker)) return RunStatus::Failed;
+  if (fs::exists(runDir)) return RunStatus::Incomplete;
+  return RunStatus::Pending;
+}
+
+void prepareSweepDir(const fs::path& dir, const SweepSpec& spec, const std::vector<SweepRun>& runs) {
+  fs::create_directories(dir / "runs");
+  fs::create_directories(dir / "deposits");
+  const json table = runTableJson(runs);
+  const fs::path tablePath = dir / kSweepTable;
+  if (fs::exists(tablePath)) {
+    const json existing = readJsonFile(tablePath);
+    if (!existing.contains("runs") || existing.at("runs") != table)
+      throw std::invalid_argument(fmt::format(
+          "{}: holds a different sweep (its run table differs from this sweep file's); resume it with the "
+          "sweep file that made it, or choose a new output folder",
+          dir.string()));
+    return;
+  }
+  // Several tasks of a job array may get here at once: each writes the same bytes atomically.
+  const json doc = {{"format", "confpack-sweep-table"},
+                    {"version", 1},
+                    {"name", spec.name},
+                    {"sweep", spec.source},
+                    {"runs", table}};
+  core::writeFileAtomically(tablePath, doc.dump(1));
+}
+
+std::vector<SweepRun> readRunTable(const fs::path& dir, SweepSpec* spec) {
+  const fs::path tablePath = dir / kSweepTable;
+  if (!fs::exists(tablePath))
+    throw std::invalid_argument(fmt::format("{}: not a sweep folder (no {})", dir.string(), kSweepTable));
+  const json doc = readJsonFile(tablePath);
+  if (doc.value("format", std::string()) != "confpack-sweep-table" || !doc.contains("runs") || !doc.at("runs").is_array())
+    throw std::invalid_argument(fmt::format("{}: format: not a confpack sweep table", tablePath.string()));
+  if (spec) *spec = parseSweepSpec(doc.at("sweep"), tablePath.string() + ": sweep");
+  std::vector<SweepRun> runs;
+  std::map<std::string, std::size_t> deposits;
+  for (const json& r : doc.at("runs")) {
+    SweepRun run;
+    run.index = runs.size();
+    run.name = r.at("name").get<std::string>();
+    core::from_json(r.at("config"), run.config);
+    const std::string dep = r.at("deposit").get<std::string>();
+    run.depositIndex = static_cast<std::size_t>(std::stoul(dep.substr(1)));
+    runs.push_back(std::move(run));
+  }
+  return runs;
+}
+
+std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& dir, std::optional<std::size_t> taskIndex,
+                           std::size_t taskCount) {
+  std::set<std::size_t> slice;
+  if (taskIndex)
+    for (std::size_t i : sliceRuns(runs, *taskIndex, taskCount)) slice.insert(i);
+  std::ostringstream out;
+  out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}{}\n", "run", "deposit", "family", "x_S", "W",
+                     "mu_w", "seed", "backend", dir.empty() ? "" : " status");
+  for (const SweepRun& r : runs) {
+    if (taskIndex && !slice.count(r.index)) continue;
+    const std::string w = r.config.box.periodicY ? fmt::format("bi{}", trimNumber(r.config.box.width))
+                                                 : trimNumber(r.config.box.width);
+    out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(),
+                       familyName(r.config), trimNumber(r.config.population.smallFraction), w,
+                       trimNumber(r.config.box.wallFriction), r.config.seed, r.config.backend);
+    if (!dir.empty()) out << ' ' << toString(runStatus(dir / "runs" / r.name));
+    out << '\n';
+  }
+  return out.str();
+}
+
+SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOptions& opt, const SweepRunFn& run,
+                      const SweepDepositFn& makeDeposit) {
+  if (opt.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", opt.jobs));
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<SweepRun> runs = expandRuns(spec);
+  const std::vector<std::size_t> slice = sliceRuns(runs, opt.taskIndex, opt.taskCount);
+  prepareSweepDir(dir, spec, runs);
+
+  SweepSummary summary;
+  summary.total = runs.size();
+  summary.inSlice = slice.size();
+
+  std::vector<std::size_t> todo;
+  std::map<std::size_t, DepositSlot> slots;
+  for (std::size_t i : slice) {
+    if (runStatus(dir / "runs" / runs[i].name) == RunStatus::Done) {
+      ++summary.alreadyDone;
+      continue;
+    }
+    todo.push_back(i);
+    ++slots[runs[i].depositIndex].remaining;
+  }
+
+  std::ostream& log = opt.log ? *opt.log : std::cerr;
+  ProgressPrinter printer(log, opt.quiet, opt.live);
+  if (!opt.quiet)
+    printer.finished(fmt::format("sweep {}: {} runs, {} in this task ({}/{}), {} already done, {} to run with {} job{}",
+                                 spec.name, runs.size(), slice.size(), opt.taskIndex, opt.taskCount,
+                                 summary.alreadyDone, todo.size(), opt.jobs, opt.jobs > 1 ? "s" : ""));
+
+  std::atomic<std::size_t> next{0};
+  std::atomic<std::size_t> finishedCount{0};
+  std::atomic<std::size_t> failedCount{0};
+  const std::size_t total = todo.size();
+
+  auto depositFor = [&](const SweepRun& r) -> std::shared_ptr<const core::Deposit> {
+    DepositSlot& slot = slots.at(r.depositIndex);
+    std::lock_guard lock(slot.mutex);
+    if (!slot.deposit) {
+      const fs::path file = dir / "deposits" / (r.depositName() + ".json");
+      if (fs::exists(file)) {
+        slot.deposit = std::make_shared<const core::Deposit>(readDeposit(file));
+      } else {
+        auto made = std::make_shared<const core::Deposit>(makeDeposit(r.config));
+        writeDeposit(*made, r.config.box, file);
+        slot.deposit = std::move(made);
+      }
+    }
+    return slot.deposit;
+  };
+
+  auto release = [&](const SweepRun& r) {
+    DepositSlot& slot = slots.at(r.depositIndex);
+    std::lock_guard lock(slot.mutex);
+    if (--slot.remaining == 0) slot.deposit.reset();
+  };
+
+  auto worker = [&]() {
+    for (;;) {
+      const std::size_t k = next.fetch_add(1);
+      if (k >= total) return;
+      const SweepRun& r = runs[todo[k]];
+      const fs::path runDir = dir / "runs" / r.name;
+      const auto t0 = std::chrono::steady_clock::now();
+      json result;
+      std::string error;
+      try {
+        // Anything left in an unfinished folder may be half written: start from nothing.
+        fs::remove_all(runDir);
+        fs::create_directories(runDir);
+        json cfg;
+        core::to_json(cfg, r.config);
+        core::writeFileAtomically(runDir / "config.json", cfg.dump(2));
+        const std::shared_ptr<const core::Deposit> deposit = depositFor(r);
+        const std::string tag = fmt::format("{} {}", r.name, r.config.backend);
+        result = run(r.config, runDir, *deposit,
+                     [&](double fraction, const std::string& status) { printer.update(tag, fraction, status); });
+        printer.remove(tag);
+      } catch (const std::exception& e) {
+        error = e.what();
+        if (error.empty()) error = "unknown error";
+      } catch (...) {
+        error = "unknown error";
+      }
+      release(r);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const std::size_t n = finishedCount.fetch_add(1) + 1;
+      const std::string w = r.config.box.periodicY ? "bi" + trimNumber(r.config.box.width)
+                                                   : trimNumber(r.config.box.width);
+      if (error.empty()) {
+        // The marker is the last thing written, atomically: its presence means result.json and
+        // everything else of the run is complete.
+        json done = {{"name", r.name},      {"status", "done"},       {"wall_s", seconds},
+                     {"finished", utcNow()}, {"label", r.label()}};
+        if (result.contains("solid_fraction")) done["solid_fraction"] = result.at("solid_fraction");
+        if (result.contains("equilibrium") && result.at("equilibrium").contains("reached"))
+          done["equilibrium_reached"] = result.at("equilibrium").at("reached");
+        try {
+          core::writeFileAtomically(runDir / kDoneMarker, done.dump(2));
+        } catch (const std::exception& e) {
+          error = fmt::format("cannot write {}: {}", kDoneMarker, e.what());
+        }
+      }
+      if (error.empty()) {
+        std::string phi = "phi=?";
+        if (result.contains("solid_fraction") && result.at("solid_fraction").is_number())
+          phi = fmt::format("phi={:.3f}", result.at("solid_fraction").get<double>());
+        const bool unequilibrated = result.contains("equilibrium") && result.at("equilibrium").is_object() &&
+                                    result.at("equilibrium").value("reached", true) == false;
+        printer.finished(fmt::format("[{}/{}] {} {} W={} {} {:.0f} s{}", n, total, r.name, r.config.backend, w,
+                                     phi, seconds, unequilibrated ? " (NOT equilibrated)" : ""));
+      } else {
+        failedCount.fetch_add(1);
+        try {
+          core::writeFileAtomically(runDir / kFailedMarker,
+                                    json{{"name", r.name}, {"status", "failed"}, {"error", error},
+                                         {"wall_s", seconds}, {"finished", utcNow()}}
+                                        .dump(2));
+        } catch (...) {
+          // The folder lacks done.json either way, so the next invocation redoes the run.
+        }
+        printer.finished(fmt::format("[{}/{}] {} {} W={} FAILED after {:.0f} s: {}", n, total, r.name,
+                                     r.config.backend, w, seconds, error));
+      }
+    }
+  };
+
+  {
+    std::vector<std::jthread> pool;
+    const int workers = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(opt.jobs), std::max<std::size_t>(total, 1)));
+    for (int i = 1; i < workers; ++i) pool.emplace_back(worker);
+    worker();  // the calling thread is one of the workers
+  }
+
+  summary.failed = failedCount.load();
+  summary.ran = finishedCount.load() - summary.failed;
+  summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!opt.quiet)
+    printer.finished(fmt::format("sweep {}: {} finished, {} failed, {} skipped (already done) in {:.0f} s", spec.name,
+                                 summary.ran, summary.failed, summary.alreadyDone, summary.wallSeconds));
+  return summary;
+}
+
+}  // namespace confpack::app

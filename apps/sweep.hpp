@@ -1,0 +1,143 @@
+#pragma once
+// Sweeps (SPEC 7): a base run configuration and lists of values to combine (width W or
+// biperiodic, shape, x_S, mu_w, seeds, backends), expanded into a table of runs with stable names
+// r0000, r0001, ... that are run locally in parallel or sliced over the tasks of a cluster job
+// array, and that resume after an interruption without redoing a finished run.
+//
+// Folder layout of a sweep (docs/sweeps.md has the full description):
+//   SWEEPDIR/sweep.json            the sweep file as given + the expanded run table
+//   SWEEPDIR/deposits/d0000.json   one deposit per (box, population, deposition, seed)
+//   SWEEPDIR/runs/r0000/           config.json, result.json, profiles, packing, frames, and
+//                                  done.json (written last, atomically) or failed.json
+// A run folder without done.json is not finished: it is wiped and redone from scratch.
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "apps/run_pipeline.hpp"
+#include "core/deposition.hpp"
+#include "core/run_config.hpp"
+
+namespace confpack::app {
+
+/// Value of the "format" key of a sweep file.
+inline constexpr std::string_view kSweepFormat = "confpack-sweep";
+inline constexpr int kSweepVersion = 1;
+
+/// One confinement: side walls a gap `width` apart, or biperiodic with period `width`.
+struct WidthChoice {
+  double width = 10.0;     ///< [d_L]
+  bool periodicY = false;  ///< true: the unconfined (biperiodic) reference
+  bool operator==(const WidthChoice&) const = default;
+};
+
+/// One cartesian product of values; an empty list means "the base configuration's value".
+struct SweepGroup {
+  std::vector<WidthChoice> widths;
+  std::vector<core::ShapeKind> shapes;
+  std::vector<double> smallFractions;  ///< x_S [% by volume]
+  std::vector<double> wallFrictions;   ///< mu_w [-]
+  std::vector<std::uint64_t> seeds;
+  std::vector<std::string> backends;
+};
+
+/// A parsed, validated sweep file.
+struct SweepSpec {
+  std::string name = "sweep";
+  nlohmann::json base = nlohmann::json::object();  ///< partial RunConfig JSON over the defaults
+  double biperiodicWidth = 20.0;                   ///< period of "biperiodic" entries [d_L]
+  std::vector<SweepGroup> groups;
+  nlohmann::json source;                           ///< the document as given (kept in sweep.json)
+};
+
+/// One run of the table.
+struct SweepRun {
+  std::size_t index = 0;         ///< position in the run table
+  std::string name;              ///< "r0007": the folder name, never a float value
+  std::size_t depositIndex = 0;  ///< runs with the same index compact the same deposit
+  core::RunConfig config;        ///< fully resolved
+
+  /// "d0003": the deposit file stem.
+  std::string depositName() const;
+  /// Short human label, e.g. "MSP xS=0 W=10 mu=0.3 s1 nscd".
+  std::string label() const;
+};
+
+/// Validates a sweep document; throws std::invalid_argument naming `source` and the bad field.
+SweepSpec parseSweepSpec(const nlohmann::json& doc, std::string_view source = "sweep");
+/// Reads and parses a sweep file (JSON).
+SweepSpec readSweepSpec(const std::filesystem::path& path);
+
+/// Expands the groups in order (shape, x_S, W, mu_w, seed, backend; backend varies fastest), drops
+/// duplicates of runs already in the table, and gives each run its stable name and its deposit.
+/// Each resolved configuration is validated (std::invalid_argument names the run).
+std::vector<SweepRun> expandRuns(const SweepSpec& spec);
+
+/// Short name of a configuration's family: MSP, BSP, MPP, BPP (SPEC 2.3).
+std::string familyName(const core::RunConfig& cfg);
+
+/// Runs of one task of a job array: deposit groups are dealt round-robin over the tasks (group g
+/// goes to task g mod taskCount), so every run belongs to exactly one task and the runs sharing a
+/// deposit stay together (the deposit is computed once). Returns run indices in table order.
+std::vector<std::size_t> sliceRuns(const std::vector<SweepRun>& runs, std::size_t taskIndex,
+                                   std::size_t taskCount);
+
+enum class RunStatus { Pending, Incomplete, Failed, Done };
+std::string_view toString(RunStatus s);
+
+/// State of a run folder: Done when done.json exists, Failed when failed.json exists, Incomplete
+/// when the folder exists without either marker, Pending when there is no folder.
+RunStatus runStatus(const std::filesystem::path& runDir);
+
+inline constexpr const char* kDoneMarker = "done.json";
+inline constexpr const char* kFailedMarker = "failed.json";
+inline constexpr const char* kSweepTable = "sweep.json";
+
+/// Compacts `deposit` with cfg in runDir (which exists and is empty) and returns result.json's
+/// content; it must have written result.json before returning. The real one is runAndWrite.
+using SweepRunFn = std::function<nlohmann::json(const core::RunConfig& cfg, const std::filesystem::path& runDir,
+                                                const core::Deposit& deposit, const RunProgressFn& progress)>;
+/// Makes the deposit of a configuration (the real one is core::deposit with cfg's seed).
+using SweepDepositFn = std::function<core::Deposit(const core::RunConfig& cfg)>;
+
+struct SweepOptions {
+  int jobs = 1;                ///< runs at the same time in this process
+  std::size_t taskIndex = 0;   ///< this task's slice, in [0, taskCount)
+  std::size_t taskCount = 1;   ///< number of tasks sharing the sweep
+  bool quiet = false;          ///< no progress lines
+  std::ostream* log = nullptr; ///< progress stream; nullptr = std::cerr
+  bool live = false;           ///< redraw a live status line (only on a terminal)
+};
+
+struct SweepSummary {
+  std::size_t total = 0;        ///< runs in the table
+  std::size_t inSlice = 0;      ///< runs of this task
+  std::size_t alreadyDone = 0;  ///< found finished and skipped
+  std::size_t ran = 0;          ///< finished now
+  std::size_t failed = 0;       ///< threw; failed.json written, retried by the next invocation
+  double wallSeconds = 0.0;
+};
+
+/// Creates SWEEPDIR and writes sweep.json, or, when SWEEPDIR already holds a sweep, checks that its
+/// run table is the same (std::invalid_argument otherwise: a different sweep needs a new folder).
+void prepareSweepDir(const std::filesystem::path& dir, const SweepSpec& spec, const std::vector<SweepRun>& runs);
+
+/// Runs this task's unfinished runs with `opt.jobs` workers. A run that throws is recorded in
+/// failed.json and the sweep goes on. Deposits are made (or read back) once per deposit group.
+SweepSummary runSweep(const SweepSpec& spec, const std::filesystem::path& dir, const SweepOptions& opt,
+                      const SweepRunFn& run, const SweepDepositFn& makeDeposit);
+
+/// The run table as text (name, deposit, family, x_S, W, mu_w, seed, backend, status when `dir`
+/// is given), one line per run, for `confpack sweep --list`.
+std::string formatRunTable(const std::vector<SweepRun>& runs, const std::filesystem::path& dir = {},
+                           std::optional<std::size_t> taskIndex = {}, std::size_t taskCount = 1);
+
+/// Reads the run table back from SWEEPDIR/sweep.json (for the report).
+std::vector<SweepRun> readRunTable(const std::filesystem::path& dir, SweepSpec* spec = nullptr);
+
+}  // namespace confpack::app

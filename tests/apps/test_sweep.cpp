@@ -1,0 +1,303 @@
+// Sweep engine: run-table expansion, slicing, resume after interruption, shared deposits.
+// A fake runner (milliseconds per run) stands in for the physics; what is tested is the
+// bookkeeping that makes a study survive kills and cluster slicing.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "apps/deposit_store.hpp"
+#include "apps/sweep.hpp"
+#include "core/packing_io.hpp"
+
+namespace fs = std::filesystem;
+using namespace confpack;
+using nlohmann::json;
+
+namespace {
+
+fs::path freshDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_sweep_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+// 3 confinements x 2 seeds x 2 backends = 12 runs, 6 deposits.
+json smallSweep() {
+  return json::parse(R"({
+    "format": "confpack-sweep", "version": 1, "name": "unit",
+    "base": { "box": { "length_x": 6, "height": 4 } },
+    "biperiodic_width": 6,
+    "vary": { "width": [3, 5, "biperiodic"], "replicas": 2, "backend": ["nscd", "bullet"] }
+  })");
+}
+
+// A deposit that depends on the configuration and seed only, inside the box.
+core::Deposit fakeDeposit(const core::RunConfig& cfg) {
+  core::Deposit d;
+  for (int i = 0; i < 5; ++i) {
+    core::Grain g;
+    g.size = 1.0 + 0.01 * static_cast<double>((cfg.seed * 7 + i) % 5);
+    g.position = core::Vec3(0.1 + 1.1 * i, 0.5 * cfg.box.width, 0.5 + 0.1 * static_cast<double>(cfg.seed) + 1.0 / 3.0);
+    d.grains.push_back(g);
+    d.placeholders.push_back(g.position);
+  }
+  d.placeholderDiameter = 1.1;
+  d.pileHeight = 2.0 / 3.0 + static_cast<double>(cfg.seed);
+  return d;
+}
+
+std::string depositDigest(const core::Deposit& d) {
+  std::ostringstream s;
+  s.precision(17);
+  for (const core::Grain& g : d.grains) s << g.size << ' ' << g.position.transpose() << ';';
+  s << d.pileHeight;
+  return s.str();
+}
+
+// Records every call: run folder name -> number of calls, and the deposit each run received.
+struct Recorder {
+  std::mutex mutex;
+  std::map<std::string, int> calls;
+  std::map<std::string, std::string> deposits;
+  int depositCalls = 0;
+  std::set<std::string> throwOn;  // run names whose runner throws (an interruption)
+
+  app::SweepRunFn runner() {
+    return [this](const core::RunConfig& cfg, const fs::path& dir, const core::Deposit& dep,
+                  const app::RunProgressFn& progress) {
+      const std::string name = dir.filename().string();
+      {
+        std::lock_guard lock(mutex);
+        ++calls[name];
+        deposits[name] = depositDigest(dep);
+      }
+      if (progress) progress(0.5, "half");
+      // Half a result is written before the interruption, as a real kill would leave it.
+      json result = {{"solid_fraction", 0.6 + 0.001 * static_cast<double>(cfg.seed)}, {"backend", cfg.backend}};
+      std::ofstream(dir / "result.json") << result.dump();
+      {
+        std::lock_guard lock(mutex);
+        if (throwOn.count(name)) throw std::runtime_error("interrupted");
+      }
+      return result;
+    };
+  }
+  app::SweepDepositFn depositor() {
+    return [this](const core::RunConfig& cfg) {
+      std::lock_guard lock(mutex);
+      ++depositCalls;
+      return fakeDeposit(cfg);
+    };
+  }
+};
+
+app::SweepOptions quietOptions(int jobs = 1) {
+  app::SweepOptions o;
+  o.jobs = jobs;
+  o.quiet = true;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("run table: counts, stable names, backend fastest, shared deposits") {
+  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
+  const auto runs = app::expandRuns(spec);
+  REQUIRE(runs.size() == 12);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    CHECK(runs[i].index == i);
+    char expected[8];
+    std::snprintf(expected, sizeof expected, "r%04zu", i);
+    CHECK(runs[i].name == expected);
+    CHECK(runs[i].config.backend == (i % 2 == 0 ? "nscd" : "bullet"));
+    CHECK(runs[i].depositIndex == i / 2);  // the two backends of one (config, seed) share a deposit
+  }
+  CHECK(runs[0].config.box.width == 3.0);
+  CHECK_FALSE(runs[0].config.box.periodicY);
+  CHECK(runs[0].config.seed == 1);
+  CHECK(runs[2].config.seed == 2);
+  CHECK(runs[11].config.box.periodicY);
+  CHECK(runs[11].config.box.width == 6.0);
+  CHECK(runs[11].config.box.lengthX == 6.0);  // base value kept
+
+  // Expanding again gives the same table: names never depend on anything but the order.
+  const auto again = app::expandRuns(app::parseSweepSpec(smallSweep()));
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    json a, b;
+    core::to_json(a, runs[i].config);
+    core::to_json(b, again[i].config);
+    CHECK(a == b);
+    CHECK(runs[i].name == again[i].name);
+  }
+}
+
+TEST_CASE("run table: groups are unioned without duplicates; mu_w variants share the deposit") {
+  const json doc = json::parse(R"({
+    "groups": [
+      { "width": [5, 10], "small_fraction": [0, 25], "backend": "nscd" },
+      { "width": [5], "small_fraction": [0], "wall_friction": [0, 0.5], "backend": "nscd" }
+    ]})");
+  const auto runs = app::expandRuns(app::parseSweepSpec(doc));
+  // 4 from the first group; the second adds only mu_w = 0.5 (mu_w = 0 duplicates r0000).
+  REQUIRE(runs.size() == 5);
+  CHECK(runs[4].config.box.wallFriction == 0.5);
+  CHECK(runs[4].config.box.width == 5.0);
+  CHECK(runs[4].config.population.smallFraction == 0.0);
+  // Deposition is geometric and ignores mu_w: r0004 compacts r0000's deposit.
+  CHECK(runs[4].depositIndex == runs[0].depositIndex);
+  std::set<std::size_t> deposits;
+  for (const auto& r : runs) deposits.insert(r.depositIndex);
+  CHECK(deposits.size() == 4);
+}
+
+TEST_CASE("sweep file: bad input is refused with a message naming the field") {
+  auto message = [](const json& doc) {
+    try {
+      app::expandRuns(app::parseSweepSpec(doc, "s.json"));
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  using Catch::Matchers::Contains;
+  CHECK_THAT(message(json::parse(R"({"vary": {"width": [0]}})")), Contains("vary.width"));
+  CHECK_THAT(message(json::parse(R"({"vary": {"width": ["wide"]}})")), Contains("vary.width"));
+  CHECK_THAT(message(json::parse(R"({"vary": {"widht": [5]}})")), Contains("vary.widht"));
+  CHECK_THAT(message(json::parse(R"({"vary": {"backend": ["ode"]}})")), Contains("vary.backend"));
+  CHECK_THAT(message(json::parse(R"({"vary": {"small_fraction": [120]}})")), Contains("vary.small_fraction"));
+  CHECK_THAT(message(json::parse(R"({"vary": {"shape": ["cube"]}})")), Contains("vary.shape"));
+  CHECK_THAT(message(json::parse(R"({"vary": {"seed": [1], "replicas": 2}})")), Contains("replicas"));
+  CHECK_THAT(message(json::parse(R"({"base": {"box": {"widht": 5}}, "vary": {}})")), Contains("base.box.widht"));
+  CHECK_THAT(message(json::parse(R"({"base": {"box": {"length_x": -1}}, "vary": {}})")), Contains("length_x"));
+  CHECK_THAT(message(json::parse(R"({"vary": {}, "groups": [{}]})")), Contains("vary"));
+  CHECK_THAT(message(json::parse(R"({"vary": {}, "colour": 1})")), Contains("colour"));
+  CHECK(message(json::parse(R"({"vary": {"width": [5, "biperiodic"]}})")) == "accepted");
+}
+
+TEST_CASE("slicing covers every run exactly once and keeps deposit groups together") {
+  const auto runs = app::expandRuns(app::parseSweepSpec(smallSweep()));
+  for (std::size_t k = 1; k <= 7; ++k) {
+    std::map<std::size_t, int> seen;
+    std::map<std::size_t, std::size_t> taskOfDeposit;
+    for (std::size_t t = 0; t < k; ++t)
+      for (std::size_t i : app::sliceRuns(runs, t, k)) {
+        ++seen[i];
+        const auto [it, inserted] = taskOfDeposit.try_emplace(runs[i].depositIndex, t);
+        CHECK(it->second == t);
+      }
+    CHECK(seen.size() == runs.size());
+    for (const auto& [i, n] : seen) CHECK(n == 1);
+  }
+  CHECK_THROWS_AS(app::sliceRuns(runs, 3, 3), std::invalid_argument);
+  CHECK_THROWS_AS(app::sliceRuns(runs, 0, 0), std::invalid_argument);
+}
+
+TEST_CASE("interrupted sweep resumes: finished runs are never redone, unfinished ones are") {
+  const fs::path dir = freshDir("resume");
+  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
+  Recorder rec;
+  rec.throwOn = {"r0003", "r0008"};
+  const app::SweepSummary first = app::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
+  CHECK(first.total == 12);
+  CHECK(first.ran == 10);
+  CHECK(first.failed == 2);
+  CHECK(app::runStatus(dir / "runs" / "r0003") == app::RunStatus::Failed);
+  CHECK(app::runStatus(dir / "runs" / "r0000") == app::RunStatus::Done);
+  // r0003 has a result.json but no done marker: it must not count as finished.
+  CHECK(fs::exists(dir / "runs" / "r0003" / "result.json"));
+
+  // A kill in the middle of a run leaves a folder with a result but no marker.
+  fs::remove(dir / "runs" / "r0005" / app::kDoneMarker);
+  CHECK(app::runStatus(dir / "runs" / "r0005") == app::RunStatus::Incomplete);
+
+  rec.throwOn.clear();
+  const app::SweepSummary second = app::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
+  CHECK(second.alreadyDone == 9);
+  CHECK(second.ran == 3);
+  CHECK(second.failed == 0);
+  for (const auto& [name, n] : rec.calls) {
+    INFO(name);
+    CHECK(n == ((name == "r0003" || name == "r0005" || name == "r0008") ? 2 : 1));
+  }
+  CHECK(rec.calls.size() == 12);
+  // Deposits were made once per group; the resumed runs read them back from disk.
+  CHECK(rec.depositCalls == 6);
+
+  // A third invocation finds nothing to do.
+  const app::SweepSummary third = app::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
+  CHECK(third.ran == 0);
+  CHECK(third.alreadyDone == 12);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("both backends of one (configuration, seed) compact the same deposit, also after a resume") {
+  const fs::path dir = freshDir("deposit");
+  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
+  const auto runs = app::expandRuns(spec);
+  Recorder rec;
+  rec.throwOn = {"r0001"};  // bullet's run of deposit d0000 fails the first time
+  app::runSweep(spec, dir, quietOptions(2), rec.runner(), rec.depositor());
+  const std::string firstDigest = rec.deposits.at("r0000");
+  rec.throwOn.clear();
+  app::runSweep(spec, dir, quietOptions(2), rec.runner(), rec.depositor());
+  // Read back from deposits/d0000.json bit for bit.
+  CHECK(rec.deposits.at("r0001") == firstDigest);
+  for (const auto& r : runs) {
+    const auto& partner = runs[r.index ^ 1u];
+    CHECK(rec.deposits.at(r.name) == rec.deposits.at(partner.name));
+    CHECK(rec.deposits.at(r.name) == depositDigest(fakeDeposit(r.config)));
+  }
+  // Different seeds give different deposits (the digest is not trivially constant).
+  CHECK(rec.deposits.at("r0000") != rec.deposits.at("r0002"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("job-array slices run separately in one folder finish the study; parallel jobs run each once") {
+  const fs::path dir = freshDir("slices");
+  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
+  Recorder rec;
+  std::size_t ran = 0;
+  for (std::size_t t = 0; t < 3; ++t) {
+    app::SweepOptions o = quietOptions(2);
+    o.taskIndex = t;
+    o.taskCount = 3;
+    const auto s = app::runSweep(spec, dir, o, rec.runner(), rec.depositor());
+    CHECK(s.inSlice == 4);
+    ran += s.ran;
+  }
+  CHECK(ran == 12);
+  CHECK(rec.calls.size() == 12);
+  for (const auto& [name, n] : rec.calls) CHECK(n == 1);
+  const std::string listing = app::formatRunTable(app::readRunTable(dir), dir);
+  CHECK(listing.find("pending") == std::string::npos);
+  CHECK(listing.find("r0011") != std::string::npos);
+
+  // The folder belongs to this sweep: another sweep file is refused there.
+  json other = smallSweep();
+  other["vary"]["width"] = json::array({4});
+  CHECK_THROWS_AS(app::runSweep(app::parseSweepSpec(other), dir, quietOptions(), rec.runner(), rec.depositor()),
+                  std::invalid_argument);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("progress: one line per finished run in the documented form") {
+  const fs::path dir = freshDir("progress");
+  json doc = smallSweep();
+  doc["vary"]["width"] = json::array({5});
+  doc["vary"]["replicas"] = 1;
+  Recorder rec;
+  std::ostringstream log;
+  app::SweepOptions o;
+  o.log = &log;
+  app::runSweep(app::parseSweepSpec(doc), dir, o, rec.runner(), rec.depositor());
+  const std::string text = log.str();
+  CHECK(text.find("[1/2] r0000 nscd W=5 phi=0.601") != std::string::npos);
+  CHECK(text.find("[2/2] r0001 bullet W=5 phi=0.601") != std::string::npos);
+  fs::remove_all(dir);
+}
