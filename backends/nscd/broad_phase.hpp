@@ -1,0 +1,41 @@
+#pragma once
+// Broad phase of the nscd backend: a uniform cell grid rebuilt every step by counting sort, with
+// periodic wrapping along x (and y when the box is biperiodic). Each candidate pair comes out once,
+// a < b, together with the periodic image of b that is close to a.
+#include <cstdint>
+#include <vector>
+
+#include "core/box.hpp"
+
+namespace confpack::nscd {
+
+/// A pair whose bounding spheres (enlarged by the alert distance) overlap. b's image that touches
+/// a sits at position_b + shiftX * L_x e_x + shiftY * W e_y.
+struct CandidatePair {
+  int a = 0;
+  int b = 0;
+  std::int8_t shiftX = 0;
+  std::int8_t shiftY = 0;
+};
+
+class BroadPhase {
+ public:
+  /// `maxReach` is the largest interaction radius any grain will have [d_L]; it sets the cell size
+  /// 2 maxReach. Throws std::invalid_argument if a periodic length is shorter than two cells,
+  /// where the minimum image would no longer be the only image in reach.
+  BroadPhase(const core::BoxDef& box, double maxReach);
+
+  /// Fills `out` (cleared first) with every pair i < j such that |minimumImage(x_j - x_i)| <
+  /// reach_i + reach_j. Positions need not be wrapped. No allocation once the buffers have grown.
+  void findPairs(const std::vector<core::Vec3>& positions, const std::vector<double>& reach,
+                 std::vector<CandidatePair>& out);
+
+ private:
+  core::BoxDef box_;
+  double cell_ = 1.0;
+  int nx_ = 1, ny_ = 1;
+  // Per-step buffers (kept to avoid allocation).
+  std::vector<int> cellOf_, cellStart_, cellItems_, cursor_;
+};
+
+}  // namespace confpack::nscd

@@ -1,0 +1,220 @@
+#include "backends/nscd/contact_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace confpack::nscd {
+
+using core::Mat3;
+using core::Vec3;
+
+namespace {
+
+// c of the contact law (see the header): exact closing of open gaps, bounded overlap removal.
+double gapBias(double gap, double dt, const NscdSettings& s) {
+  if (gap >= 0.0) return gap / dt;
+  return std::max(s.gapCorrection * gap / dt, -s.maxCorrectionVelocity);
+}
+
+}  // namespace
+
+void ContactSolver::prepare(const std::vector<ContactGeometry>& contacts, const std::vector<Vec3>& positions,
+                            const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
+                            const NscdSettings& settings) {
+  normalRows_.clear();
+  frictionRows_.clear();
+  rowRef_.clear();
+  const int staticBody = static_cast<int>(bodies.size()) - 1;
+  for (const ContactGeometry& c : contacts) {
+    const bool wall = c.b < 0;
+    const double mu = wall ? box.wallFrictionOf(static_cast<core::WallId>(c.b)) : 0.0;
+    const BodyInverseMass& ma = bodies[c.a];
+    if (wall && mu > 0.0) {
+      rowRef_.push_back({true, static_cast<int>(frictionRows_.size())});
+      // Fixed tangent basis of a side wall (normal +-y): t1 = x, t2 = z. Fixed axes make the
+      // cached tangential impulses meaningful from one step to the next.
+      const Vec3 t1 = Vec3::UnitX(), t2 = Vec3::UnitZ();
+      for (int p = 0; p < c.pointCount; ++p) {
+        FrictionRow row;
+        row.a = c.a;
+        row.n = c.normal;
+        row.t1 = t1;
+        row.t2 = t2;
+        const Vec3 la = c.points[p] - positions[c.a];
+        row.axn = la.cross(c.normal);
+        row.axt1 = la.cross(t1);
+        row.axt2 = la.cross(t2);
+        row.iaAxn = ma.invInertia * row.axn;
+        row.iaAxt1 = ma.invInertia * row.axt1;
+        row.iaAxt2 = ma.invInertia * row.axt2;
+        row.invMa = ma.invMass;
+        row.invWnn = 1.0 / (ma.invMass + row.axn.dot(row.iaAxn));
+        // W_tt = (1/m) I_2 + [(l x t_i).I^-1 (l x t_j)]; its largest eigenvalue in closed form.
+        const double w11 = ma.invMass + row.axt1.dot(row.iaAxt1);
+        const double w22 = ma.invMass + row.axt2.dot(row.iaAxt2);
+        const double w12 = row.axt1.dot(row.iaAxt2);
+        const double half = 0.5 * (w11 - w22);
+        row.invWt = 1.0 / (0.5 * (w11 + w22) + std::sqrt(half * half + w12 * w12));
+        row.bias = gapBias(c.gaps[p], dt, settings);
+        row.mu = mu;
+        frictionRows_.push_back(row);
+      }
+      continue;
+    }
+    rowRef_.push_back({false, static_cast<int>(normalRows_.size())});
+    const int b = wall ? staticBody : c.b;
+    const BodyInverseMass& mb = bodies[b];
+    const Vec3 pb = wall ? Vec3::Zero()
+                         : Vec3(positions[c.b] + Vec3(c.shiftX * box.lengthX, c.shiftY * box.width, 0.0));
+    for (int p = 0; p < c.pointCount; ++p) {
+      NormalRow row;
+      row.a = c.a;
+      row.b = b;
+      row.n = c.normal;
+      const Vec3 la = c.points[p] - positions[c.a];
+      const Vec3 lb = wall ? Vec3::Zero() : Vec3(c.points[p] - pb);
+      row.axn = la.cross(c.normal);
+      row.bxn = lb.cross(c.normal);
+      row.iaAxn = ma.invInertia * row.axn;
+      row.ibBxn = mb.invInertia * row.bxn;
+      row.invMa = ma.invMass;
+      row.invMb = mb.invMass;
+      row.invW = 1.0 / (ma.invMass + mb.invMass + row.axn.dot(row.iaAxn) + row.bxn.dot(row.ibBxn));
+      row.bias = gapBias(c.gaps[p], dt, settings);
+      normalRows_.push_back(row);
+    }
+  }
+}
+
+void ContactSolver::warmStart(const ContactCache& cache, const std::vector<ContactGeometry>& contacts, double dt,
+                              std::vector<BodyVelocity>& vel) {
+  const double scale = cache.dt() > 0.0 ? dt / cache.dt() : 0.0;
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    const ContactGeometry& g = contacts[c];
+    const CachedContact* old = cache.find(ContactKey::of(g));
+    if (old == nullptr) continue;
+    // Same point count: point by point. Otherwise the previous total is shared equally (the
+    // points of a re-clipped face do not correspond one to one).
+    auto take = [&](const std::array<double, kMaxContactPoints>& v, int p) {
+      if (old->pointCount == g.pointCount) return scale * v[p];
+      double s = 0.0;
+      for (int q = 0; q < old->pointCount; ++q) s += v[q];
+      return scale * s / g.pointCount;
+    };
+    const RowRef ref = rowRef_[c];
+    for (int p = 0; p < g.pointCount; ++p) {
+      if (ref.friction) {
+        FrictionRow& row = frictionRows_[ref.first + p];
+        row.rn = take(old->normal, p);
+        row.rt1 = take(old->tangent1, p);
+        row.rt2 = take(old->tangent2, p);
+        // Impulse on a is minus that on the wall.
+        BodyVelocity& va = vel[row.a];
+        va.v -= row.invMa * (row.rn * row.n + row.rt1 * row.t1 + row.rt2 * row.t2);
+        va.w -= row.rn * row.iaAxn + row.rt1 * row.iaAxt1 + row.rt2 * row.iaAxt2;
+      } else {
+        NormalRow& row = normalRows_[ref.first + p];
+        row.r = take(old->normal, p);
+        vel[row.a].v -= row.invMa * row.r * row.n;
+        vel[row.a].w -= row.r * row.iaAxn;
+        vel[row.b].v += row.invMb * row.r * row.n;
+        vel[row.b].w += row.r * row.ibBxn;
+      }
+    }
+  }
+}
+
+int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
+  residual_ = 0.0;
+  if (normalRows_.empty() && frictionRows_.empty()) return 0;
+  int sweep = 0;
+  while (sweep < settings.maxIterations) {
+    ++sweep;
+    double sumDelta2 = 0.0, sumR2 = 0.0;
+    // Hot loop: one frictionless row. The static body has zero inverse mass, so wall rows need no
+    // branch; its velocity stays zero.
+    for (NormalRow& row : normalRows_) {
+      BodyVelocity& va = vel[row.a];
+      BodyVelocity& vb = vel[row.b];
+      const double un = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+      const double rNew = std::max(0.0, row.r - (un + row.bias) * row.invW);
+      const double dr = rNew - row.r;
+      row.r = rNew;
+      va.v -= (row.invMa * dr) * row.n;
+      va.w -= dr * row.iaAxn;
+      vb.v += (row.invMb * dr) * row.n;
+      vb.w += dr * row.ibBxn;
+      sumDelta2 += dr * dr;
+      sumR2 += rNew * rNew;
+    }
+    for (FrictionRow& row : frictionRows_) {
+      BodyVelocity& va = vel[row.a];
+      // Normal part. The wall does not move: u = -(v_a + w_a x l_a).
+      const double un = -(row.n.dot(va.v) + row.axn.dot(va.w));
+      const double rn = std::max(0.0, row.rn - (un + row.bias) * row.invWnn);
+      const double dn = rn - row.rn;
+      row.rn = rn;
+      va.v -= (row.invMa * dn) * row.n;
+      va.w -= dn * row.iaAxn;
+      // Tangential part with the updated normal impulse, projected on the Coulomb disc.
+      const double ut1 = -(row.t1.dot(va.v) + row.axt1.dot(va.w));
+      const double ut2 = -(row.t2.dot(va.v) + row.axt2.dot(va.w));
+      double rt1 = row.rt1 - ut1 * row.invWt;
+      double rt2 = row.rt2 - ut2 * row.invWt;
+      const double limit = row.mu * rn;
+      const double norm = std::hypot(rt1, rt2);
+      if (norm > limit) {
+        const double s = norm > 0.0 ? limit / norm : 0.0;
+        rt1 *= s;
+        rt2 *= s;
+      }
+      const double d1 = rt1 - row.rt1, d2 = rt2 - row.rt2;
+      row.rt1 = rt1;
+      row.rt2 = rt2;
+      va.v -= row.invMa * (d1 * row.t1 + d2 * row.t2);
+      va.w -= d1 * row.iaAxt1 + d2 * row.iaAxt2;
+      sumDelta2 += dn * dn + d1 * d1 + d2 * d2;
+      sumR2 += rn * rn + rt1 * rt1 + rt2 * rt2;
+    }
+    residual_ = sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : (sumDelta2 > 0.0 ? 1.0 : 0.0);
+    if (sweep >= settings.minIterations && residual_ < settings.tolerance) break;
+  }
+  return sweep;
+}
+
+double ContactSolver::normalImpulse(int c, int p) const {
+  const RowRef ref = rowRef_[c];
+  return ref.friction ? frictionRows_[ref.first + p].rn : normalRows_[ref.first + p].r;
+}
+
+Vec3 ContactSolver::tangentImpulse(int c, int p) const {
+  const RowRef ref = rowRef_[c];
+  if (!ref.friction) return Vec3::Zero();
+  const FrictionRow& row = frictionRows_[ref.first + p];
+  return row.rt1 * row.t1 + row.rt2 * row.t2;
+}
+
+void ContactSolver::exportImpulses(const std::vector<ContactGeometry>& contacts,
+                                   std::vector<CachedContact>& out) const {
+  out.clear();
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    const ContactGeometry& g = contacts[c];
+    CachedContact e;
+    e.key = ContactKey::of(g);
+    e.pointCount = g.pointCount;
+    const RowRef ref = rowRef_[c];
+    for (int p = 0; p < g.pointCount; ++p) {
+      if (ref.friction) {
+        const FrictionRow& row = frictionRows_[ref.first + p];
+        e.normal[p] = row.rn;
+        e.tangent1[p] = row.rt1;
+        e.tangent2[p] = row.rt2;
+      } else {
+        e.normal[p] = normalRows_[ref.first + p].r;
+      }
+    }
+    out.push_back(e);
+  }
+}
+
+}  // namespace confpack::nscd

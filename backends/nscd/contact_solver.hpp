@@ -1,0 +1,114 @@
+#pragma once
+// Contact solver of the nscd backend: nonlinear Gauss-Seidel on contact impulses
+// (Moreau 1994; Jean 1999 "The non-smooth contact dynamics method", CMAME 177; LMGC90's NLGS).
+//
+// Unknowns. One impulse per contact point and step (force x dt): r_n >= 0 along the normal n
+// (from a to b; +r_n n acts on b, -r_n n on a), plus (r_t1, r_t2) along a fixed tangent basis for
+// points on a side wall with friction mu_w > 0. Grain-grain and floor contacts are frictionless.
+//
+// Kinematics. With lever arms l_a = x_c - x_a, l_b = x_c - x_b' (b' the periodic image of b), the
+// relative velocity of b with respect to a at the point, along a unit direction e, is
+//     u_e = e.(v_b - v_a) + (l_b x e).w_b - (l_a x e).w_a
+// and v_{i+1} = v_free + M^-1 H r changes it linearly in r through the Delassus operator
+//     W = H^T M^-1 H,  local block  W_loc = Q^T [ sum_b (1/m_b) I - [l_b]x I_b^-1 [l_b]x ] Q,
+// Q = (n, t1, t2) the contact frame, I_b^-1 the world-frame inverse inertia R I_body^-1 R^T.
+// For a frictionless row  W_nn = sum_b ( 1/m_b + (l_b x n).I_b^-1 (l_b x n) ).
+//
+// Contact law (velocity Signorini with e_n = 0 and a gap term; g_m = gap in q_m):
+//     u_n + c >= 0,  r_n >= 0,  r_n (u_n + c) = 0,
+//     c = g_m / dt                                   if g_m >= 0,
+//     c = max(beta g_m / dt, -v_corr)                 if g_m < 0 (overlap).
+// Why g_m / dt and not g_m / (theta dt): the next step's predicted gap is, to first order,
+// g_m' = g_m + theta dt u + (1 - theta) dt u = g_m + dt u. Asking u >= -g_m/dt therefore lets a grain
+// close an open gap exactly within one step (no artificial gaps, no bounce: e_n = 0) and leaves
+// g_m' >= 0, so no overlap is created. With g_m / (theta dt) the end-of-step gap closes but, for
+// theta < 1, the next predicted gap is negative and the velocity flips sign every step (a
+// period-2 oscillation that never decays at theta = 1/2). Overlaps (only from unconverged
+// sweeps or the curvature of rotations) are removed by a fraction beta per step, capped at v_corr.
+//
+// Side-wall friction (Coulomb, e_t = 0): ||r_t|| <= mu r_n; u_t = 0 if ||r_t|| < mu r_n, otherwise
+// r_t = -mu r_n u_t / ||u_t||.
+//
+// Gauss-Seidel update of one row (a few dozen flops, Jacobian pieces precomputed):
+//     r_n <- max(0, r_n - (u_n + c) / W_nn)
+// and for a friction point, after its normal update, in the same visit,
+//     r_t <- proj_{||r_t|| <= mu r_n} ( r_t - u_t / w_t ),   w_t = largest eigenvalue of W_tt.
+// A scalar w_t (not W_tt^-1) keeps the fixed point exactly Coulomb's law: on the disc boundary,
+// u_t = -(lambda - 1) w_t r_t is anti-parallel to r_t; inside, u_t = 0.
+// Multi-point contacts (double, triple) are solved point by point as independent rows sharing the
+// normal: the total force and moment of the contact converge, while their split between points is
+// whatever the sweep reaches (the static problem leaves it undetermined).
+//
+// Convergence ("Quad"-type relative norm over one sweep k):
+//     eps_k = sqrt( sum_rows ||r^k - r^(k-1)||^2 / sum_rows ||r^k||^2 ),
+// stop when eps_k < tolerance (after min_iterations) or after max_iterations sweeps.
+// Rows are visited in contact order, which depends only on the configuration: bitwise determinism.
+#include <vector>
+
+#include "backends/nscd/contact_cache.hpp"
+#include "backends/nscd/narrow_phase.hpp"
+#include "backends/nscd/nscd_settings.hpp"
+
+namespace confpack::nscd {
+
+/// Linear and angular velocity of a body (hot solver state, apart from mass properties).
+struct BodyVelocity {
+  core::Vec3 v = core::Vec3::Zero();
+  core::Vec3 w = core::Vec3::Zero();
+};
+
+/// Inverse mass properties in the current configuration (world frame).
+struct BodyInverseMass {
+  double invMass = 0.0;
+  core::Mat3 invInertia = core::Mat3::Zero();
+};
+
+class ContactSolver {
+ public:
+  /// Builds the rows of every contact point: lever arms from `positions` (q_m), Delassus diagonal,
+  /// gap-correction bias. `bodies` has one entry per grain plus a last, static one (zero inverse
+  /// mass) standing for the walls. `wallFriction` is mu_w (applies to side walls only).
+  void prepare(const std::vector<ContactGeometry>& contacts, const std::vector<core::Vec3>& positions,
+               const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
+               const NscdSettings& settings);
+  /// Sets the impulses from the cache (scaled to this dt) and applies them to the velocities.
+  void warmStart(const ContactCache& cache, const std::vector<ContactGeometry>& contacts, double dt,
+                 std::vector<BodyVelocity>& velocities);
+  /// Gauss-Seidel sweeps until convergence; returns the number of sweeps.
+  int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
+  double residual() const { return residual_; }
+  int rowCount() const { return static_cast<int>(normalRows_.size() + frictionRows_.size()); }
+
+  /// Impulses of contact c, point p, after solve(): normal and tangential (world vector).
+  double normalImpulse(int c, int p) const;
+  core::Vec3 tangentImpulse(int c, int p) const;
+  /// Writes the solution into cache entries (same order as the contacts).
+  void exportImpulses(const std::vector<ContactGeometry>& contacts, std::vector<CachedContact>& out) const;
+
+ private:
+  struct NormalRow {
+    core::Vec3 n, axn, bxn, iaAxn, ibBxn;  // Jacobian pieces: n, l_a x n, l_b x n, I_a^-1 (l_a x n), ...
+    double invMa = 0.0, invMb = 0.0;
+    double invW = 0.0;   // 1 / W_nn
+    double bias = 0.0;   // c of the contact law [d_L / t0]
+    double r = 0.0;      // impulse
+    int a = 0, b = 0;    // body indices (b = the static body for walls)
+  };
+  struct FrictionRow {   // a point on a side wall: b is static
+    core::Vec3 n, t1, t2, axn, axt1, axt2, iaAxn, iaAxt1, iaAxt2;
+    double invMa = 0.0, invWnn = 0.0, invWt = 0.0, bias = 0.0, mu = 0.0;
+    double rn = 0.0, rt1 = 0.0, rt2 = 0.0;
+    int a = 0;
+  };
+  // Where the rows of contact c start: rowRef_[c] = {is friction, first row index}.
+  struct RowRef {
+    bool friction = false;
+    int first = 0;
+  };
+  std::vector<NormalRow> normalRows_;
+  std::vector<FrictionRow> frictionRows_;
+  std::vector<RowRef> rowRef_;
+  double residual_ = 0.0;
+};
+
+}  // namespace confpack::nscd

@@ -1,0 +1,148 @@
+#include "backends/nscd/narrow_phase.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace confpack::nscd {
+
+using core::Vec3;
+using core::WallId;
+
+bool collideSphereSphere(const Vec3& pa, double ra, const Vec3& pbImage, double rb, double alert,
+                         ContactGeometry& out) {
+  const Vec3 d = pbImage - pa;
+  const double dist = d.norm();
+  const double gap = dist - ra - rb;
+  if (gap >= alert || dist <= 0.0) return false;
+  out.type = core::ContactType::Simple;
+  out.feature = 0;
+  out.normal = d / dist;
+  out.pointCount = 1;
+  out.points[0] = pa + out.normal * (ra + 0.5 * gap);
+  out.gaps[0] = gap;
+  return true;
+}
+
+bool collideSphereWall(const Vec3& pa, double ra, WallId w, const core::BoxDef& box, double alert,
+                       ContactGeometry& out) {
+  const Vec3 inward = core::BoxDef::wallNormal(w);
+  const double gap = inward.dot(pa - box.wallPoint(w)) - ra;
+  if (gap >= alert) return false;
+  out.b = static_cast<int>(w);
+  out.shiftX = out.shiftY = 0;
+  out.type = core::ContactType::Simple;
+  out.feature = 0;
+  out.normal = -inward;
+  out.pointCount = 1;
+  out.points[0] = pa + out.normal * (ra + 0.5 * gap);
+  out.gaps[0] = gap;
+  return true;
+}
+
+std::uint32_t featureKey(const core::Feature& a, const core::Feature& b) {
+  // 2 bits of kind and 14 bits of (index + 1) per body; index -1 (see core::Feature) maps to 0.
+  auto pack = [](const core::Feature& f) {
+    return (static_cast<std::uint32_t>(f.kind) << 14) | (static_cast<std::uint32_t>(f.index + 1) & 0x3fffu);
+  };
+  return (pack(a) << 16) | pack(b);
+}
+
+void fromPolyhedronContact(const core::PolyhedronContact& pc, bool flip, ContactGeometry& out) {
+  out.type = pc.type;
+  out.normal = flip ? Vec3(-pc.normal) : pc.normal;
+  out.feature = flip ? featureKey(pc.featureB, pc.featureA) : featureKey(pc.featureA, pc.featureB);
+  out.pointCount = std::min<int>(static_cast<int>(pc.points.size()), kMaxContactPoints);
+  for (int p = 0; p < out.pointCount; ++p) {
+    out.points[p] = pc.points[p];
+    out.gaps[p] = pc.pointGaps[p];
+  }
+}
+
+NarrowPhase::NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction)
+    : box_(box), alertFraction_(alertFraction) {
+  for (const core::Grain& g : grains) {
+    if (!(g.size > 0.0) || !std::isfinite(g.size))
+      throw std::invalid_argument("nscd: every grain size must be a positive number");
+    poly_.push_back(g.shape == core::ShapeKind::Pinacoid ? g.polyhedron() : core::ConvexPolyhedron{});
+    shape_.push_back(g.shape);
+    radius_.push_back(g.boundingRadius());
+    size_.push_back(g.size);
+  }
+}
+
+double NarrowPhase::maxReach() const {
+  double r = 0.0;
+  for (std::size_t i = 0; i < radius_.size(); ++i) r = std::max(r, reach(static_cast<int>(i)));
+  return r;
+}
+
+void NarrowPhase::collidePair(const CandidatePair& pair, const std::vector<Vec3>& positions,
+                              const std::vector<core::Quat>& orientations,
+                              std::vector<ContactGeometry>& out) const {
+  const int a = pair.a, b = pair.b;
+  const Vec3 pb = positions[b] + Vec3(pair.shiftX * box_.lengthX, pair.shiftY * box_.width, 0.0);
+  const double alert = alertFraction_ * std::min(size_[a], size_[b]);
+  ContactGeometry c;
+  c.a = a;
+  c.b = b;
+  c.shiftX = pair.shiftX;
+  c.shiftY = pair.shiftY;
+  const bool sphereA = shape_[a] == core::ShapeKind::Sphere, sphereB = shape_[b] == core::ShapeKind::Sphere;
+  if (sphereA && sphereB) {
+    if (collideSphereSphere(positions[a], radius_[a], pb, radius_[b], alert, c)) out.push_back(c);
+    return;
+  }
+  // Polyhedra: the exact SAT routines of core/polyhedron_contact (shared with analysis).
+  auto placed = [&](int i, const Vec3& p) {
+    return core::PlacedPolyhedron{&poly_[i], p, orientations[i].toRotationMatrix()};
+  };
+  std::optional<core::PolyhedronContact> pc;
+  bool flip = false;
+  if (!sphereA && !sphereB) {
+    pc = core::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert);
+  } else if (!sphereA) {
+    pc = core::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
+  } else {
+    pc = core::collidePolyhedronSphere(placed(b, pb), positions[a], radius_[a], alert);
+    flip = true;
+  }
+  if (!pc || pc->points.empty()) return;
+  fromPolyhedronContact(*pc, flip, c);
+  out.push_back(c);
+}
+
+void NarrowPhase::collideWalls(int i, const std::vector<Vec3>& positions,
+                               const std::vector<core::Quat>& orientations,
+                               std::vector<ContactGeometry>& out) const {
+  const double alert = alertFraction_ * size_[i];
+  const Vec3& p = positions[i];
+  ContactGeometry c;
+  c.a = i;
+  if (shape_[i] == core::ShapeKind::Pinacoid) {
+    const core::PlacedPolyhedron placed{&poly_[i], p, orientations[i].toRotationMatrix()};
+    auto wall = [&](WallId w, double distance) {
+      if (distance - radius_[i] >= alert) return;  // bounding-sphere rejection
+      const auto pc = core::collidePolyhedronPlane(placed, box_.wallPoint(w), core::BoxDef::wallNormal(w), alert);
+      if (!pc || pc->points.empty()) return;
+      c.b = static_cast<int>(w);
+      fromPolyhedronContact(*pc, false, c);
+      out.push_back(c);
+    };
+    wall(WallId::Floor, p.z());
+    if (box_.periodicY) return;
+    wall(WallId::SideLow, p.y());
+    wall(WallId::SideHigh, box_.width - p.y());
+    return;
+  }
+  // Cheap rejection on the bounding radius before the exact routine.
+  if (p.z() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::Floor, box_, alert, c))
+    out.push_back(c);
+  if (box_.periodicY) return;
+  if (p.y() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::SideLow, box_, alert, c))
+    out.push_back(c);
+  if (box_.width - p.y() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::SideHigh, box_, alert, c))
+    out.push_back(c);
+}
+
+}  // namespace confpack::nscd

@@ -1,0 +1,77 @@
+#pragma once
+// Narrow phase of the nscd backend: exact contact geometry (plane, points, gaps) for a candidate
+// pair in the predicted configuration q_m, dispatched on the pair of shapes (STYLE: a pair table
+// indexed by shape type, after Box2D's s_registers).
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "backends/nscd/broad_phase.hpp"
+#include "core/box.hpp"
+#include "core/contact.hpp"
+#include "core/grain.hpp"
+#include "core/polyhedron_contact.hpp"
+
+namespace confpack::nscd {
+
+/// Largest number of points of one contact (a face-face clip of two pinacoids is reduced to 4).
+inline constexpr int kMaxContactPoints = 4;
+
+/// One contact plane between grain a and grain b (or a wall, b < 0) with its points.
+struct ContactGeometry {
+  int a = 0;
+  int b = 0;                       ///< grain index, or a core::WallId value
+  std::int8_t shiftX = 0;          ///< b's image: position_b + shiftX L_x e_x + shiftY W e_y
+  std::int8_t shiftY = 0;
+  core::ContactType type = core::ContactType::Simple;
+  std::uint32_t feature = 0;       ///< feature pair (polyhedra), part of the cache key; 0 for spheres
+  core::Vec3 normal = core::Vec3::UnitZ();  ///< unit, from a towards b
+  int pointCount = 0;
+  std::array<core::Vec3, kMaxContactPoints> points{};  ///< world frame, near a (midway across the gap)
+  std::array<double, kMaxContactPoints> gaps{};        ///< signed gap at each point [d_L]
+};
+
+/// Sphere-sphere: gap = |x_b - x_a| - r_a - r_b, normal along the centre line, one point midway
+/// across the gap. Returns false if the gap is not below `alert`.
+bool collideSphereSphere(const core::Vec3& pa, double ra, const core::Vec3& pbImage, double rb, double alert,
+                         ContactGeometry& out);
+
+/// Sphere-wall: the wall is the plane through box.wallPoint(w) with inward normal
+/// BoxDef::wallNormal(w); the contact normal points into the wall. One point.
+bool collideSphereWall(const core::Vec3& pa, double ra, core::WallId w, const core::BoxDef& box, double alert,
+                       ContactGeometry& out);
+
+/// Packs the feature pair of a polyhedron contact into a cache-key word (kind and index of each).
+std::uint32_t featureKey(const core::Feature& a, const core::Feature& b);
+
+/// Copies a polyhedron contact (core/polyhedron_contact.hpp) into `out`; `flip` reverses the
+/// normal and swaps the features (when the routine was called with the bodies exchanged).
+void fromPolyhedronContact(const core::PolyhedronContact& pc, bool flip, ContactGeometry& out);
+
+/// Shape data of every grain, and the dispatch over pairs of shapes.
+class NarrowPhase {
+ public:
+  /// Throws std::invalid_argument if a grain has a size that is not a positive number.
+  NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction);
+
+  /// Interaction radius of grain i for the broad phase: bounding radius + alert distance.
+  double reach(int i) const { return radius_[i] + alertFraction_ * size_[i]; }
+  double maxReach() const;
+
+  /// Appends the contact of a candidate pair (if its gap is within the alert distance).
+  void collidePair(const CandidatePair& pair, const std::vector<core::Vec3>& positions,
+                   const std::vector<core::Quat>& orientations, std::vector<ContactGeometry>& out) const;
+  /// Appends the contacts of grain i with the floor and the side walls.
+  void collideWalls(int i, const std::vector<core::Vec3>& positions, const std::vector<core::Quat>& orientations,
+                    std::vector<ContactGeometry>& out) const;
+
+ private:
+  core::BoxDef box_;
+  double alertFraction_ = 0.0;
+  std::vector<core::ShapeKind> shape_;
+  std::vector<double> radius_;  ///< sphere radius or bounding radius [d_L]
+  std::vector<double> size_;    ///< d or L [d_L]
+  std::vector<core::ConvexPolyhedron> poly_;  ///< body-frame shape of pinacoids (empty for spheres)
+};
+
+}  // namespace confpack::nscd

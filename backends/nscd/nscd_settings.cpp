@@ -1,0 +1,73 @@
+#include "backends/nscd/nscd_settings.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace confpack::nscd {
+
+void NscdSettings::validate() const {
+  auto bad = [](const char* key, const std::string& what) {
+    throw std::invalid_argument(fmt::format("nscd option '{}' {}", key, what));
+  };
+  if (!(theta >= 0.5 && theta <= 1.0)) bad("theta", fmt::format("must be in [0.5, 1] (got {})", theta));
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance))
+    bad("tolerance", fmt::format("must be a positive number (got {})", tolerance));
+  if (maxIterations < 1) bad("max_iterations", fmt::format("must be >= 1 (got {})", maxIterations));
+  if (minIterations < 1 || minIterations > maxIterations)
+    bad("min_iterations", fmt::format("must be in [1, max_iterations] (got {})", minIterations));
+  if (!(alertDistance >= 0.0) || !std::isfinite(alertDistance))
+    bad("alert_distance", fmt::format("must be >= 0 (got {})", alertDistance));
+  if (!(gapCorrection > 0.0 && gapCorrection <= 1.0))
+    bad("gap_correction", fmt::format("must be in (0, 1] (got {})", gapCorrection));
+  if (!(maxCorrectionVelocity > 0.0) || !std::isfinite(maxCorrectionVelocity))
+    bad("max_correction_velocity", fmt::format("must be a positive number (got {})", maxCorrectionVelocity));
+  if (threads < 1) bad("threads", fmt::format("must be >= 1 (got {})", threads));
+}
+
+void to_json(nlohmann::json& j, const NscdSettings& s) {
+  j = {{"theta", s.theta},
+       {"tolerance", s.tolerance},
+       {"max_iterations", s.maxIterations},
+       {"min_iterations", s.minIterations},
+       {"alert_distance", s.alertDistance},
+       {"gap_correction", s.gapCorrection},
+       {"max_correction_velocity", s.maxCorrectionVelocity},
+       {"threads", s.threads}};
+}
+
+NscdSettings settingsFromJson(const nlohmann::json& j) {
+  NscdSettings s;
+  if (j.is_null()) return s;
+  if (!j.is_object()) throw std::invalid_argument("nscd options must be a JSON object");
+  for (const auto& [key, value] : j.items()) {
+    auto number = [&](double& field) {
+      if (!value.is_number()) throw std::invalid_argument(fmt::format("nscd option '{}' must be a number", key));
+      field = value.get<double>();
+    };
+    auto integer = [&](int& field) {
+      if (!value.is_number_integer())
+        throw std::invalid_argument(fmt::format("nscd option '{}' must be an integer", key));
+      field = value.get<int>();
+    };
+    if (key == "theta") number(s.theta);
+    else if (key == "tolerance") number(s.tolerance);
+    else if (key == "max_iterations") integer(s.maxIterations);
+    else if (key == "min_iterations") integer(s.minIterations);
+    else if (key == "alert_distance") number(s.alertDistance);
+    else if (key == "gap_correction") number(s.gapCorrection);
+    else if (key == "max_correction_velocity") number(s.maxCorrectionVelocity);
+    else if (key == "threads") integer(s.threads);
+    else
+      throw std::invalid_argument(fmt::format(
+          "unknown nscd option '{}' (known: theta, tolerance, max_iterations, min_iterations, alert_distance, "
+          "gap_correction, max_correction_velocity, threads)",
+          key));
+  }
+  s.validate();
+  return s;
+}
+
+}  // namespace confpack::nscd

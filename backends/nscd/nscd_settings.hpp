@@ -1,0 +1,48 @@
+#pragma once
+// Settings of the native contact dynamics backend (SPEC 5.1), with their JSON round trip.
+// Every key of the options JSON is a field below; unknown keys are refused so that a typo never
+// silently runs with a default.
+#include <nlohmann/json.hpp>
+
+namespace confpack::nscd {
+
+/// Options of the nscd backend. JSON keys in brackets.
+struct NscdSettings {
+  /// ["theta"] Moreau-Jean theta in [0.5, 1] [-]. 0.5 integrates constant forces exactly
+  /// (free fall has zero position error); 1 is the fully implicit (dissipative) scheme.
+  double theta = 0.5;
+  /// ["tolerance"] Gauss-Seidel stopping threshold on the relative impulse change of one sweep,
+  /// eps = sqrt(sum_rows |r^k - r^(k-1)|^2 / sum_rows |r^k|^2) (a "Quad"-type norm: every row
+  /// counts with its impulse vector, normal and tangential) [-], > 0.
+  double tolerance = 1e-5;
+  /// ["max_iterations"] cap on Gauss-Seidel sweeps per step [-], >= 1.
+  int maxIterations = 2000;
+  /// ["min_iterations"] sweeps done even when the first ones already look converged [-], >= 1.
+  int minIterations = 2;
+  /// ["alert_distance"] a pair becomes a contact row when its gap in the predicted configuration
+  /// is below alert_distance x (the smaller size of the pair, or the grain size for a wall)
+  /// [fraction of d]. Must exceed the largest approach per step (SPEC 4: d/100). >= 0.
+  double alertDistance = 0.03;
+  /// ["gap_correction"] fraction beta in (0, 1] of an overlap removed per step. The contact law
+  /// imposes u_n >= -g_m / dt for an open gap g_m >= 0 (grains may close the gap exactly, with no
+  /// bounce) and u_n >= -beta g_m / dt for an overlap g_m < 0 (a bounded separation velocity that
+  /// removes the overlap geometrically, without kicking grains out of the pile). [-]
+  double gapCorrection = 0.2;
+  /// ["max_correction_velocity"] upper bound of the separation velocity the overlap correction
+  /// may ask for [sqrt(g d_L)], > 0. Protects against an initial configuration with large
+  /// overlaps exploding; irrelevant once the overlaps are small.
+  double maxCorrectionVelocity = 0.05;
+  /// ["threads"] worker threads [-], >= 1. The solver is single-threaded (sequential
+  /// Gauss-Seidel is what makes a run bitwise reproducible); the value is accepted and recorded.
+  int threads = 1;
+
+  /// Throws std::invalid_argument naming the field if a value is out of range.
+  void validate() const;
+};
+
+void to_json(nlohmann::json& j, const NscdSettings& s);
+/// Reads the keys that are present (missing ones keep their defaults); throws
+/// std::invalid_argument for an unknown key, a value of the wrong type, or one out of range.
+NscdSettings settingsFromJson(const nlohmann::json& j);
+
+}  // namespace confpack::nscd
