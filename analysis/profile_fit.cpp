@@ -1,0 +1,259 @@
+#include "analysis/profile_fit.hpp"
+
+#include <fmt/format.h>
+#include <gsl/gsl_blas.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_matrix.h>
+#include <gsl/gsl_multifit_nlinear.h>
+#include <gsl/gsl_vector.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+
+namespace confpack::analysis {
+
+double ProfileLaw::operator()(double y) const {
+  double b = phiBulk;
+  for (int i = 0; i < (bidisperse ? 2 : 1); ++i)
+    b += beta[i] * std::cos(std::numbers::pi * (2.0 * y - 1.0) / gamma[i]) * std::exp(-y / lambda[i]);
+  return (1.0 - std::exp(-y / alpha)) * b;
+}
+
+void ProfileFitDef::validate() const {
+  if (maxIterations < 1)
+    throw std::invalid_argument(fmt::format("profile fit: max_iterations must be >= 1 (got {})", maxIterations));
+}
+
+namespace {
+
+// Parameter vector layout: alpha, phi_b, beta_L, gamma_L, lambda_L [, beta_S, gamma_S, lambda_S].
+int parameterCount(bool bi) { return bi ? 8 : 5; }
+
+ProfileLaw fromVector(const gsl_vector* x, bool bi) {
+  ProfileLaw l;
+  l.bidisperse = bi;
+  l.alpha = gsl_vector_get(x, 0);
+  l.phiBulk = gsl_vector_get(x, 1);
+  for (int i = 0; i < (bi ? 2 : 1); ++i) {
+    l.beta[i] = gsl_vector_get(x, 2 + 3 * i);
+    l.gamma[i] = gsl_vector_get(x, 3 + 3 * i);
+    l.lambda[i] = gsl_vector_get(x, 4 + 3 * i);
+  }
+  if (!bi) l.beta[1] = 0.0;
+  return l;
+}
+
+void toVector(const ProfileLaw& l, gsl_vector* x) {
+  gsl_vector_set(x, 0, l.alpha);
+  gsl_vector_set(x, 1, l.phiBulk);
+  for (int i = 0; i < (l.bidisperse ? 2 : 1); ++i) {
+    gsl_vector_set(x, 2 + 3 * i, l.beta[i]);
+    gsl_vector_set(x, 3 + 3 * i, l.gamma[i]);
+    gsl_vector_set(x, 4 + 3 * i, l.lambda[i]);
+  }
+}
+
+struct Data {
+  const std::vector<double>* y;
+  const std::vector<double>* phi;
+  bool bi;
+};
+
+int residuals(const gsl_vector* x, void* params, gsl_vector* f) {
+  const Data& d = *static_cast<Data*>(params);
+  const ProfileLaw l = fromVector(x, d.bi);
+  for (std::size_t k = 0; k < d.y->size(); ++k) gsl_vector_set(f, k, l((*d.y)[k]) - (*d.phi)[k]);
+  return GSL_SUCCESS;
+}
+
+// Analytic Jacobian. With A = 1 - e^{-y/alpha}, B the bracket, c_i = cos(pi(2y-1)/gamma_i),
+// s_i = sin(...), e_i = e^{-y/lambda_i}:
+//   df/dalpha = -(y/alpha^2) e^{-y/alpha} B,   df/dphi_b = A,   df/dbeta_i = A c_i e_i,
+//   df/dgamma_i = A beta_i e_i s_i pi (2y-1)/gamma_i^2,   df/dlambda_i = A beta_i c_i e_i y/lambda_i^2.
+int jacobian(const gsl_vector* x, void* params, gsl_matrix* jac) {
+  const Data& d = *static_cast<Data*>(params);
+  const ProfileLaw l = fromVector(x, d.bi);
+  for (std::size_t k = 0; k < d.y->size(); ++k) {
+    const double y = (*d.y)[k];
+    const double ea = std::exp(-y / l.alpha), a = 1.0 - ea;
+    double b = l.phiBulk;
+    for (int i = 0; i < (d.bi ? 2 : 1); ++i) {
+      const double arg = std::numbers::pi * (2.0 * y - 1.0) / l.gamma[i];
+      const double c = std::cos(arg), s = std::sin(arg), e = std::exp(-y / l.lambda[i]);
+      b += l.beta[i] * c * e;
+      gsl_matrix_set(jac, k, 2 + 3 * i, a * c * e);
+      gsl_matrix_set(jac, k, 3 + 3 * i, a * l.beta[i] * e * s * std::numbers::pi * (2.0 * y - 1.0) / (l.gamma[i] * l.gamma[i]));
+      gsl_matrix_set(jac, k, 4 + 3 * i, a * l.beta[i] * c * e * y / (l.lambda[i] * l.lambda[i]));
+    }
+    gsl_matrix_set(jac, k, 0, -(y / (l.alpha * l.alpha)) * ea * b);
+    gsl_matrix_set(jac, k, 1, a);
+  }
+  return GSL_SUCCESS;
+}
+
+// Local maxima of a lightly smoothed profile (3-point running mean), y ascending.
+std::vector<std::size_t> peaks(const std::vector<double>& phi) {
+  std::vector<double> s(phi.size());
+  for (std::size_t k = 0; k < phi.size(); ++k) {
+    const std::size_t lo = k > 0 ? k - 1 : k, hi = std::min(phi.size() - 1, k + 1);
+    s[k] = (phi[lo] + phi[k] + phi[hi]) / 3.0;
+  }
+  std::vector<std::size_t> out;
+  for (std::size_t k = 1; k + 1 < s.size(); ++k)
+    if (s[k] > s[k - 1] && s[k] >= s[k + 1]) out.push_back(k);
+  return out;
+}
+
+struct Attempt {
+  ProfileFit fit;
+  bool valid = false;
+};
+
+Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, const ProfileLaw& start,
+               const ProfileFitDef& def) {
+  Attempt at;
+  const bool bi = def.bidisperse;
+  const std::size_t n = y.size(), p = parameterCount(bi);
+  Data data{&y, &phi, bi};
+  gsl_multifit_nlinear_fdf fdf;
+  fdf.f = residuals;
+  fdf.df = jacobian;
+  fdf.fvv = nullptr;
+  fdf.n = n;
+  fdf.p = p;
+  fdf.params = &data;
+  gsl_multifit_nlinear_parameters params = gsl_multifit_nlinear_default_parameters();
+  params.trs = gsl_multifit_nlinear_trs_lm;
+  gsl_multifit_nlinear_workspace* w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &params, n, p);
+  gsl_vector* x0 = gsl_vector_alloc(p);
+  gsl_matrix* covar = gsl_matrix_alloc(p, p);
+  toVector(start, x0);
+  int info = 0;
+  int status = gsl_multifit_nlinear_init(x0, &fdf, w);
+  if (status == GSL_SUCCESS) status = gsl_multifit_nlinear_driver(def.maxIterations, 1e-10, 1e-10, 1e-10, nullptr, nullptr, &info, w);
+  ProfileFit& f = at.fit;
+  f.iterations = static_cast<int>(gsl_multifit_nlinear_niter(w));
+  const gsl_vector* x = gsl_multifit_nlinear_position(w);
+  f.law = fromVector(x, bi);
+  double chisq = 0.0;
+  gsl_blas_ddot(gsl_multifit_nlinear_residual(w), gsl_multifit_nlinear_residual(w), &chisq);
+  f.chiSquare = chisq;
+  f.dof = static_cast<int>(n - p);
+  f.rms = std::sqrt(chisq / f.dof);
+  if (status != GSL_SUCCESS) {
+    f.reason = fmt::format("no convergence ({})", gsl_strerror(status));
+  } else {
+    gsl_multifit_nlinear_covar(gsl_multifit_nlinear_jac(w), 0.0, covar);
+    const double scale = chisq / f.dof;
+    gsl_vector* err = gsl_vector_alloc(p);
+    bool finite = true;
+    for (std::size_t i = 0; i < p; ++i) {
+      const double v = gsl_matrix_get(covar, i, i) * scale;
+      finite = finite && std::isfinite(v) && v >= 0.0;
+      gsl_vector_set(err, i, std::sqrt(std::max(0.0, v)));
+    }
+    f.error = fromVector(err, bi);
+    gsl_vector_free(err);
+    const ProfileLaw& l = f.law;
+    bool physical = l.alpha > 0.0 && l.gamma[0] > 0.0 && l.lambda[0] > 0.0 && std::isfinite(chisq);
+    if (bi) physical = physical && l.gamma[1] > 0.0 && l.lambda[1] > 0.0;
+    if (!physical) f.reason = "non-physical parameters (alpha, gamma or lambda <= 0)";
+    else if (!finite) f.reason = "singular covariance (parameters not determined by the data)";
+    else {
+      f.ok = true;
+      at.valid = true;
+    }
+  }
+  gsl_matrix_free(covar);
+  gsl_vector_free(x0);
+  gsl_multifit_nlinear_free(w);
+  return at;
+}
+
+}  // namespace
+
+ProfileLaw initialGuess(const std::vector<double>& y, const std::vector<double>& phi, bool bidisperse) {
+  ProfileLaw l;
+  l.bidisperse = bidisperse;
+  const double yEnd = y.back();
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t k = 0; k < y.size(); ++k)
+    if (y[k] >= yEnd - 1.0) {
+      sum += phi[k];
+      ++count;
+    }
+  l.phiBulk = count > 0 ? sum / count : phi.back();
+  const std::vector<std::size_t> pk = peaks(phi);
+  // First peak: the highest in the first d_L; second: the highest in (first + 0.5, first + 1.5).
+  std::optional<std::size_t> p1, p2;
+  for (std::size_t k : pk)
+    if (y[k] < 1.0 && (!p1 || phi[k] > phi[*p1])) p1 = k;
+  if (p1)
+    for (std::size_t k : pk)
+      if (y[k] > y[*p1] + 0.5 && y[k] < y[*p1] + 1.5 && (!p2 || phi[k] > phi[*p2])) p2 = k;
+  l.gamma[0] = p1 && p2 ? y[*p2] - y[*p1] : 0.9;
+  l.lambda[0] = 1.0;
+  if (p1 && p2) {
+    const double r = (phi[*p1] - l.phiBulk) / (phi[*p2] - l.phiBulk);
+    if (r > 1.0 && std::isfinite(r)) l.lambda[0] = std::clamp(l.gamma[0] / std::log(r), 0.1, 10.0);
+  }
+  l.beta[0] = p1 ? (phi[*p1] - l.phiBulk) * std::exp(y[*p1] / l.lambda[0]) : 0.1;
+  if (!(l.beta[0] > 0.0)) l.beta[0] = 0.1;
+  l.alpha = 0.1;
+  l.gamma[1] = 0.5 * l.gamma[0];
+  l.lambda[1] = 0.5 * l.lambda[0];
+  l.beta[1] = bidisperse ? 0.1 * l.beta[0] : 0.0;
+  return l;
+}
+
+ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>& phiAll, const ProfileFitDef& def) {
+  def.validate();
+  if (yAll.size() != phiAll.size())
+    throw std::invalid_argument(fmt::format("profile fit: {} positions for {} values", yAll.size(), phiAll.size()));
+  // GSL's default handler aborts; errors are reported through status codes instead.
+  static const gsl_error_handler_t* previous = gsl_set_error_handler_off();
+  (void)previous;
+  std::vector<double> y, phi;
+  for (std::size_t k = 0; k < yAll.size(); ++k)
+    if (yAll[k] > def.yMin && std::isfinite(phiAll[k])) {
+      y.push_back(yAll[k]);
+      phi.push_back(phiAll[k]);
+    }
+  ProfileFit best;
+  const int p = parameterCount(def.bidisperse);
+  if (static_cast<int>(y.size()) < 2 * p) {
+    best.reason = fmt::format("too few profile points ({}) for {} parameters", y.size(), p);
+    return best;
+  }
+  const ProfileLaw guess = initialGuess(y, phi, def.bidisperse);
+  bool found = false;
+  std::string lastReason;
+  for (double fa : {1.0, 0.5, 2.0})
+    for (double fl : {1.0, 0.5, 2.0}) {
+      ProfileLaw start = guess;
+      start.alpha *= fa;
+      start.lambda[0] *= fl;
+      start.lambda[1] *= fl;
+      Attempt at = runFit(y, phi, start, def);
+      if (!at.valid) {
+        lastReason = at.fit.reason;
+        continue;
+      }
+      if (!found || at.fit.chiSquare < best.chiSquare) {
+        best = at.fit;
+        found = true;
+      }
+    }
+  if (!found) {
+    best = ProfileFit{};
+    best.reason = lastReason.empty() ? "no start converged" : lastReason;
+  }
+  return best;
+}
+
+}  // namespace confpack::analysis
