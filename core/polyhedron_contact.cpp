@@ -233,7 +233,19 @@ DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B) {
       Vec3 c1, c2;
       const double d2 = closestSegmentSegment(A.v[ea[0]], A.v[ea[1]], B.v[eb[0]], B.v[eb[1]], s, t, c1, c2);
       const double d = std::sqrt(d2);
-      if (d < r.distance - tieTol && d > 0.0) r = {d, (c2 - c1) / d};
+      if (d < r.distance - tieTol && d > 0.0) {
+        // Crossing edges (closest points inside both): the normal is the cross product of the
+        // edges, exact even when d is tiny; (c2 - c1)/d would carry rounding/d.
+        const Vec3 da = A.v[ea[1]] - A.v[ea[0]], db = B.v[eb[1]] - B.v[eb[0]];
+        Vec3 u = da.cross(db);
+        const bool interior = s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0;
+        if (interior && u.norm() > kParallelEdgeSin * da.norm() * db.norm()) {
+          u.normalize();
+          r = {d, u.dot(c2 - c1) >= 0.0 ? u : Vec3(-u)};
+        } else {
+          r = {d, (c2 - c1) / d};
+        }
+      }
     }
   return r;
 }
@@ -697,8 +709,8 @@ Feature supportFeature(const PlacedPolyhedron& p, const Vec3& dir, double angleT
 ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double angleTol) {
   if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
   const WorldPoly A(a), B(b);
-  Vec3 normal;
-  double gap;
+  Vec3 normal = Vec3::UnitZ();
+  double gap = 0.0;
   pairNormal(A, B, kInf, normal, gap);
   return buildContact(A, B, normal, gap, angleTol).type;
 }
