@@ -116,6 +116,7 @@ Interpenetration interpenetration(const core::Packing& packing, const BulkRegion
   const std::vector<NeighbourPair> neighbours = neighbourPairs(packing);
   std::vector<OverlapPair> pinacoidPairs;
   bool anyPinacoid = false;
+  for (const core::Grain& g : packing.grains) anyPinacoid = anyPinacoid || g.shape == core::ShapeKind::Pinacoid;
   const core::Plane below{-core::Vec3::UnitZ(), -region.zLow}, above{core::Vec3::UnitZ(), region.zHigh};
   for (const NeighbourPair& np : neighbours) {
     const core::Grain& a = packing.grains[np.i];
@@ -134,7 +135,6 @@ Interpenetration interpenetration(const core::Packing& packing, const BulkRegion
       r.overlapVolume += v;
       ++r.overlappingPairs;
     } else {
-      anyPinacoid = true;
       const PlacedGrain pa(a), pb(b, a.position + np.separation);
       core::ConvexPolytope inter = pinacoidIntersection(pa.placed, pb.placed);
       if (inter.empty()) continue;

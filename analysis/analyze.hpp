@@ -1,0 +1,87 @@
+#pragma once
+// All per-run measurements of SPEC 6 on one packing, as the result.json blocks of SPEC 8.3 and
+// the CSV profiles. Read-only over the packing; the same code for both backends.
+//
+// Contacts: the packing's own list when it has one (a run: forces of the last step), otherwise
+// geometric contacts (analysis/geometric_contacts.hpp, all force-carrying).
+// Equilibrium: the run pipeline adds its own block (it has the velocities). Here, when the packing
+// carries contacts with forces and `equilibrium` is on, the SPEC 6.1 test is evaluated with all
+// velocities taken as zero ("velocities": "assumed_zero" in the block): the force and moment
+// balances are then exact, the kinetic ratio is 0 by assumption. Without contacts the block is
+// null (there are no forces to balance).
+// Profile fit: only with side walls (a biperiodic box has no wall profile); bidisperse law when
+// the packing holds both large and small grains (homogeneity's size threshold).
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "analysis/bulk_region.hpp"
+#include "analysis/coordination.hpp"
+#include "analysis/equilibrium.hpp"
+#include "analysis/fabric.hpp"
+#include "analysis/geometric_model.hpp"
+#include "analysis/geometric_contacts.hpp"
+#include "analysis/homogeneity.hpp"
+#include "analysis/interpenetration.hpp"
+#include "analysis/nematic.hpp"
+#include "analysis/profile_fit.hpp"
+#include "analysis/solid_fraction.hpp"
+
+namespace confpack::analysis {
+
+struct AnalysisOptions {
+  BulkRegionDef region{};
+  ProfileDef profile{};
+  InterpenetrationDef interpenetration{};
+  CoordinationDef coordination{};
+  GeometricContactDef geometricContacts{};
+  FabricDef fabric{};
+  HomogeneityDef homogeneity{};
+  ProfileFitDef profileFit{};          ///< `bidisperse` is decided from the grains
+  double boundaryDistance = 2.0;       ///< nematic boundary layer thickness [d_L]
+  bool equilibrium = true;             ///< evaluate SPEC 6.1 (zero velocities) when forces are present
+  core::Vec3 gravity = core::Vec3(0.0, 0.0, -1.0);  ///< [g]
+  double density = 1.0;                ///< rho
+  double forceRatio = 1e-4, momentRatio = 1e-4, kineticRatio = 1e-8;  ///< SPEC 6.1 thresholds
+
+  void validate() const;  ///< throws std::invalid_argument naming the bad field
+};
+
+/// Everything measured on one packing.
+struct Analysis {
+  int grains = 0;
+  double meanSize = 0.0;               ///< d_avg [d_L]
+  bool bidisperse = false;
+  BulkRegion region;
+  SolidFraction solid;
+  SolidFractionProfile phiProfile;
+  ProfileFit profileFit;               ///< ok = false with a reason when absent
+  std::optional<double> profileIntegralC;  ///< 2 int (phi_bulk - phi(y)) dy with the fitted phi_bulk
+  Interpenetration interpenetration;
+  bool geometricContacts = false;
+  Coordination coordination;
+  Fabric fabric;
+  Nematic nematic;
+  Homogeneity homogeneity;
+  std::optional<EquilibriumReport> equilibrium;
+};
+
+/// Runs every measurement. Throws std::invalid_argument for an unusable packing (e.g. a contact
+/// with an out-of-range grain, mixed sphere-pinacoid pairs) or bad options.
+Analysis analyze(const core::Packing& packing, const AnalysisOptions& options = {});
+
+/// The SPEC 8.3 blocks: n_grains, free_surface, bulk_region, solid_fraction, coordination,
+/// interpenetration_percent, anisotropy, fabric, nematic, profile_fit, equilibrium (null when not
+/// evaluated). Quantities that do not apply are null, not absent.
+nlohmann::json toJson(const Analysis& a);
+
+/// analyze() + toJson().
+nlohmann::json analyzePacking(const core::Packing& packing, const AnalysisOptions& options = {});
+
+/// Writes the CSV profiles into `dir` (which must exist), each atomically, with a header line and
+/// `# key: value` lines from `metadata` (seed, backend, version ...):
+/// phi_y.csv, z_y.csv, homogeneity_z.csv, homogeneity_y.csv, orientation_cos.csv,
+/// orientation_azimuth.csv.
+void writeProfiles(const std::filesystem::path& dir, const Analysis& a, const nlohmann::json& metadata);
+
+}  // namespace confpack::analysis

@@ -1,0 +1,107 @@
+// The aggregate analysis (result.json blocks of SPEC 8.3) and its CSV profiles.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include "analysis/analyze.hpp"
+#include "core/deposition.hpp"
+#include "lattices.hpp"
+
+using namespace confpack;
+using analysis::testing::simpleCubic;
+
+namespace {
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+TEST_CASE("analysis of a simple cubic lattice between walls", "[analysis][analyze]") {
+  core::Packing p = simpleCubic(6, 5, 12);
+  p.box.periodicY = false;  // spheres at y = 0.5 ... 4.5 touch both walls
+  const analysis::Analysis a = analysis::analyze(p);
+  const nlohmann::json j = analysis::toJson(a);
+  CHECK(j["n_grains"] == 360);
+  CHECK(j["solid_fraction"].get<double>() == Approx(std::numbers::pi / 6).epsilon(1e-12));
+  CHECK(j["free_surface"].get<double>() == Approx(12.0));
+  // The two outer columns of five touch a wall instead of a sixth sphere: Z = (3 x 6 + 2 x 5)/5.
+  CHECK(j["coordination"]["Z"].get<double>() == Approx(5.6));
+  CHECK(j["coordination"]["simple"].get<double>() == Approx(5.6));
+  CHECK(j["coordination"]["double"].get<double>() == 0.0);
+  CHECK(j["coordination"]["rattler_fraction"].get<double>() == 0.0);
+  CHECK(j["coordination"]["wall"].get<double>() == Approx(2.0 / 5.0));
+  CHECK(j["coordination"]["geometric_contacts"] == true);
+  CHECK(j["coordination"]["hyperstaticity"].is_null());
+  CHECK(j["interpenetration_percent"]["exact"].get<double>() == 0.0);
+  CHECK(j["interpenetration_percent"]["lattice_min"].is_null());
+  CHECK(j["interpenetration_percent"]["lattice_max"].is_null());
+  // Fabric: per grain 2 contacts along x and z, 1.6 along y: a = (5/2)(2 - 1.6)/5.6.
+  CHECK(j["anisotropy"].get<double>() == Approx(2.5 * 0.4 / 5.6));
+  CHECK(j["nematic"]["bulk"].is_null());
+  CHECK(j["nematic"]["boundary"].is_null());
+  CHECK(j["equilibrium"].is_null());
+  REQUIRE(j.contains("profile_fit"));
+  CHECK(j["profile_fit"].contains("lambda_L"));
+  CHECK(j["profile_fit"].contains("phi_bulk"));
+  // The folded profile of touching layers: its mean over the half width is pi/6.
+  double mean = 0.0;
+  for (double v : a.phiProfile.phi) mean += v;
+  mean /= a.phiProfile.phi.size();
+  CHECK(mean == Approx(std::numbers::pi / 6).epsilon(1e-9));
+
+  const auto dir = std::filesystem::temp_directory_path() / "confpack_test_analyze_profiles";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  analysis::writeProfiles(dir, a, {{"seed", 7}, {"backend", "none"}, {"version", "test"}});
+  for (const char* name : {"phi_y.csv", "z_y.csv", "homogeneity_z.csv", "homogeneity_y.csv", "orientation_cos.csv",
+                           "orientation_azimuth.csv"}) {
+    INFO(name);
+    const std::string text = slurp(dir / name);
+    CHECK(text.rfind("# confpack", 0) == 0);
+    CHECK(text.find("# seed: 7\n") != std::string::npos);
+    CHECK(text.find("# backend: none\n") != std::string::npos);
+  }
+  const std::string phi = slurp(dir / "phi_y.csv");
+  CHECK(phi.find("\ny,phi\n") != std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("analysis of a small pinacoid deposit", "[analysis][analyze][pinacoid]") {
+  core::BoxDef box;
+  box.lengthX = 5;
+  box.width = 6;
+  box.height = 9;
+  core::PopulationDef pop;
+  pop.shape = core::ShapeKind::Pinacoid;
+  core::DepositionDef def;
+  def.grainCount = 180;
+  core::Packing p;
+  p.box = box;
+  p.grains = core::deposit(box, pop, def, 3).grains;
+  const nlohmann::json j = analysis::analyzePacking(p);
+  INFO(j.dump(1));
+  CHECK(j["n_grains"] == 180);
+  CHECK(j["nematic"]["bulk"].is_number());
+  CHECK(j["nematic"]["boundary"].is_number());
+  CHECK(j["solid_fraction"].get<double>() > 0.1);
+  CHECK(j["solid_fraction"].get<double>() < 0.7);
+  // The deposit has no overlaps (grains sit inside non-overlapping placeholders).
+  CHECK(j["interpenetration_percent"]["exact"].get<double>() == 0.0);
+  CHECK(j["interpenetration_percent"]["lattice_min"].get<double>() == 0.0);
+  CHECK(j["interpenetration_percent"]["lattice_max"].get<double>() == 0.0);
+  // Pinacoids substituted into circumscribing placeholders touch nothing: all rattlers, and the
+  // hyperstaticity (over non-rattlers) is then undefined.
+  CHECK(j["coordination"]["rattler_fraction"].get<double>() == 1.0);
+  CHECK(j["coordination"]["hyperstaticity"].is_null());
+  // A contact naming a grain that does not exist is refused with a message, not a crash.
+  core::Contact bad;
+  bad.a = 0;
+  bad.b = 5000;
+  p.contacts = std::vector<core::Contact>{bad};
+  CHECK_THROWS_AS(analysis::analyzePacking(p), std::invalid_argument);
+}
