@@ -1,1 +1,33 @@
-int main() { return 0; }
+// confpack: the command line (SPEC 8.1). Thin: parse, dispatch to a subcommand, return its code.
+#include <CLI/CLI.hpp>
+
+#include "apps/cli_common.hpp"
+#include "apps/commands.hpp"
+
+int main(int argc, char** argv) {
+  using namespace confpack::app;
+  CLI::App app{
+      "confpack: dense packings of frictionless spheres and pinacoids between two walls, compacted by a "
+      "native NSCD solver or Bullet"};
+  app.name("confpack");
+  // Set before the subcommands are added: they copy the root's failure message.
+  app.failure_message(oneLineFailure);
+  app.require_subcommand(1);
+  registerDeposit(app);
+  registerRun(app);
+  registerAnalyze(app);
+  registerSweep(app);
+  registerReport(app);
+  registerReproduce(app);
+  registerBench(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // help -> 0; RuntimeError -> its code, silently
+    // Every other parse failure (unknown flag, bad value, missing --out) is bad input: exit 2,
+    // whatever CLI11's own numbering says.
+    if (code == kExitOk || e.get_name() == "RuntimeError") return code;
+    return kExitBadInput;
+  }
+  return kExitOk;
+}

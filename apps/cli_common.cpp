@@ -1,0 +1,200 @@
+#include "apps/cli_common.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <system_error>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "backends/backend_factory.hpp"
+#include "core/packing_io.hpp"
+
+namespace confpack::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A finite real in an interval, with a message a user can act on. CLI11's own range validators
+/// print their bounds as 300-digit numbers and accept "inf", hence these.
+CLI::Validator realIn(double lo, double hi, bool loOpen, bool hiOpen, const std::string& what,
+                      const std::string& typeName) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double x = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(x))
+          return fmt::format("must be {} (got '{}', not a finite number)", what, text);
+        const bool ok = (loOpen ? x > lo : x >= lo) && (hiOpen ? x < hi : x <= hi);
+        return ok ? std::string() : fmt::format("must be {} (got {})", what, text);
+      },
+      typeName);
+}
+
+const CLI::Validator kPositive = realIn(0.0, HUGE_VAL, true, true, "a positive number", "POSITIVE");
+const CLI::Validator kNonNegative = realIn(0.0, HUGE_VAL, false, true, "a number >= 0", "NON-NEGATIVE");
+
+/// Digits only: CLI11 would otherwise wrap "-1" into 2^64 - 1 for an unsigned seed.
+const CLI::Validator kUnsigned(
+    [](std::string& text) -> std::string {
+      const bool ok = !text.empty() && text.size() <= 19 && text.find_first_not_of("0123456789") == std::string::npos;
+      return ok ? std::string() : fmt::format("must be an integer in [0, 10^19) (got '{}')", text);
+    },
+    "UINT");
+
+}  // namespace
+
+void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired) {
+  // A string checked against the names, then converted: the help then reads {sphere,pinacoid}.
+  sub.add_option_function<std::string>(
+         "--shape", [&cfg](const std::string& s) { cfg.population.shape = core::shapeFromString(s); },
+         "Grain shape")
+      ->check(CLI::IsMember({"sphere", "pinacoid"}))
+      ->default_str(std::string(core::toString(cfg.population.shape)));
+  sub.add_option("--length-x", cfg.box.lengthX, "Period L_x along x [d_L]")
+      ->check(kPositive)
+      ->capture_default_str();
+  sub.add_option("--width", cfg.box.width, "Gap W between the side walls, or period along y with --periodic-y [d_L]")
+      ->check(kPositive)
+      ->capture_default_str();
+  sub.add_flag("--periodic-y", cfg.box.periodicY, "Periodic along y instead of side walls (unconfined reference)");
+  sub.add_option("--height", cfg.box.height, "Target final packing height h [d_L]")
+      ->check(kPositive)
+      ->capture_default_str();
+  sub.add_option("--small-fraction", cfg.population.smallFraction, "x_S, volume percentage of small grains (d_S = d_L/2)")
+      ->check(realIn(0.0, 100.0, false, false, "a percentage in [0, 100]", "PERCENT"))
+      ->capture_default_str();
+  sub.add_option("--wall-friction", cfg.box.wallFriction, "Coulomb friction mu_w of the side walls (floor frictionless)")
+      ->check(kNonNegative)
+      ->capture_default_str();
+  std::vector<std::string> names;
+  for (auto n : backends::backendNames()) names.emplace_back(n);
+  sub.add_option("--backend", cfg.backend, "Contact backend")->check(CLI::IsMember(names))->capture_default_str();
+  sub.add_option("--seed", cfg.seed, "Seed of every random stream (a run is a function of it)")
+      ->check(kUnsigned)
+      ->capture_default_str();
+  auto* out = sub.add_option("--out", opts.out, "Output directory (created; written all or nothing)")->type_name("DIR");
+  if (outRequired) out->required();
+  sub.add_option("--threads", cfg.threads, "Worker threads")->type_name("N")->check(CLI::Range(1, 4096))->capture_default_str();
+  auto* quiet = sub.add_flag("-q,--quiet", opts.quiet, "No progress output");
+  sub.add_flag("-v,--verbose", opts.verbosity, "More detail on stderr (repeatable)")->excludes(quiet);
+  sub.add_option("--pinacoid-G", cfg.population.pinacoid.widthRatio, "Pinacoid width G / L")
+      ->check(kPositive)
+      ->capture_default_str();
+  sub.add_option("--pinacoid-E", cfg.population.pinacoid.heightRatio, "Pinacoid height E / L")
+      ->check(kPositive)
+      ->capture_default_str();
+  sub.add_option("--pinacoid-alpha", cfg.population.pinacoid.alphaDeg,
+                 "Inclination of the pinacoid's triangular faces [degrees], in (0, 90)")
+      ->check(realIn(0.0, 90.0, true, true, "an angle in (0, 90) degrees", "DEGREES"))
+      ->capture_default_str();
+}
+
+std::string oneLineFailure(const CLI::App* /*app*/, const std::exception& e) {
+  std::string what = e.what();
+  // CLI11 messages can carry a trailing newline; keep the promise of one line.
+  for (char& c : what)
+    if (c == '\n') c = ' ';
+  while (!what.empty() && what.back() == ' ') what.pop_back();
+  return fmt::format("confpack: error: {} (see --help)\n", what);
+}
+
+namespace {
+[[noreturn]] void failWith(std::string_view command, const std::exception& e, int code) {
+  std::string what = e.what();
+  for (char& c : what)
+    if (c == '\n') c = ' ';
+  std::fprintf(stderr, "confpack %.*s: error: %s\n", static_cast<int>(command.size()), command.data(), what.c_str());
+  throw CLI::RuntimeError(code);
+}
+}  // namespace
+
+void checkInput(std::string_view command, const std::function<void()>& checks) {
+  try {
+    checks();
+  } catch (const CLI::RuntimeError&) {
+    throw;
+  } catch (const std::exception& e) {
+    failWith(command, e, kExitBadInput);
+  }
+}
+
+void runWork(std::string_view command, const std::function<void()>& work) {
+  try {
+    work();
+  } catch (const CLI::RuntimeError&) {
+    throw;
+  } catch (const std::exception& e) {
+    failWith(command, e, kExitRuntimeFailure);
+  }
+}
+
+void checkOutputTarget(const fs::path& out) {
+  std::error_code ec;
+  if (out.empty()) throw std::invalid_argument("--out: an output directory is required");
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw std::invalid_argument(fmt::format("--out: '{}' exists and is not a directory", out.string()));
+}
+
+void applyThreads(int threads) {
+#ifdef _OPENMP
+  omp_set_num_threads(threads);
+#else
+  (void)threads;
+#endif
+}
+
+namespace {
+/// Absolute, normalised, without a trailing separator ("out/run/" and "out/run/." name "out/run").
+fs::path normalisedTarget(const fs::path& p) {
+  fs::path t = fs::absolute(p).lexically_normal();
+  while (!t.has_filename() && t.has_parent_path() && t != t.parent_path()) t = t.parent_path();
+  return t;
+}
+}  // namespace
+
+StagedOutput::StagedOutput(const fs::path& target) : target_(normalisedTarget(target)) {
+  // Parents that do not exist yet are ours: remember them so a failure removes them too.
+  for (fs::path p = target_.parent_path(); !p.empty() && !fs::exists(p); p = p.parent_path()) {
+    createdParents_.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(target_.parent_path());
+  staging_ = target_.parent_path() / fmt::format(".{}.partial-{}", target_.filename().string(), ::getpid());
+  fs::remove_all(staging_);
+  fs::create_directory(staging_);
+}
+
+StagedOutput::~StagedOutput() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+  for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only if empty
+}
+
+void StagedOutput::commit() {
+  if (!fs::exists(target_)) {
+    fs::rename(staging_, target_);
+  } else {
+    for (const auto& entry : fs::directory_iterator(staging_)) {
+      const fs::path dest = target_ / entry.path().filename();
+      // A directory (vtk/) cannot be renamed over a non-empty one: the old one goes first.
+      if (entry.is_directory() && fs::exists(dest)) fs::remove_all(dest);
+      fs::rename(entry.path(), dest);
+    }
+    fs::remove(staging_);
+  }
+  committed_ = true;
+}
+
+void writeJson(const fs::path& path, const nlohmann::json& j) { core::writeFileAtomically(path, j.dump(2) + "\n"); }
+
+}  // namespace confpack::app

@@ -1,0 +1,82 @@
+#pragma once
+// What the subcommands share: the common flags of SPEC 8.1 bound into a core::RunConfig, the
+// exit-code discipline, and all-or-nothing output directories.
+//
+// Exit codes: 0 ok, 2 bad input (refused before any work, nothing written), 1 runtime failure
+// (nothing partial left behind). Every failure prints exactly one line on stderr.
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/run_config.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace confpack::app {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitRuntimeFailure = 1;
+inline constexpr int kExitBadInput = 2;
+
+/// Flags that are not part of the run configuration.
+struct CommonOptions {
+  std::filesystem::path out;  ///< --out DIR
+  bool quiet = false;         ///< --quiet: no progress, summary only
+  int verbosity = 0;          ///< -v (repeatable): more detail on stderr
+};
+
+/// Adds the common flags of SPEC 8.1 to a subcommand: --shape, --length-x, --width, --periodic-y,
+/// --height, --small-fraction, --wall-friction, --backend, --seed, --out, --threads, --quiet, -v,
+/// plus --pinacoid-G, --pinacoid-E, --pinacoid-alpha. Values land in `cfg` and `opts`, with
+/// validators so that a bad value is refused by the parser, before any work. The defaults shown
+/// by --help are those of the core definition structs.
+void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired = true);
+
+/// The CLI11 failure message of `confpack`: one line, "confpack: error: <what> (see --help)".
+std::string oneLineFailure(const CLI::App* app, const std::exception& e);
+
+/// Runs input checks of subcommand `command`: a std::exception becomes one line
+/// "confpack <command>: error: <what>" and exit code 2 (CLI::RuntimeError).
+void checkInput(std::string_view command, const std::function<void()>& checks);
+/// Runs the work of a subcommand: any std::exception becomes one line and exit code 1.
+void runWork(std::string_view command, const std::function<void()>& work);
+
+/// Refuses an --out that cannot be a directory (an existing file), as bad input.
+void checkOutputTarget(const std::filesystem::path& out);
+
+/// Applies --threads to OpenMP (when the build has it).
+void applyThreads(int threads);
+
+/// An output directory that appears complete or not at all. Files are written into a hidden
+/// staging directory next to the target (same file system, so renames are atomic); commit() moves
+/// them in place: the whole directory in one rename when the target does not exist yet, else entry
+/// by entry (each entry atomically). Without commit() (an exception unwinds), the staging
+/// directory and any parent directories created for it are removed.
+class StagedOutput {
+ public:
+  explicit StagedOutput(const std::filesystem::path& target);
+  ~StagedOutput();
+  StagedOutput(const StagedOutput&) = delete;
+  StagedOutput& operator=(const StagedOutput&) = delete;
+
+  /// Where to write.
+  const std::filesystem::path& dir() const { return staging_; }
+  /// The final directory.
+  const std::filesystem::path& target() const { return target_; }
+  void commit();
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path staging_;
+  std::vector<std::filesystem::path> createdParents_;  ///< deepest first
+  bool committed_ = false;
+};
+
+/// Writes `j` (indented) to `path` atomically.
+void writeJson(const std::filesystem::path& path, const nlohmann::json& j);
+
+}  // namespace confpack::app
