@@ -388,6 +388,10 @@ double heightAt(const FeatureSurface& s, const Frame& fr, const Vec2& x) {
 struct Region {
   ContactType type = ContactType::Simple;
   std::vector<Vec2> points;
+  // Set when the surface points are known exactly in 3D (crossing edges: the closest points of
+  // the two segments); then they are used instead of the lateral points and heights.
+  bool exactPair = false;
+  std::vector<std::pair<Vec3, Vec3>> pairs;  // (on A, on B) per point when exactPair
 };
 
 // The contact region of feature sets sa (of A, near max along n) and sb (of B, near min along n)
@@ -457,6 +461,8 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       Vec3 c1, c2;
       closestSegmentSegment(surfA.p0, surfA.p1, surfB.p0, surfB.p1, s, t, c1, c2);
       r.points = {0.5 * (fr.lateral(c1) + fr.lateral(c2))};
+      r.exactPair = true;
+      r.pairs = {{c1, c2}};
     } else {
       // Parallel edges: overlap of their projections on A's edge line (a line contact).
       const Vec2 dir = da.normalized();
@@ -464,9 +470,17 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       const double b0 = dir.dot(pb[0] - pa[0]), b1 = dir.dot(pb[1] - pa[0]);
       const double lo = std::max(a0, std::min(b0, b1)), hi = std::min(a1, std::max(b0, b1));
       // The two lines may be offset laterally by rounding or tilt: put points midway across.
-      const Vec2 offset = 0.5 * ((pb[0] - pa[0]) - dir * dir.dot(pb[0] - pa[0]));
-      if (hi >= lo) finishSegmentOrPoint({pa[0] + lo * dir + offset, pa[0] + hi * dir + offset});
-      else r.points = {pa[0] + 0.5 * (lo + hi) * dir + offset};
+      if (hi >= lo) finishSegmentOrPoint({pa[0] + lo * dir, pa[0] + hi * dir});
+      else r.points = {pa[0] + 0.5 * (lo + hi) * dir};
+      // Surface points: the same abscissa along the common direction on each 3D edge (the
+      // lateral lines may be offset by the tilt allowed by the tolerance).
+      r.exactPair = true;
+      for (const Vec2& x : r.points) {
+        const double lam = dir.dot(x - pa[0]);
+        const double ta = std::clamp(lam / a1, 0.0, 1.0);
+        const double tb = std::abs(b1 - b0) > 1e-300 ? std::clamp((lam - b0) / (b1 - b0), 0.0, 1.0) : 0.0;
+        r.pairs.emplace_back(surfA.p0 + ta * (surfA.p1 - surfA.p0), surfB.p0 + tb * (surfB.p1 - surfB.p0));
+      }
     }
   } else if (ka == FeatureKind::Edge || kb == FeatureKind::Edge) {
     const std::vector<Vec2>& seg = ka == FeatureKind::Edge ? pa : pb;
@@ -514,6 +528,13 @@ PolyhedronContact buildContact(const WorldPoly& A, const WorldPoly& B, const Vec
   FeatureSurface surfA, surfB;
   const Region region = contactRegion(A, sa, B, sb, fr, surfA, surfB);
   c.type = region.type;
+  if (region.exactPair) {
+    for (const auto& [onA, onB] : region.pairs) {
+      c.points.push_back(0.5 * (onA + onB));
+      c.pointGaps.push_back(normal.dot(onB - onA));
+    }
+    return c;
+  }
   for (const Vec2& x : region.points) {
     const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
     c.points.push_back(fr.world(x, 0.5 * (ha + hb)));

@@ -482,3 +482,48 @@ TEST_CASE("contact: bad input is refused with a clear message") {
   CHECK_THROWS_AS(collidePolyhedronSphere(a, Vec3::Zero(), 0.0, 0.1), std::invalid_argument);
   CHECK_THROWS_AS(collidePolyhedronPlane(a, Vec3::Zero(), Vec3::Zero(), 0.1), std::invalid_argument);
 }
+
+TEST_CASE("contact: random near-contact pairs give consistent points, gaps and types") {
+  // Pairs brought to a random gap in [-0.01, 0.01] along their own normal. Every point must sit
+  // midway between two surface points (point -+ gap/2 normal on a's and b's surface), no point
+  // gap may be below the pair gap, and the point count must match the type.
+  const ConvexPolyhedron p = makePinacoid(1.0, kParams);
+  std::mt19937_64 rng(2024);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> uni(-0.01, 0.01);
+  int tested = 0, doubles = 0;
+  double worst = 0.0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const PlacedPolyhedron a{&p, Vec3::Zero(), randomRotation(rng)};
+    PlacedPolyhedron b{&p, Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized() * 1.5, randomRotation(rng)};
+    const double target = uni(rng);
+    auto c = collidePolyhedra(a, b, 10.0);
+    for (int k = 0; k < 5 && c; ++k) {
+      b.position += (target - c->gap) * c->normal;
+      c = collidePolyhedra(a, b, 10.0);
+    }
+    REQUIRE(c);
+    if (std::abs(c->gap - target) > 1e-9) continue;  // the normal still turned: not a fixed point
+    ++tested;
+    const std::size_t np = c->points.size();
+    REQUIRE(c->pointGaps.size() == np);
+    if (c->type == ContactType::Simple) CHECK(np == 1);
+    if (c->type == ContactType::Double) {
+      CHECK(np == 2);
+      ++doubles;
+    }
+    if (c->type == ContactType::Triple) CHECK((np == 3 || np == 4));
+    CHECK(std::abs(c->normal.norm() - 1.0) < 1e-14);
+    for (std::size_t i = 0; i < np; ++i) {
+      CHECK(c->pointGaps[i] >= c->gap - 1e-9);
+      const double da = std::abs(signedFacePlaneMax(a, c->points[i] - 0.5 * c->pointGaps[i] * c->normal));
+      const double db = std::abs(signedFacePlaneMax(b, c->points[i] + 0.5 * c->pointGaps[i] * c->normal));
+      worst = std::max({worst, da, db});
+    }
+  }
+  INFO("worst surface deviation " << worst);
+  // Near-parallel edge pairs (a line contact within the tolerance) are the worst: ~1e-7.
+  CHECK(worst < 1e-6);
+  CHECK(tested > 15000);
+  CHECK(doubles > 10);
+}
