@@ -1,5 +1,7 @@
 // confpack: the command line (SPEC 8.1). Thin: parse, dispatch to a subcommand, return its code.
 #include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
@@ -20,6 +22,20 @@ int main(int argc, char** argv) {
   registerReport(app);
   registerReproduce(app);
   registerBench(app);
+
+  // CLI11 answers a misspelt subcommand with "A subcommand is required"; name it instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->get_name() == argv[1];
+    }
+    if (!known) {
+      std::fprintf(stderr, "confpack: error: unknown subcommand '%s' (expected one of %s)\n", argv[1], names.c_str());
+      return kExitBadInput;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
