@@ -84,6 +84,12 @@ constexpr double kTouchTol = 1e-10;        // a support whose gap is below this 
 constexpr double kPenetrationTol = 1e-12;  // a move stops this far inside a newly met support [D]
 constexpr double kMultiplierTol = 1e-12;   // support force accepted as non-negative [-]
 constexpr double kDirectionTol = 1e-12;    // motion accepted as not entering a support [-]
+// Second chance when no subset passes kDirectionTol: a support met on its equator at the
+// kPenetrationTol threshold has a normal tilted by up to sqrt(2 kPenetrationTol) ~ 1.5e-6 out
+// of the horizontal, which can leave two nearly opposite supports (pinched at equal heights, as
+// happens in a W = D channel) with no admissible subset. The moves' event tests still refuse any
+// penetration deeper than kPenetrationTol, so the relaxed tolerance cannot create overlaps.
+constexpr double kRelaxedDirectionTol = 1e-5;
 constexpr double kDegenerateTol = 1e-10;   // Gram determinant below which normals are dependent [-]
 constexpr double kValidGapTol = 1e-10;     // a fallback seat may overlap at most this [D]
 // A seat is normally found in 3 to 10 moves; far more means a degenerate cycle (see settle()).
@@ -130,17 +136,38 @@ struct Projection {
   bool found = false;
   std::array<int, 3> members{};  // indices into the touching list
   int size = 0;
+  Vec3 motion = Vec3::Zero();    // projected gravity d [-]
 };
+
+// Support forces lambda = N^-1 e_z of three supports (columns of N the normals), if independent.
+std::optional<Vec3> tripleForces(const Vec3& a, const Vec3& b, const Vec3& c) {
+  Mat3 n;
+  n << a, b, c;
+  const double det = n.determinant();
+  if (det * det < kDegenerateTol) return std::nullopt;
+  return Vec3(n.inverse() * Vec3::UnitZ());
+}
+
+// Whether some three of the touching supports hold the placeholder with compressive forces.
+bool hasStableTriple(const std::vector<Vec3>& normals) {
+  const std::size_t m = normals.size();
+  for (std::size_t a = 0; a < m; ++a)
+    for (std::size_t b = a + 1; b < m; ++b)
+      for (std::size_t c = b + 1; c < m; ++c)
+        if (auto lambda = tripleForces(normals[a], normals[b], normals[c]))
+          if ((lambda->array() >= -kMultiplierTol).all()) return true;
+  return false;
+}
 
 // Finds S (see the file comment). Subsets are tried by increasing size, so that a support
 // carrying no force (lambda = 0) is released rather than kept: this is what lets a placeholder
 // leave a sphere at its equator.
-Projection projectGravity(const std::vector<Vec3>& normals) {
+Projection projectGravity(const std::vector<Vec3>& normals, double directionTol) {
   const Vec3 g(0.0, 0.0, -1.0);
   const int m = static_cast<int>(normals.size());
   auto admissible = [&](const Vec3& d, unsigned mask) {
     for (int j = 0; j < m; ++j)
-      if (!(mask & (1u << j)) && d.dot(normals[j]) < -kDirectionTol) return false;
+      if (!(mask & (1u << j)) && d.dot(normals[j]) < -directionTol) return false;
     return true;
   };
   for (int k = 0; k <= std::min(3, m); ++k) {
@@ -168,13 +195,10 @@ Projection projectGravity(const std::vector<Vec3>& normals) {
         ok = l0 >= -kMultiplierTol && l1 >= -kMultiplierTol;
         d += l0 * n0 + l1 * n1;
       } else if (k == 3) {
-        Mat3 n;
-        n << normals[idx[0]], normals[idx[1]], normals[idx[2]];
         // Three independent normals: g + N lambda = 0 exactly, lambda = N^-1 e_z.
-        const double det = n.determinant();
-        if (det * det < kDegenerateTol) continue;
-        const Vec3 lambda = n.inverse() * Vec3::UnitZ();
-        ok = (lambda.array() >= -kMultiplierTol).all();
+        const auto lambda = tripleForces(normals[idx[0]], normals[idx[1]], normals[idx[2]]);
+        if (!lambda) continue;
+        ok = (lambda->array() >= -kMultiplierTol).all();
         d = Vec3::Zero();
       }
       if (!ok || !admissible(d, mask)) continue;
@@ -182,6 +206,7 @@ Projection projectGravity(const std::vector<Vec3>& normals) {
       p.found = true;
       p.members = idx;
       p.size = k;
+      p.motion = d;
       return p;
     }
   }
@@ -218,7 +243,8 @@ class Pile {
       }
       normals.clear();
       for (const Support& s : touching) normals.push_back(normalOf(s, c));
-      const Projection p = projectGravity(normals);
+      Projection p = projectGravity(normals, kDirectionTol);
+      if (!p.found) p = projectGravity(normals, kRelaxedDirectionTol);
       if (!p.found) break;  // numerically inconsistent contact set: give up on this one
       active.clear();
       int spheres = 0, walls = 0;
@@ -231,6 +257,14 @@ class Pile {
         else ++walls;
       }
       if (floor || p.size == 3) {
+        settled = true;
+        return c;
+      }
+      // Zero projected gravity on one or two supports is an equilibrium: unstable on the top of
+      // a sphere or of a groove circle (then the arc below rolls off it), but seated when other
+      // touching supports close the pocket, as in the symmetric 4-support pockets that small
+      // periods or W = D force (the smaller subset was found first and hides the triple).
+      if (p.motion.norm() < kDirectionTol && hasStableTriple(normals)) {
         settled = true;
         return c;
       }
