@@ -2,7 +2,7 @@
 // The packing file of SPEC 8.2 ("confpack-packing", version 1) and the atomic file writes that
 // every output of the toolkit goes through.
 //
-// The format is documented in full in docs/packing-format.md. In short:
+// The format is documented in full in README.md ("Packing file"). In short:
 //
 //   { "format": "confpack-packing", "version": 1,
 //     "box": { "length_x", "width", "periodic_y", "wall_friction", "height" },
