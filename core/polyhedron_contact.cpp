@@ -35,6 +35,7 @@ struct WorldPoly {
   std::vector<Vec3> n;                       // world outward face normals
   std::vector<double> off;                   // n.x = off on the face
   std::vector<std::array<int, 2>> edgeFaces; // the two faces adjacent to each edge
+  std::vector<Vec3> edgeArc;                 // n[face1] x n[face0]: the edge's Gauss-map arc normal
   Vec3 centre = Vec3::Zero();                // an interior point (vertex mean)
   double radius = 0.0;                       // bounding radius of the shape
 
@@ -56,15 +57,23 @@ struct WorldPoly {
       off.push_back(shape->faceOffsets()[f] + n.back().dot(p.position));
     }
     if (withTopology) {
+      // Edge -> adjacent faces through a vertex-pair table (the edge list is sorted by (lo, hi)).
       const auto& edges = shape->edges();
+      const int nv = static_cast<int>(v.size());
+      thread_local std::vector<int> pairToEdge;
+      pairToEdge.assign(static_cast<std::size_t>(nv) * nv, -1);
+      for (std::size_t e = 0; e < edges.size(); ++e) pairToEdge[edges[e][0] * nv + edges[e][1]] = static_cast<int>(e);
       edgeFaces.assign(edges.size(), {-1, -1});
       for (std::size_t f = 0; f < shape->faces().size(); ++f) {
         const auto& loop = shape->faces()[f];
         for (std::size_t k = 0; k < loop.size(); ++k) {
-          const int e = edgeIndex(loop[k], loop[(k + 1) % loop.size()]);
+          const int i = loop[k], j = loop[(k + 1) % loop.size()];
+          const int e = pairToEdge[std::min(i, j) * nv + std::max(i, j)];
           if (e >= 0) edgeFaces[e][edgeFaces[e][0] < 0 ? 0 : 1] = static_cast<int>(f);
         }
       }
+      edgeArc.reserve(edges.size());
+      for (const auto& ef : edgeFaces) edgeArc.push_back(n[ef[1]].cross(n[ef[0]]));
     }
   }
 
@@ -151,13 +160,9 @@ struct SatResult {
 // edges of A (adjacent face normals a, b) and of B (c, d) build a face of the Minkowski
 // difference A - B iff the arcs a-b and (-c)-(-d) cross on the unit sphere. Only those edge
 // pairs can carry the minimum-penetration axis, and for them the supports along the axis are
-// the edges themselves, so sep costs one dot product.
-bool isMinkowskiFace(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const Vec3 bxa = b.cross(a);
-  const Vec3 dxc = d.cross(c);
-  const double cba = c.dot(bxa), dba = d.dot(bxa), adc = a.dot(dxc), bdc = b.dot(dxc);
-  return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
-}
+// the edges themselves, so sep costs one dot product. With the arc normals b x a and d x c
+// precomputed per edge, the test is 4 dot products:
+//   c.(b x a) * d.(b x a) < 0,  a.(d x c) * b.(d x c) < 0,  c.(b x a) * b.(d x c) > 0.
 
 // Returns the best axis; stops early (with sep > stopAbove) once an axis proves separation
 // beyond stopAbove.
@@ -182,10 +187,15 @@ SatResult separatingAxis(const WorldPoly& A, const WorldPoly& B, double stopAbov
     const Vec3 da = A.v[eA[i][1]] - pa;
     const Vec3& na0 = A.n[A.edgeFaces[i][0]];
     const Vec3& na1 = A.n[A.edgeFaces[i][1]];
+    const Vec3& bxa = A.edgeArc[i];
     for (std::size_t j = 0; j < eB.size(); ++j) {
+      // isMinkowskiFace(na0, na1, -nb0, -nb1) with the arc normals precomputed:
+      // (-nb1) x (-nb0) = nb1 x nb0 = B.edgeArc[j].
       const Vec3& nb0 = B.n[B.edgeFaces[j][0]];
       const Vec3& nb1 = B.n[B.edgeFaces[j][1]];
-      if (!isMinkowskiFace(na0, na1, -nb0, -nb1)) continue;
+      const Vec3& dxc = B.edgeArc[j];
+      const double cba = -nb0.dot(bxa), dba = -nb1.dot(bxa), adc = na0.dot(dxc), bdc = na1.dot(dxc);
+      if (!(cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0)) continue;
       const Vec3& pb = B.v[eB[j][0]];
       const Vec3 db = B.v[eB[j][1]] - pb;
       Vec3 u = da.cross(db);
@@ -212,23 +222,47 @@ struct DistanceResult {
   Vec3 normal = Vec3::UnitZ();
 };
 
-DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B) {
+DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B, const SatResult& sat) {
   DistanceResult r;
   const double tieTol = kRelativeLengthTol * (A.radius + B.radius);
-  for (std::size_t f = 0; f < A.n.size(); ++f)
+  // sat.sep is a lower bound of the distance: a candidate reaching it is optimal, and a feature
+  // pair whose separation along sat.axis already exceeds the best candidate cannot win.
+  const Vec3& u = sat.axis;
+  const double optimal = sat.sep + tieTol;
+  // Initial upper bound: the distance between the two support vertices along the axis.
+  int ia = 0, ib = 0;
+  for (int i = 1; i < static_cast<int>(A.v.size()); ++i)
+    if (u.dot(A.v[i]) > u.dot(A.v[ia])) ia = i;
+  for (int i = 1; i < static_cast<int>(B.v.size()); ++i)
+    if (u.dot(B.v[i]) < u.dot(B.v[ib])) ib = i;
+  double upper = (B.v[ib] - A.v[ia]).norm();
+
+  for (std::size_t f = 0; f < A.n.size() && r.distance > optimal; ++f)
     for (const Vec3& x : B.v) {
       const double d = A.n[f].dot(x) - A.off[f];
-      if (d >= 0.0 && d < r.distance && projectsInsideFace(A, static_cast<int>(f), x)) r = {d, A.n[f]};
+      if (d >= 0.0 && d < r.distance && d <= upper && projectsInsideFace(A, static_cast<int>(f), x)) r = {d, A.n[f]};
     }
-  for (std::size_t f = 0; f < B.n.size(); ++f)
+  for (std::size_t f = 0; f < B.n.size() && r.distance > optimal; ++f)
     for (const Vec3& x : A.v) {
       const double d = B.n[f].dot(x) - B.off[f];
-      if (d >= 0.0 && d < r.distance - tieTol && projectsInsideFace(B, static_cast<int>(f), x)) r = {d, -B.n[f]};
+      if (d >= 0.0 && d < r.distance - tieTol && d <= upper && projectsInsideFace(B, static_cast<int>(f), x))
+        r = {d, -B.n[f]};
     }
+  if (r.distance <= optimal) return r;
+  upper = std::min(upper, r.distance);
+  // Heights along the axis, for the edge-pair lower bound.
+  thread_local std::vector<double> ha, hb;
+  ha.resize(A.v.size());
+  hb.resize(B.v.size());
+  for (std::size_t i = 0; i < A.v.size(); ++i) ha[i] = u.dot(A.v[i]);
+  for (std::size_t i = 0; i < B.v.size(); ++i) hb[i] = u.dot(B.v[i]);
   const auto& eA = A.shape->edges();
   const auto& eB = B.shape->edges();
-  for (const auto& ea : eA)
+  for (const auto& ea : eA) {
+    const double topA = std::max(ha[ea[0]], ha[ea[1]]);
     for (const auto& eb : eB) {
+      // |c2 - c1| >= u.(c2 - c1) >= min over b's ends - max over a's ends.
+      if (std::min(hb[eb[0]], hb[eb[1]]) - topA > std::min(upper, r.distance)) continue;
       double s, t;
       Vec3 c1, c2;
       const double d2 = closestSegmentSegment(A.v[ea[0]], A.v[ea[1]], B.v[eb[0]], B.v[eb[1]], s, t, c1, c2);
@@ -237,16 +271,17 @@ DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B) {
         // Crossing edges (closest points inside both): the normal is the cross product of the
         // edges, exact even when d is tiny; (c2 - c1)/d would carry rounding/d.
         const Vec3 da = A.v[ea[1]] - A.v[ea[0]], db = B.v[eb[1]] - B.v[eb[0]];
-        Vec3 u = da.cross(db);
+        Vec3 w = da.cross(db);
         const bool interior = s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0;
-        if (interior && u.norm() > kParallelEdgeSin * da.norm() * db.norm()) {
-          u.normalize();
-          r = {d, u.dot(c2 - c1) >= 0.0 ? u : Vec3(-u)};
+        if (interior && w.norm() > kParallelEdgeSin * da.norm() * db.norm()) {
+          w.normalize();
+          r = {d, w.dot(c2 - c1) >= 0.0 ? w : Vec3(-w)};
         } else {
           r = {d, (c2 - c1) / d};
         }
       }
     }
+  }
   return r;
 }
 
@@ -553,7 +588,7 @@ bool pairNormal(const WorldPoly& A, const WorldPoly& B, double alert, Vec3& norm
     gap = sat.sep;
     return true;
   }
-  const DistanceResult d = exactDistance(A, B);
+  const DistanceResult d = exactDistance(A, B, sat);
   if (d.distance > alert) return false;
   normal = d.normal;
   gap = d.distance;
