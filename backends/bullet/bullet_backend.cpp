@@ -357,7 +357,6 @@ void BulletBackend::buildWorld() {
 
   btContactSolverInfo& info = world_->getSolverInfo();
   info.m_numIterations = settings_.iterations;
-  info.m_leastSquaresResidualThreshold = settings_.residualThreshold * settings_.residualThreshold;
   info.m_splitImpulse = settings_.splitImpulse ? 1 : 0;
   info.m_splitImpulsePenetrationThreshold = settings_.splitImpulsePenetrationThreshold;
   info.m_splitImpulseTurnErp = settings_.splitImpulseTurnErp;
@@ -548,7 +547,11 @@ void BulletBackend::step(double dt) {
   btDispatcherInfo& dispatch = world_->getDispatchInfo();
   dispatch.m_timeStep = dt;
   dispatch.m_stepCount = 0;
-  world_->getSolverInfo().m_timeStep = dt;
+  btContactSolverInfo& info = world_->getSolverInfo();
+  info.m_timeStep = dt;
+  // The early exit is relative to the velocity gravity adds in one step (BulletSettings).
+  const double exitVelocity = settings_.residualThreshold * system_.gravity.norm() * dt;
+  info.m_leastSquaresResidualThreshold = exitVelocity * exitVelocity;
 
   // The pieces of btDiscreteDynamicsWorld::stepSimulation + internalSingleStepSimulation for
   // one fixed step, in Bullet's order: forces, collision at the current poses, solve

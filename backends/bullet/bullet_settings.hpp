@@ -18,10 +18,13 @@ struct BulletSettings {
   /// hundreds.
   int iterations = 200;
   /// ["residual_threshold"] early exit: the sweeps stop when the largest velocity correction of
-  /// one sweep falls below this value [sqrt(g d_L)], >= 0. Bullet compares the square of it with
-  /// its m_leastSquaresResidual (max over rows of (delta impulse x effective inverse mass)^2).
+  /// one sweep, relative to the velocity gravity adds in one step (|g| dt), falls below this
+  /// value [-], >= 0. Bullet compares (residual_threshold |g| dt)^2 with its
+  /// m_leastSquaresResidual (max over rows of (delta impulse x effective inverse mass)^2). The
+  /// contact forces are then converged to about this relative accuracy: a column of 10 beads
+  /// gives the k m g law to 1e-6 with 1e-6, to machine precision with 0 (measured).
   /// 0 = always run `iterations` sweeps.
-  double residualThreshold = 1e-7;
+  double residualThreshold = 1e-6;
   /// ["split_impulse"] correct overlaps deeper than split_impulse_penetration_threshold with a
   /// separate "push" velocity that moves the grains without adding momentum (Bullet's split
   /// impulse), instead of a Baumgarte velocity bias.

@@ -59,6 +59,9 @@ const Tolerances& tolerancesFor(std::string_view backend) {
     // Bullet integrates with semi-implicit Euler: v += g dt, then x += v dt, so after n steps
     // z = z0 - g dt^2 n (n + 1) / 2 = z0 - g t^2 / 2 - g t dt / 2: a first-order error of g t dt / 2.
     bullet.freeFallPerTdt = 0.5;
+    // Like nscd: converge the sequential-impulse sweeps (early exit at a sweep correction of
+    // 1e-10 |g| dt, cap 2000) so the column and pile checks measure the physics.
+    bullet.tightOptions = {{"residual_threshold", 1e-10}, {"iterations", 2000}};
     t["bullet"] = bullet;
     return t;
   }();
