@@ -37,6 +37,9 @@ struct PileCheck {
   std::size_t onWall = 0;        // placeholders with a side wall among their contacts
   std::size_t wallSeats = 0;     // seated on a triple that includes a side wall
   std::size_t outside = 0;       // placeholders outside the box
+  // Centres between 1e-9 D and 1e-4 D from a wall plane y = D/2 (or W - D/2): a placeholder
+  // that slid down a wall must sit on it exactly; a free one lands that close with odds ~1e-4.
+  std::size_t wallNearMiss = 0;
 };
 
 // A support of placeholder i found from the final geometry: earlier placeholders within 1e-9 D
@@ -109,6 +112,8 @@ PileCheck checkPile(const BoxDef& box, double dia, const std::vector<Vec3>& c) {
       if (low) contacts.push_back({false, Vec3::UnitY(), Vec3::Zero()});
       if (high) contacts.push_back({false, -Vec3::UnitY(), Vec3::Zero()});
       if (low || high) ++out.onWall;
+      const double toWall = std::min(std::abs(p.y() - r), std::abs(box.width - r - p.y()));
+      if (toWall >= tol && toWall < 1e-4 * dia) ++out.wallNearMiss;
     }
     bool stable = floor;
     bool wallSeat = false;
@@ -234,6 +239,7 @@ TEST_CASE("random placeholder piles overlap nothing and every placeholder is sea
   CHECK(check.maxOverlap < 1e-9);
   CHECK(check.unstable == 0);
   CHECK(check.outside == 0);
+  CHECK(check.wallNearMiss == 0);
   // A 8 x 6 floor holds ~20-40 placeholders in its first layer (random sequential adsorption
   // of disks of diameter D covers about 0.55 of the plane: 0.55 * 48 / (pi D^2 / 4) = 28).
   CHECK(check.onFloor >= 15);
