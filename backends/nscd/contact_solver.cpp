@@ -131,13 +131,14 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
   while (sweep < settings.maxIterations) {
     ++sweep;
     double sumDelta2 = 0.0, sumR2 = 0.0;
+    const double omega = settings.relaxation;
     // Hot loop: one frictionless row. The static body has zero inverse mass, so wall rows need no
     // branch; its velocity stays zero.
-    for (NormalRow& row : normalRows_) {
+    auto normalRow = [&](NormalRow& row) {
       BodyVelocity& va = vel[row.a];
       BodyVelocity& vb = vel[row.b];
       const double un = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
-      const double rNew = std::max(0.0, row.r - (un + row.bias) * row.invW);
+      const double rNew = std::max(0.0, row.r - omega * (un + row.bias) * row.invW);
       const double dr = rNew - row.r;
       row.r = rNew;
       va.v -= (row.invMa * dr) * row.n;
@@ -146,8 +147,8 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
       vb.w += dr * row.ibBxn;
       sumDelta2 += dr * dr;
       sumR2 += rNew * rNew;
-    }
-    for (FrictionRow& row : frictionRows_) {
+    };
+    auto frictionRow = [&](FrictionRow& row) {
       BodyVelocity& va = vel[row.a];
       // Normal part. The wall does not move: u = -(v_a + w_a x l_a).
       const double un = -(row.n.dot(va.v) + row.axn.dot(va.w));
@@ -175,7 +176,11 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
       va.w -= d1 * row.iaAxt1 + d2 * row.iaAxt2;
       sumDelta2 += dn * dn + d1 * d1 + d2 * d2;
       sumR2 += rn * rn + rt1 * rt1 + rt2 * rt2;
-    }
+    };
+    // Forward sweeps only: a symmetric (forward/backward) variant was measured slower on a
+    // 536-sphere pile (258 versus 166 sweeps per step on average over the first 5 t0).
+    for (NormalRow& row : normalRows_) normalRow(row);
+    for (FrictionRow& row : frictionRows_) frictionRow(row);
     residual_ = sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : (sumDelta2 > 0.0 ? 1.0 : 0.0);
     if (sweep >= settings.minIterations && residual_ < settings.tolerance) break;
   }

@@ -30,7 +30,7 @@
 // r_t = -mu r_n u_t / ||u_t||.
 //
 // Gauss-Seidel update of one row (a few dozen flops, Jacobian pieces precomputed):
-//     r_n <- max(0, r_n - (u_n + c) / W_nn)
+//     r_n <- max(0, r_n - omega (u_n + c) / W_nn)      (omega = 1: plain Gauss-Seidel; option)
 // and for a friction point, after its normal update, in the same visit,
 //     r_t <- proj_{||r_t|| <= mu r_n} ( r_t - u_t / w_t ),   w_t = largest eigenvalue of W_tt.
 // A scalar w_t (not W_tt^-1) keeps the fixed point exactly Coulomb's law: on the disc boundary,

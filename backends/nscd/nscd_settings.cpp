@@ -18,6 +18,8 @@ void NscdSettings::validate() const {
   if (maxIterations < 1) bad("max_iterations", fmt::format("must be >= 1 (got {})", maxIterations));
   if (minIterations < 1 || minIterations > maxIterations)
     bad("min_iterations", fmt::format("must be in [1, max_iterations] (got {})", minIterations));
+  if (!(relaxation > 0.0 && relaxation < 2.0))
+    bad("relaxation", fmt::format("must be in (0, 2) (got {})", relaxation));
   if (!(alertDistance >= 0.0) || !std::isfinite(alertDistance))
     bad("alert_distance", fmt::format("must be >= 0 (got {})", alertDistance));
   if (!(gapCorrection > 0.0 && gapCorrection <= 1.0))
@@ -32,6 +34,7 @@ void to_json(nlohmann::json& j, const NscdSettings& s) {
        {"tolerance", s.tolerance},
        {"max_iterations", s.maxIterations},
        {"min_iterations", s.minIterations},
+       {"relaxation", s.relaxation},
        {"alert_distance", s.alertDistance},
        {"gap_correction", s.gapCorrection},
        {"max_correction_velocity", s.maxCorrectionVelocity},
@@ -56,13 +59,14 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     else if (key == "tolerance") number(s.tolerance);
     else if (key == "max_iterations") integer(s.maxIterations);
     else if (key == "min_iterations") integer(s.minIterations);
+    else if (key == "relaxation") number(s.relaxation);
     else if (key == "alert_distance") number(s.alertDistance);
     else if (key == "gap_correction") number(s.gapCorrection);
     else if (key == "max_correction_velocity") number(s.maxCorrectionVelocity);
     else if (key == "threads") integer(s.threads);
     else
       throw std::invalid_argument(fmt::format(
-          "unknown nscd option '{}' (known: theta, tolerance, max_iterations, min_iterations, alert_distance, "
+          "unknown nscd option '{}' (known: theta, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
           "gap_correction, max_correction_velocity, threads)",
           key));
   }

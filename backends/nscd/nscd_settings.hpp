@@ -19,6 +19,10 @@ struct NscdSettings {
   int maxIterations = 2000;
   /// ["min_iterations"] sweeps done even when the first ones already look converged [-], >= 1.
   int minIterations = 2;
+  /// ["relaxation"] over-relaxation factor omega in (0, 2) of the projected Gauss-Seidel update
+  /// r <- proj(r - omega (u + c) / W) [-]. 1 is plain Gauss-Seidel; projected SOR converges for
+  /// any omega in (0, 2) on the frictionless (symmetric) problem, friction rows use omega = 1.
+  double relaxation = 1.0;
   /// ["alert_distance"] a pair becomes a contact row when its gap in the predicted configuration
   /// is below alert_distance x (the smaller size of the pair, or the grain size for a wall)
   /// [fraction of d]. Must exceed the largest approach per step (SPEC 4: d/100). >= 0.
