@@ -90,16 +90,58 @@ class Dispatcher final : public btCollisionDispatcher {
   double breakingThreshold_;
 };
 
-// The sequential-impulse solver, unchanged, with its three stages timed into the profile.
+// The sequential-impulse solver with its three stages timed into the profile, and one saving:
+// Bullet gives every contact point one or two friction rows whatever its friction coefficient.
+// With mu = 0 (grain-grain and floor contacts, i.e. nearly all of a pile) a friction row is
+// clamped to [-0, 0] in every sweep, so it never applies an impulse and contributes nothing to
+// the residual: the row is pure cost (two thirds of all rows with two friction directions).
+// When `skipZeroFriction` is set, manifolds whose points all have zero combined friction get
+// normal rows only, built by Bullet's own setupContactConstraint; the physics is bitwise the
+// same (tested), a step of a 163-sphere pile about 1.5 times faster (measured).
 class TimedSolver final : public btSequentialImpulseConstraintSolver {
  public:
   core::StepProfile* profile = nullptr;
+  bool skipZeroFriction = true;
   /// Largest velocity correction of the last sweep [sqrt(g d_L)]: Bullet's residual is the max
   /// over rows of (delta impulse / jacDiagABInv)^2, a squared velocity.
   double residual() const { return std::sqrt(std::max(0.0, double(m_leastSquaresResidual))); }
   int iterationsUsed() const { return m_analyticsData.m_numIterationsUsed; }
 
  protected:
+  void convertContacts(btPersistentManifold** manifolds, int numManifolds, const btContactSolverInfo& info) override {
+    for (int i = 0; i < numManifolds; ++i) {
+      btPersistentManifold* m = manifolds[i];
+      bool frictionless = skipZeroFriction;
+      for (int k = 0; frictionless && k < m->getNumContacts(); ++k)
+        frictionless = m->getContactPoint(k).m_combinedFriction == 0.0 &&
+                       m->getContactPoint(k).m_combinedRollingFriction == 0.0;
+      if (frictionless) convertFrictionlessContact(m, info);
+      else convertContact(m, info);
+    }
+  }
+
+  // btSequentialImpulseConstraintSolver::convertContact without the friction rows.
+  void convertFrictionlessContact(btPersistentManifold* manifold, const btContactSolverInfo& info) {
+    auto* o0 = const_cast<btCollisionObject*>(manifold->getBody0());
+    auto* o1 = const_cast<btCollisionObject*>(manifold->getBody1());
+    const int idA = getOrInitSolverBody(*o0, info.m_timeStep);
+    const int idB = getOrInitSolverBody(*o1, info.m_timeStep);
+    if (m_tmpSolverBodyPool[idA].m_invMass.fuzzyZero() && m_tmpSolverBodyPool[idB].m_invMass.fuzzyZero()) return;
+    for (int k = 0; k < manifold->getNumContacts(); ++k) {
+      btManifoldPoint& cp = manifold->getContactPoint(k);
+      if (cp.getDistance() > manifold->getContactProcessingThreshold()) continue;
+      btSolverConstraint& row = m_tmpSolverContactConstraintPool.expandNonInitializing();
+      row.m_solverBodyIdA = idA;
+      row.m_solverBodyIdB = idB;
+      row.m_originalContactPoint = &cp;
+      const btVector3 relPos1 = cp.getPositionWorldOnA() - o0->getWorldTransform().getOrigin();
+      const btVector3 relPos2 = cp.getPositionWorldOnB() - o1->getWorldTransform().getOrigin();
+      btScalar relaxation;
+      setupContactConstraint(row, idA, idB, cp, info, relaxation, relPos1, relPos2);
+      row.m_frictionIndex = -1;  // no friction rows (read in solveGroupCacheFriendlyFinish)
+    }
+  }
+
   btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
                                         int numManifolds, btTypedConstraint** constraints, int numConstraints,
                                         const btContactSolverInfo& info, btIDebugDraw* debugDrawer) override {
@@ -125,10 +167,28 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
   }
   btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                          const btContactSolverInfo& info) override {
-    // Impulses into the manifold points (next step's warm start), velocities and split-impulse
-    // pushes into the bodies.
+    // Impulses into the manifold points (next step's warm start, and what readBack reports),
+    // then Bullet's own write-back of velocities and split-impulse pushes. Bullet's
+    // writeBackContacts would read the friction rows of every contact, which frictionless
+    // rows do not have, so the contact part is done here and Bullet's is switched off.
     const auto t0 = Clock::now();
-    const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, info);
+    const bool twoDirections = (info.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS) != 0;
+    for (int j = 0; j < m_tmpSolverContactConstraintPool.size(); ++j) {
+      const btSolverConstraint& row = m_tmpSolverContactConstraintPool[j];
+      auto* pt = static_cast<btManifoldPoint*>(row.m_originalContactPoint);
+      pt->m_appliedImpulse = row.m_appliedImpulse;
+      pt->m_appliedImpulseLateral1 = 0.0;
+      pt->m_appliedImpulseLateral2 = 0.0;
+      if (row.m_frictionIndex >= 0) {
+        pt->m_appliedImpulseLateral1 = m_tmpSolverContactFrictionConstraintPool[row.m_frictionIndex].m_appliedImpulse;
+        if (twoDirections)
+          pt->m_appliedImpulseLateral2 =
+              m_tmpSolverContactFrictionConstraintPool[row.m_frictionIndex + 1].m_appliedImpulse;
+      }
+    }
+    btContactSolverInfo rest = info;
+    rest.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
+    const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, rest);
     (*profile)[Phase::StoreImpulses] += secondsSince(t0);
     return r;
   }
@@ -352,6 +412,7 @@ void BulletBackend::buildWorld() {
   broadphase_ = std::make_unique<btDbvtBroadphase>();
   solver_ = std::make_unique<TimedSolver>();
   solver_->profile = &profile_;
+  solver_->skipZeroFriction = settings_.skipZeroFrictionRows;
   world_ = std::make_unique<World>(dispatcher_.get(), broadphase_.get(), solver_.get(), config_.get());
   world_->setGravity(toBt(system_.gravity));
 

