@@ -95,8 +95,11 @@ struct WorldPoly {
     return m;
   }
   // Tolerance on heights for the support feature: a face tilted by angleTol spans at most
-  // sin(angleTol) x (its diameter <= 2R) in height.
-  double featureEps(double angleTol) const { return std::sin(angleTol) * 2.0 * radius; }
+  // sin(angleTol) x (its diameter <= 2R) in height. Never below the rounding of the heights
+  // (kRelativeLengthTol): a face exactly normal to n must still read as a face at angleTol = 0.
+  double featureEps(double angleTol) const {
+    return std::max(std::sin(std::max(angleTol, 0.0)), kRelativeLengthTol) * 2.0 * radius;
+  }
 };
 
 // Closest points of segments p1-q1 and p2-q2 (Ericson, Real-Time Collision Detection, 5.1.9).
@@ -268,16 +271,18 @@ DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B, const SatRe
       const double d2 = closestSegmentSegment(A.v[ea[0]], A.v[ea[1]], B.v[eb[0]], B.v[eb[1]], s, t, c1, c2);
       const double d = std::sqrt(d2);
       if (d < r.distance - tieTol && d > 0.0) {
-        // Crossing edges (closest points inside both): the normal is the cross product of the
-        // edges, exact even when d is tiny; (c2 - c1)/d would carry rounding/d.
+        // Two readings of the direction: (c2 - c1)/d, which carries rounding/d and, for nearly
+        // parallel edges, the ill-conditioning of where along them the closest points sit; and
+        // the edges' cross product, exact for crossing edges. The true closest direction n*
+        // is the one of largest support separation (sep(n*) = distance, sep(u) < distance
+        // otherwise), so keep whichever separates more.
         const Vec3 da = A.v[ea[1]] - A.v[ea[0]], db = B.v[eb[1]] - B.v[eb[0]];
+        r = {d, (c2 - c1) / d};
         Vec3 w = da.cross(db);
-        const bool interior = s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0;
-        if (interior && w.norm() > kParallelEdgeSin * da.norm() * db.norm()) {
+        if (w.norm() > kParallelEdgeSin * da.norm() * db.norm()) {
           w.normalize();
-          r = {d, w.dot(c2 - c1) >= 0.0 ? w : Vec3(-w)};
-        } else {
-          r = {d, (c2 - c1) / d};
+          if (w.dot(c2 - c1) < 0.0) w = -w;
+          if (B.minAlong(w) - A.maxAlong(w) >= B.minAlong(r.normal) - A.maxAlong(r.normal)) r.normal = w;
         }
       }
     }
@@ -481,12 +486,67 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     }
   };
 
-  if (ka == FeatureKind::Vertex && kb == FeatureKind::Vertex) {
-    r.points = {0.5 * (pa[0] + pb[0])};
-  } else if (ka == FeatureKind::Vertex) {
+  // Fallback for a single-point contact whose lateral construction does not fall on both
+  // features (vertex-vertex, vertex-edge, or projections that miss each other, which a large
+  // angular tolerance allows): the closest pair of points of the two 3D features, found over
+  // their boundary segments and over vertices projecting inside a face.
+  auto closestFeaturePair = [&]() {
+    auto loopOf = [](const WorldPoly& w, const SupportSet& s) {
+      std::vector<Vec3> loop;
+      if (s.feature.kind == FeatureKind::Face)
+        for (int i : w.shape->faces()[s.feature.index]) loop.push_back(w.v[i]);
+      else
+        for (int i : s.verts) loop.push_back(w.v[i]);
+      return loop;
+    };
+    const std::vector<Vec3> la = loopOf(A, sa), lb = loopOf(B, sb);
+    auto segCount = [](const std::vector<Vec3>& l) { return l.size() <= 2 ? std::size_t{1} : l.size(); };
+    double best = kInf;
+    std::pair<Vec3, Vec3> pair{la[0], lb[0]};
+    for (std::size_t i = 0; i < segCount(la); ++i)
+      for (std::size_t j = 0; j < segCount(lb); ++j) {
+        double s, t;
+        Vec3 c1, c2;
+        const double d2 = closestSegmentSegment(la[i], la[(i + 1) % la.size()], lb[j], lb[(j + 1) % lb.size()], s, t, c1, c2);
+        if (d2 < best) {
+          best = d2;
+          pair = {c1, c2};
+        }
+      }
+    auto facePoints = [&](const WorldPoly& w, const SupportSet& s, const std::vector<Vec3>& other, bool faceIsA) {
+      if (s.feature.kind != FeatureKind::Face) return;
+      const int f = s.feature.index;
+      for (const Vec3& x : other) {
+        if (!projectsInsideFace(w, f, x)) continue;
+        const Vec3 proj = x - (w.n[f].dot(x) - w.off[f]) * w.n[f];
+        const double d2 = (x - proj).squaredNorm();
+        if (d2 < best) {
+          best = d2;
+          pair = faceIsA ? std::make_pair(proj, x) : std::make_pair(x, proj);
+        }
+      }
+    };
+    facePoints(A, sa, lb, true);
+    facePoints(B, sb, la, false);
+    r.type = ContactType::Simple;
+    r.points = {0.5 * (fr.lateral(pair.first) + fr.lateral(pair.second))};
+    r.exactPair = true;
+    r.pairs = {pair};
+  };
+  auto insideConvex = [&](const Vec2& x, const std::vector<Vec2>& poly) {
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const Vec2 e = poly[(k + 1) % poly.size()] - poly[k];
+      if (cross2(e, x - poly[k]) < -lenTol * e.norm()) return false;
+    }
+    return true;
+  };
+
+  if (ka == FeatureKind::Vertex && kb == FeatureKind::Face && insideConvex(pa[0], pb)) {
     r.points = {pa[0]};
-  } else if (kb == FeatureKind::Vertex) {
+  } else if (kb == FeatureKind::Vertex && ka == FeatureKind::Face && insideConvex(pb[0], pa)) {
     r.points = {pb[0]};
+  } else if (ka == FeatureKind::Vertex || kb == FeatureKind::Vertex) {
+    closestFeaturePair();
   } else if (ka == FeatureKind::Edge && kb == FeatureKind::Edge) {
     const Vec2 da = pa[1] - pa[0], db = pb[1] - pb[0];
     const double sinAngle = std::abs(cross2(da, db)) / std::max(da.norm() * db.norm(), 1e-300);
@@ -522,7 +582,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     const std::vector<Vec2>& face = ka == FeatureKind::Edge ? pb : pa;
     Vec2 p = seg[0], q = seg[1];
     if (clipSegment(p, q, face)) finishSegmentOrPoint({p, q});
-    else finishSegmentOrPoint({0.5 * (seg[0] + seg[1])});  // rounding miss: centre of the edge
+    else closestFeaturePair();  // the edge's projection misses the face
   } else {
     std::vector<Vec2> poly = clipPolygon(pa, pb);
     if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
@@ -531,11 +591,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     } else if (!poly.empty()) {
       finishSegmentOrPoint(poly);
     } else {
-      // Rounding miss: the faces' projections do not overlap; use the midpoint of their centres.
-      Vec2 ca = Vec2::Zero(), cb = Vec2::Zero();
-      for (const Vec2& x : pa) ca += x / static_cast<double>(pa.size());
-      for (const Vec2& x : pb) cb += x / static_cast<double>(pb.size());
-      r.points = {0.5 * (ca + cb)};
+      closestFeaturePair();  // the faces' projections do not overlap
     }
   }
   return r;
@@ -592,6 +648,13 @@ bool pairNormal(const WorldPoly& A, const WorldPoly& B, double alert, Vec3& norm
   if (d.distance > alert) return false;
   normal = d.normal;
   gap = d.distance;
+  // The closest direction n* is the axis of largest support separation. When the closest pair
+  // is nearly degenerate (an edge almost perpendicular to n*, within ~1e-11 of the distance of
+  // a neighbouring pair) the closest-point direction can be off by 1e-5 rad while the SAT axis
+  // is exact: keep the SAT axis if it separates clearly more. Ties keep the closest-feature
+  // normal (face normals for face-based contacts).
+  const double sepClosest = B.minAlong(normal) - A.maxAlong(normal);
+  if (sat.sep > sepClosest + 1e-13 * (A.radius + B.radius)) normal = sat.axis;
   return true;
 }
 

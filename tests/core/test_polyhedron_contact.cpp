@@ -484,6 +484,9 @@ TEST_CASE("contact: bad input is refused with a clear message") {
 }
 
 TEST_CASE("contact: random near-contact pairs give consistent points, gaps and types") {
+  // A solver may ask for a large angular tolerance (more predictive points) or none at all:
+  // same guarantees.
+  const double angleTol = GENERATE(0.0, 1e-3, 0.05);
   // Pairs brought to a random gap in [-0.01, 0.01] along their own normal. Every point must sit
   // midway between two surface points (point -+ gap/2 normal on a's and b's surface), no point
   // gap may be below the pair gap, and the point count must match the type.
@@ -493,14 +496,14 @@ TEST_CASE("contact: random near-contact pairs give consistent points, gaps and t
   std::uniform_real_distribution<double> uni(-0.01, 0.01);
   int tested = 0, doubles = 0;
   double worst = 0.0;
-  for (int trial = 0; trial < 20000; ++trial) {
+  for (int trial = 0; trial < 10000; ++trial) {
     const PlacedPolyhedron a{&p, Vec3::Zero(), randomRotation(rng)};
     PlacedPolyhedron b{&p, Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized() * 1.5, randomRotation(rng)};
     const double target = uni(rng);
-    auto c = collidePolyhedra(a, b, 10.0);
+    auto c = collidePolyhedra(a, b, 10.0, angleTol);
     for (int k = 0; k < 5 && c; ++k) {
       b.position += (target - c->gap) * c->normal;
-      c = collidePolyhedra(a, b, 10.0);
+      c = collidePolyhedra(a, b, 10.0, angleTol);
     }
     REQUIRE(c);
     if (std::abs(c->gap - target) > 1e-9) continue;  // the normal still turned: not a fixed point
@@ -521,9 +524,10 @@ TEST_CASE("contact: random near-contact pairs give consistent points, gaps and t
       worst = std::max({worst, da, db});
     }
   }
-  INFO("worst surface deviation " << worst);
-  // Near-parallel edge pairs (a line contact within the tolerance) are the worst: ~1e-7.
-  CHECK(worst < 1e-6);
-  CHECK(tested > 15000);
-  CHECK(doubles > 10);
+  INFO("angleTol " << angleTol << ", worst surface deviation " << worst << ", tested " << tested);
+  // Nearly degenerate vertex-edge pairs are the worst (~1e-8): the closest points slide along
+  // an edge almost perpendicular to the normal.
+  CHECK(worst < 1e-7);
+  CHECK(tested > 7500);
+  if (angleTol > 0.0) CHECK(doubles > 10);  // random poses are never exactly edge-on-face
 }
