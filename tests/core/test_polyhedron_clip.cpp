@@ -232,3 +232,48 @@ TEST_CASE("clip: bad input is refused with a clear message") {
   CHECK_THROWS_AS(toPolytope(none), std::invalid_argument);
   CHECK(slabVolume(placed, 2, 0.3, 0.1) == 0.0);  // empty slab, not an error
 }
+
+TEST_CASE("clip: the two sides of any plane add up to the volume, also through vertices") {
+  // Planes through 0, 1, 2 or 3 vertices of a randomly placed pinacoid, and planes a hair
+  // (1e-13, inside the on-plane tolerance, or 1e-9, outside it) away from a vertex: the two
+  // half-space volumes must always sum to V and each stay in [0, V].
+  const ConvexPolyhedron p = makePinacoid(1.0, PinacoidParams{});
+  const double v = pinacoidMassProperties(1.0, PinacoidParams{}).volume;
+  std::mt19937_64 rng(31);
+  std::normal_distribution<double> g;
+  std::uniform_int_distribution<int> pick(0, 7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Mat3 r = trial % 4 == 0 ? Mat3::Identity() : randomRotation(rng);
+    const PlacedPolyhedron placed{&p, Vec3(g(rng), g(rng), 5 + g(rng)), r};
+    const std::vector<Vec3> w = placed.worldVertices();
+    Vec3 n = Vec3(g(rng), g(rng), g(rng)).normalized();
+    Vec3 through = placed.position + 0.3 * Vec3(g(rng), g(rng), g(rng));
+    switch (trial % 5) {
+      case 1: through = w[pick(rng)]; break;
+      case 2: {  // through two vertices
+        const int i = pick(rng), j = (i + 1 + pick(rng) % 7) % 8;
+        through = w[i];
+        n = (w[j] - w[i]).cross(Vec3(g(rng), g(rng), g(rng))).normalized();
+        break;
+      }
+      case 3: {  // through three vertices (often a face plane or a diagonal section)
+        const int i = pick(rng), j = (i + 1 + pick(rng) % 7) % 8;
+        int k = pick(rng);
+        while (k == i || k == j) k = pick(rng);
+        const Vec3 c = (w[j] - w[i]).cross(w[k] - w[i]);
+        if (c.norm() < 1e-6) continue;
+        through = w[i];
+        n = c.normalized();
+        break;
+      }
+      case 4: through = w[pick(rng)] + (trial % 2 ? 1e-13 : 1e-9) * n; break;
+      default: break;
+    }
+    const Plane below[1] = {{n, n.dot(through)}};
+    const Plane above[1] = {{-n, -n.dot(through)}};
+    const double v1 = clippedVolume(placed, below), v2 = clippedVolume(placed, above);
+    CHECK(v1 >= 0.0);
+    CHECK(v2 >= 0.0);
+    CHECK(v1 + v2 == Approx(v).epsilon(1e-12));
+  }
+}
