@@ -1,19 +1,86 @@
-// Placeholder until the `run` subcommand lands: it exists (with --help) so that the command
-// line is complete, and refuses to run.
-#include <CLI/CLI.hpp>
-#include <cstdio>
+// `confpack run`: the whole protocol of SPEC 4 for one configuration and one backend: deposit,
+// compact until equilibrium (SPEC 6.1) or the time limit, analyse (SPEC 6), write.
+//
+//   DIR/result.json    SPEC 8.3 (written last: its presence means the run finished)
+//   DIR/packing.json   final packing with contacts and forces (SPEC 8.2)
+//   DIR/config.json    the fully resolved RunConfig
+//   DIR/*.csv          profiles
+//   DIR/vtk/           ParaView frames (frame_grains.pvd, frame_contacts.pvd)
+#include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+#include <memory>
+
+#include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "apps/progress.hpp"
+#include "apps/run_pipeline.hpp"
 
 namespace confpack::app {
 
-void registerRun(CLI::App& app) {
-  auto* sub = app.add_subcommand("run", "Deposit, compact with a backend until equilibrium, analyse and write result.json");
-  sub->allow_extras();
-  sub->callback([] {
-    std::fputs("confpack run: not implemented yet\n", stderr);
-    throw CLI::RuntimeError(2);
+namespace {
+
+struct RunState {
+  core::RunConfig cfg;
+  CommonOptions opts;
+  std::string backendOptions;  ///< --backend-options JSON text
+};
+
+void runRun(RunState& st) {
+  core::RunConfig& cfg = st.cfg;
+  checkInput("run", [&] {
+    if (!st.backendOptions.empty()) cfg.backendOptions = nlohmann::json::parse(st.backendOptions);
+    cfg.validate();
+    checkOutputTarget(st.opts.out);
   });
+  runWork("run", [&] {
+    applyThreads(cfg.threads);
+    StagedOutput output(st.opts.out);
+    Progress progress("run", !st.opts.quiet, 10.0);
+    const nlohmann::json result = runAndWrite(cfg, output.dir(), [&](double fraction, const std::string& status) {
+      progress.update(fraction, status);
+    });
+    progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
+    writeJson(output.dir() / "config.json", result["config"]);
+    output.commit();
+    const auto& coord = result["coordination"];
+    fmt::print("run: {} {} grains, phi = {:.4f}, Z = {:.3f}, interpenetration {:.2e} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
+               cfg.backend, result["n_grains"].get<int>(), result["solid_fraction"].get<double>(),
+               coord["Z"].is_number() ? coord["Z"].get<double>() : 0.0,
+               result["interpenetration_percent"]["exact"].get<double>(),
+               result["equilibrium"]["reached"].get<bool>() ? "reached" : "NOT reached",
+               result["timing"]["steps"].get<long>(), result["timing"]["wall_s"].get<double>(),
+               output.target().string());
+  });
+}
+
+}  // namespace
+
+void registerRun(CLI::App& app) {
+  auto st = std::make_shared<RunState>();
+  auto* sub = app.add_subcommand(
+      "run", "Deposit, compact with a backend until equilibrium (or the time limit), analyse, write DIR/result.json");
+  addRunConfigOptions(*sub, st->cfg, st->opts);
+  sub->add_option("--dt", st->cfg.compaction.dt, "Time step [t0]; 0 = SPEC 4 rule from the deposit's drop")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_option("--time-limit", st->cfg.compaction.timeLimit,
+                  "Simulated time after which the run stops, reported as not equilibrated [t0]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--check-interval", st->cfg.compaction.checkInterval, "Steps between equilibrium checks")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--frame-interval", st->cfg.compaction.frameInterval,
+                  "Steps between ParaView frames (0 = first and last only)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_option("--grains", st->cfg.deposition.grainCount,
+                  "Number of grains (0 = from --height and the expected solid fraction)")
+      ->capture_default_str();
+  sub->add_option("--backend-options", st->backendOptions,
+                  "Backend settings as JSON, e.g. '{\"tolerance\": 1e-5}' (see the README for the keys)");
+  sub->callback([st] { runRun(*st); });
 }
 
 }  // namespace confpack::app

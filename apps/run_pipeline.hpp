@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "analysis/analyze.hpp"
 #include "core/backend.hpp"
 #include "core/deposition.hpp"
 #include "core/packing.hpp"
@@ -23,12 +24,24 @@ using RunProgressFn = std::function<void(double fraction, const std::string& sta
 /// dh = pile height - (grain volume / (L_x W phi_expected)), floored at one grain size.
 double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit);
 
+/// The state of a compaction at one equilibrium check.
+struct CheckPoint {
+  long steps = 0;
+  double time = 0.0;              ///< simulated time [t0]
+  double wallSeconds = 0.0;       ///< since the start of the compaction [s]
+  double maxForceRatio = 0.0;     ///< SPEC 6.1 ratios at this check
+  double maxMomentRatio = 0.0;
+  double maxKineticRatio = 0.0;
+  double interpenetrationPercent = 0.0;  ///< exact bulk interpenetration [%] (no lattice)
+};
+
 struct CompactionOutcome {
   core::Packing packing;                  ///< final poses with the last step's contacts and forces
   std::vector<core::BodyState> states;    ///< final velocities
   nlohmann::json equilibrium;             ///< SPEC 8.3 equilibrium block
   nlohmann::json timing;                  ///< wall_s, steps, iterations, phases, ...
   nlohmann::json backendSettings;         ///< resolved backend settings
+  std::vector<CheckPoint> history;        ///< one entry per equilibrium check
   double dt = 0.0;
   bool reached = false;
 };
@@ -37,9 +50,14 @@ struct CompactionOutcome {
 CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit,
                           const std::filesystem::path& vtkDir = {}, const RunProgressFn& progress = {});
 
-/// The result.json of a run (SPEC 8.3): analysis of the final packing + equilibrium, timing,
-/// backend, seed and the resolved configuration.
-nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out);
+/// Analysis options of a run: the defaults, without analysis's own zero-velocity equilibrium
+/// block (the pipeline writes the real one, with velocities).
+analysis::AnalysisOptions analysisOptions();
+
+/// The result.json of a run (SPEC 8.3): the measurements of the final packing, the equilibrium
+/// block, timing, backend, seed and the resolved configuration.
+nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
+                          const analysis::Analysis& measured);
 
 /// Deposit (unless `shared` is given: sweeps compact one deposit with both backends) + compact +
 /// analyse, writing into `outDir` (which must exist): result.json, packing.json (final, with

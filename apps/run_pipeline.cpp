@@ -1,0 +1,186 @@
+#include "apps/run_pipeline.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "analysis/equilibrium.hpp"
+#include "analysis/interpenetration.hpp"
+#include "backends/backend_factory.hpp"
+#include "core/packing_io.hpp"
+#include "core/vtk_writer.hpp"
+
+namespace confpack::app {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// The packing as the backend has it now: poses from the states, contacts of the last step.
+core::Packing snapshot(const core::BoxDef& box, const std::vector<core::Grain>& grains,
+                       const core::ContactBackend& backend) {
+  core::Packing p;
+  p.box = box;
+  p.grains = grains;
+  const auto& states = backend.states();
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    p.grains[i].position = states[i].position;
+    p.grains[i].orientation = states[i].orientation;
+  }
+  p.contacts = backend.contacts();
+  return p;
+}
+
+std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
+  std::vector<core::Vec3> v;
+  v.reserve(states.size());
+  for (const auto& s : states) v.push_back(s.velocity);
+  return v;
+}
+
+}  // namespace
+
+analysis::AnalysisOptions analysisOptions() {
+  analysis::AnalysisOptions o;
+  o.equilibrium = false;  // the pipeline has the velocities: it writes its own block
+  return o;
+}
+
+double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit) {
+  const double volume = core::totalVolume(deposit.grains);
+  const double finalHeight = volume / (cfg.box.lengthX * cfg.box.width * cfg.deposition.expectedSolidFraction);
+  const double dh = std::max(deposit.pileHeight - finalHeight, cfg.population.largeSize);
+  return 0.01 * std::sqrt(cfg.population.largeSize / (2.0 * dh));
+}
+
+CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit, const std::filesystem::path& vtkDir,
+                          const RunProgressFn& progress) {
+  const auto start = Clock::now();
+  core::SystemDef system;
+  system.box = cfg.box;
+  system.grains = deposit.grains;
+  auto backend = backends::makeBackend(cfg.backend, system, cfg.backendOptions);
+
+  CompactionOutcome out;
+  out.dt = cfg.compaction.dt > 0.0 ? cfg.compaction.dt : defaultTimeStep(cfg, deposit);
+  const long maxSteps = static_cast<long>(std::ceil(cfg.compaction.timeLimit / out.dt));
+
+  std::optional<core::VtkSeries> frames;
+  if (!vtkDir.empty()) {
+    frames.emplace(vtkDir, "frame");
+    core::Packing initial{cfg.box, deposit.grains, std::nullopt};
+    frames->addFrame(0.0, initial);
+  }
+
+  core::StepProfile totals;
+  long steps = 0;
+  long totalIterations = 0;
+  double rowUpdates = 0.0;  // contact rows x sweeps, for contact updates per second
+  analysis::EquilibriumReport eq;
+  bool haveEq = false;
+  while (steps < maxSteps) {
+    backend->step(out.dt);
+    ++steps;
+    const core::StepProfile& prof = backend->profile();
+    for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
+    totalIterations += prof.iterations;
+    rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
+
+    const bool frameDue = frames && cfg.compaction.frameInterval > 0 && steps % cfg.compaction.frameInterval == 0;
+    const bool checkDue = steps % cfg.compaction.checkInterval == 0 || steps == maxSteps;
+    if (!frameDue && !checkDue) continue;
+    const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
+    if (frameDue) frames->addFrame(steps * out.dt, now, velocities(backend->states()));
+    if (checkDue) {
+      eq = analysis::equilibrium(now, backend->states(), system.gravity, system.density, cfg.compaction.forceRatio,
+                                 cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
+      haveEq = true;
+      analysis::InterpenetrationDef exactOnly;
+      exactOnly.lattice = false;  // the lattice bounds are for the final state only (costly)
+      const double overlap =
+          analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
+      out.history.push_back({steps, steps * out.dt, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
+                             eq.maxKineticRatio, overlap});
+      if (progress)
+        progress(static_cast<double>(steps) / maxSteps,
+                 fmt::format("{} t={:.1f} step {} sweeps/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
+                             backend->name(), steps * out.dt, steps, static_cast<double>(totalIterations) / steps,
+                             eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio));
+      if (eq.reached) break;
+    }
+  }
+
+  out.packing = snapshot(cfg.box, deposit.grains, *backend);
+  out.states = backend->states();
+  if (!haveEq)
+    eq = analysis::equilibrium(out.packing, out.states, system.gravity, system.density, cfg.compaction.forceRatio,
+                               cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
+  if (frames) {
+    frames->addFrame(steps * out.dt, out.packing, velocities(out.states));
+    frames->finish();
+  }
+  out.reached = eq.reached;
+  out.equilibrium = eq;
+  out.equilibrium["simulated_time"] = steps * out.dt;
+  out.equilibrium["time_limit"] = cfg.compaction.timeLimit;
+
+  nlohmann::json phases = nlohmann::json::object();
+  for (int k = 0; k < static_cast<int>(core::Phase::Count); ++k)
+    phases[std::string(core::toString(static_cast<core::Phase>(k)))] = totals.seconds[k];
+  const double solveSeconds = totals[core::Phase::Solve];
+  nlohmann::json history = nlohmann::json::array();
+  for (const CheckPoint& c : out.history)
+    history.push_back({{"steps", c.steps}, {"time", c.time}, {"wall_s", c.wallSeconds},
+                       {"max_force_ratio", c.maxForceRatio}, {"max_moment_ratio", c.maxMomentRatio},
+                       {"max_kinetic_ratio", c.maxKineticRatio}, {"interpenetration_percent", c.interpenetrationPercent}});
+  out.timing = {{"wall_s", secondsSince(start)},
+                {"compaction_s", secondsSince(start)},
+                {"steps", steps},
+                {"dt", out.dt},
+                {"iterations", totalIterations},
+                {"iterations_per_step", steps > 0 ? static_cast<double>(totalIterations) / steps : 0.0},
+                {"contact_updates_per_s", solveSeconds > 0.0 ? rowUpdates / solveSeconds : 0.0},
+                {"phases", phases},
+                {"history", history}};
+  out.backendSettings = backend->settings();
+  return out;
+}
+
+nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
+                          const analysis::Analysis& measured) {
+  nlohmann::json r = analysis::toJson(measured);
+  r["backend"] = cfg.backend;
+  r["seed"] = cfg.seed;
+  r["n_grains"] = out.packing.grains.size();
+  r["equilibrium"] = out.equilibrium;
+  r["timing"] = out.timing;
+  r["timing"]["deposit_s"] = deposit.seconds;
+  r["timing"]["wall_s"] = out.timing["compaction_s"].get<double>() + deposit.seconds;
+  r["deposit"] = {{"pile_height", deposit.pileHeight},
+                  {"placeholder_diameter", deposit.placeholderDiameter},
+                  {"solid_fraction", deposit.solidFraction}};
+  r["config"] = cfg;
+  r["config"]["backend_settings"] = out.backendSettings;
+  r["config"]["compaction"]["dt"] = out.dt;
+  r["confpack_version"] = CONFPACK_VERSION;
+  return r;
+}
+
+nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
+                           const RunProgressFn& progress, const core::Deposit* shared) {
+  const core::Deposit dep = shared ? *shared : core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const CompactionOutcome out = compact(cfg, dep, outDir / "vtk", progress);
+  const analysis::Analysis measured = analysis::analyze(out.packing, analysisOptions());
+  nlohmann::json result = makeResult(cfg, dep, out, measured);
+  core::writePacking(out.packing, outDir / "packing.json");
+  analysis::writeProfiles(outDir, measured,
+                          {{"seed", cfg.seed}, {"backend", cfg.backend}, {"version", CONFPACK_VERSION}});
+  core::writeFileAtomically(outDir / "result.json", result.dump(2));
+  return result;
+}
+
+}  // namespace confpack::app
