@@ -59,6 +59,11 @@ ConvexPolytope toPolytope(const PlacedPolyhedron& p) {
 }
 
 void clip(const ConvexPolytope& in, const Plane& plane, ConvexPolytope& out) {
+  if (&in == &out) {  // aliasing: clearing out would destroy in
+    const ConvexPolytope copy = in;
+    clip(copy, plane, out);
+    return;
+  }
   out.vertices.clear();
   out.faceIndices.clear();
   out.faceStarts.assign(1, 0);

@@ -43,7 +43,8 @@ struct ConvexPolytope {
 
 /// The polytope of a placed polyhedron.
 ConvexPolytope toPolytope(const PlacedPolyhedron& p);
-/// in ∩ {normal.x <= offset} written into out (out may not alias in). Clears out if empty.
+/// in ∩ {normal.x <= offset} written into out (aliasing in and out works but copies). Clears
+/// out if the result is empty.
 void clip(const ConvexPolytope& in, const Plane& plane, ConvexPolytope& out);
 /// Convenience: returns the clipped copy.
 ConvexPolytope clipped(const ConvexPolytope& in, const Plane& plane);

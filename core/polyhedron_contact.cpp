@@ -270,7 +270,9 @@ DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B, const SatRe
       Vec3 c1, c2;
       const double d2 = closestSegmentSegment(A.v[ea[0]], A.v[ea[1]], B.v[eb[0]], B.v[eb[1]], s, t, c1, c2);
       const double d = std::sqrt(d2);
-      if (d < r.distance - tieTol && d > 0.0) {
+      if (d < r.distance - tieTol && d <= 0.0) {
+        r = {d, u};  // touching to rounding although SAT saw a positive gap: keep SAT's axis
+      } else if (d < r.distance - tieTol) {
         // Two readings of the direction: (c2 - c1)/d, which carries rounding/d and, for nearly
         // parallel edges, the ill-conditioning of where along them the closest points sit; and
         // the edges' cross product, exact for crossing edges. The true closest direction n*
@@ -645,6 +647,11 @@ bool pairNormal(const WorldPoly& A, const WorldPoly& B, double alert, Vec3& norm
     return true;
   }
   const DistanceResult d = exactDistance(A, B, sat);
+  if (!std::isfinite(d.distance)) {  // cannot happen for disjoint polytopes; be safe anyway
+    normal = sat.axis;
+    gap = sat.sep;
+    return true;
+  }
   if (d.distance > alert) return false;
   normal = d.normal;
   gap = d.distance;

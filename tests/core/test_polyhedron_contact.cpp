@@ -84,7 +84,7 @@ TEST_CASE("contact: pinacoid vertex on a face is Simple with the face normal") {
   // b's lowest vertex along n1 sits above the point q of a's top face (y > 0), at height g.
   const int k = p.supportIndex(r.transpose() * (-kN1));
   const Vec3 q(0.05, 0.25, 0.25);  // on y + z = 1/2, inside the trapezoid
-  for (double g : {0.01, 1e-7, -1e-4, -0.005}) {
+  for (double g : {0.01, 1e-7, 0.0, -1e-4, -0.005}) {
     const PlacedPolyhedron b{&p, q + g * kN1 - r * p.vertices()[k], r};
     const auto c = collidePolyhedra(a, b, 0.02);
     REQUIRE(c);
@@ -108,7 +108,7 @@ TEST_CASE("contact: crossing ridges are an edge-edge Simple contact") {
   const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
   // b turned 90 degrees about z: its bottom ridge runs along y and crosses a's top ridge (along x).
   const Mat3 rz = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()).toRotationMatrix();
-  for (double g : {0.003, 1e-9, -0.002}) {
+  for (double g : {0.003, 1e-9, 0.0, -0.002}) {
     const PlacedPolyhedron b{&p, Vec3(0.03, -0.02, 1.0 + g), rz};
     const auto c = collidePolyhedra(a, b, 0.01);
     REQUIRE(c);
