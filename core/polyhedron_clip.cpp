@@ -220,7 +220,8 @@ double clippedVolume(const PlacedPolyhedron& p, std::span<const Plane> halfSpace
 }
 
 double intersectionVolume(const PlacedPolyhedron& a, const PlacedPolyhedron& b) {
-  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("intersectionVolume: PlacedPolyhedron.shape is null");
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument("intersectionVolume: PlacedPolyhedron.shape is null");
   // Cheap rejection by bounding spheres before any clipping.
   const double reach = a.shape->boundingRadius() + b.shape->boundingRadius();
   if ((a.position - b.position).squaredNorm() > reach * reach) return 0.0;
@@ -245,8 +246,8 @@ double slabVolume(const PlacedPolyhedron& p, int axis, double lo, double hi) {
 
 double boxVolume(const PlacedPolyhedron& p, const Vec3& lo, const Vec3& hi) {
   if (!((hi - lo).minCoeff() > 0.0)) return 0.0;
-  const Plane planes[6] = {{Vec3::UnitX(), hi.x()},  {-Vec3::UnitX(), -lo.x()}, {Vec3::UnitY(), hi.y()},
-                           {-Vec3::UnitY(), -lo.y()}, {Vec3::UnitZ(), hi.z()},  {-Vec3::UnitZ(), -lo.z()}};
+  const Plane planes[6] = {{Vec3::UnitX(), hi.x()},   {-Vec3::UnitX(), -lo.x()}, {Vec3::UnitY(), hi.y()},
+                           {-Vec3::UnitY(), -lo.y()}, {Vec3::UnitZ(), hi.z()},   {-Vec3::UnitZ(), -lo.z()}};
   return clippedVolume(p, planes);
 }
 
@@ -283,7 +284,8 @@ std::vector<double> slabVolumes(const PlacedPolyhedron& p, int axis, std::span<c
 
 void forEachCellVolume(const PlacedPolyhedron& p, const Vec3& origin, double h,
                        const std::function<void(int, int, int, double)>& fn) {
-  if (!(h > 0.0)) throw std::invalid_argument(fmt::format("forEachCellVolume: cell side h must be positive (got {})", h));
+  if (!(h > 0.0))
+    throw std::invalid_argument(fmt::format("forEachCellVolume: cell side h must be positive (got {})", h));
   const ConvexPolytope poly = toPolytope(p);
   // Cell index range along an axis from the bounds of a piece.
   auto range = [&](const ConvexPolytope& piece, int axis, int& first, std::vector<double>& edges) {

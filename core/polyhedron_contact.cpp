@@ -31,13 +31,13 @@ constexpr double kParallelEdgeSin = 1e-9;
 // A polyhedron in world coordinates with the topology the narrow phase needs.
 struct WorldPoly {
   const ConvexPolyhedron* shape = nullptr;
-  std::vector<Vec3> v;                       // world vertices
-  std::vector<Vec3> n;                       // world outward face normals
-  std::vector<double> off;                   // n.x = off on the face
-  std::vector<std::array<int, 2>> edgeFaces; // the two faces adjacent to each edge
-  std::vector<Vec3> edgeArc;                 // n[face1] x n[face0]: the edge's Gauss-map arc normal
-  Vec3 centre = Vec3::Zero();                // an interior point (vertex mean)
-  double radius = 0.0;                       // bounding radius of the shape
+  std::vector<Vec3> v;                        // world vertices
+  std::vector<Vec3> n;                        // world outward face normals
+  std::vector<double> off;                    // n.x = off on the face
+  std::vector<std::array<int, 2>> edgeFaces;  // the two faces adjacent to each edge
+  std::vector<Vec3> edgeArc;                  // n[face1] x n[face0]: the edge's Gauss-map arc normal
+  Vec3 centre = Vec3::Zero();                 // an interior point (vertex mean)
+  double radius = 0.0;                        // bounding radius of the shape
 
   explicit WorldPoly(const PlacedPolyhedron& p, bool withTopology = true) : shape(p.shape) {
     if (shape == nullptr) throw std::invalid_argument("PlacedPolyhedron.shape is null");
@@ -155,7 +155,7 @@ bool projectsInsideFace(const WorldPoly& w, int f, const Vec3& x) {
 // Separating-axis test.
 
 struct SatResult {
-  double sep = -kInf;  // largest separation over the axes [d_L]
+  double sep = -kInf;         // largest separation over the axes [d_L]
   Vec3 axis = Vec3::UnitZ();  // from a towards b
 };
 
@@ -321,7 +321,9 @@ SupportSet supportSet(const WorldPoly& w, const Vec3& dir, double eps) {
 
 using Vec2 = Eigen::Vector2d;
 
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross2(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 double polygonArea(const std::vector<Vec2>& p) {
   double a = 0.0;
@@ -362,8 +364,10 @@ bool clipSegment(Vec2& p, Vec2& q, const std::vector<Vec2>& poly) {
       continue;
     }
     const double t = -num / den;
-    if (den > 0.0) t0 = std::max(t0, t);
-    else t1 = std::min(t1, t);
+    if (den > 0.0)
+      t0 = std::max(t0, t);
+    else
+      t1 = std::min(t1, t);
     if (t0 > t1) return false;
   }
   const Vec2 p0 = p;
@@ -408,7 +412,8 @@ struct Frame {
 
 double heightAt(const FeatureSurface& s, const Frame& fr, const Vec2& x) {
   switch (s.kind) {
-    case FeatureKind::Vertex: return fr.n.dot(s.p0);
+    case FeatureKind::Vertex:
+      return fr.n.dot(s.p0);
     case FeatureKind::Edge: {
       const Vec2 a = fr.lateral(s.p0), b = fr.lateral(s.p1);
       const Vec2 d = b - a;
@@ -509,7 +514,8 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       for (std::size_t j = 0; j < segCount(lb); ++j) {
         double s, t;
         Vec3 c1, c2;
-        const double d2 = closestSegmentSegment(la[i], la[(i + 1) % la.size()], lb[j], lb[(j + 1) % lb.size()], s, t, c1, c2);
+        const double d2 =
+            closestSegmentSegment(la[i], la[(i + 1) % la.size()], lb[j], lb[(j + 1) % lb.size()], s, t, c1, c2);
         if (d2 < best) {
           best = d2;
           pair = {c1, c2};
@@ -567,8 +573,10 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       const double b0 = dir.dot(pb[0] - pa[0]), b1 = dir.dot(pb[1] - pa[0]);
       const double lo = std::max(a0, std::min(b0, b1)), hi = std::min(a1, std::max(b0, b1));
       // The two lines may be offset laterally by rounding or tilt: put points midway across.
-      if (hi >= lo) finishSegmentOrPoint({pa[0] + lo * dir, pa[0] + hi * dir});
-      else r.points = {pa[0] + 0.5 * (lo + hi) * dir};
+      if (hi >= lo)
+        finishSegmentOrPoint({pa[0] + lo * dir, pa[0] + hi * dir});
+      else
+        r.points = {pa[0] + 0.5 * (lo + hi) * dir};
       // Surface points: the same abscissa along the common direction on each 3D edge (the
       // lateral lines may be offset by the tilt allowed by the tolerance).
       r.exactPair = true;
@@ -583,8 +591,10 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     const std::vector<Vec2>& seg = ka == FeatureKind::Edge ? pa : pb;
     const std::vector<Vec2>& face = ka == FeatureKind::Edge ? pb : pa;
     Vec2 p = seg[0], q = seg[1];
-    if (clipSegment(p, q, face)) finishSegmentOrPoint({p, q});
-    else closestFeaturePair();  // the edge's projection misses the face
+    if (clipSegment(p, q, face))
+      finishSegmentOrPoint({p, q});
+    else
+      closestFeaturePair();  // the edge's projection misses the face
   } else {
     std::vector<Vec2> poly = clipPolygon(pa, pb);
     if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
@@ -668,7 +678,8 @@ bool pairNormal(const WorldPoly& A, const WorldPoly& B, double alert, Vec3& norm
 std::vector<Vec2> convexHull2(std::vector<Vec2> p) {
   // Andrew's monotone chain; CCW output. Used for the (at most 8) points of a wall contact.
   if (p.size() < 3) return p;
-  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(p.begin(), p.end(),
+            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   std::vector<Vec2> h(2 * p.size());
   std::size_t k = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -689,7 +700,8 @@ void checkAlert(double alert, const char* who) {
 
 Vec3 unitOrThrow(const Vec3& n, const char* who) {
   const double len = n.norm();
-  if (!(len > 0.0) || !std::isfinite(len)) throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
+  if (!(len > 0.0) || !std::isfinite(len))
+    throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
   return n / len;
 }
 
@@ -698,7 +710,8 @@ Vec3 unitOrThrow(const Vec3& n, const char* who) {
 std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,
                                                   double angleTol) {
   checkAlert(alert, "collidePolyhedra");
-  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("collidePolyhedra: PlacedPolyhedron.shape is null");
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument("collidePolyhedra: PlacedPolyhedron.shape is null");
   // Bounding spheres first: most broad-phase pairs end here.
   const double reach = a.shape->boundingRadius() + b.shape->boundingRadius() + alert;
   if ((b.position - a.position).squaredNorm() > reach * reach) return std::nullopt;
@@ -712,7 +725,8 @@ std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, con
 std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron& a, const Vec3& centre, double radius,
                                                          double alert, double angleTol) {
   checkAlert(alert, "collidePolyhedronSphere");
-  if (!(radius > 0.0)) throw std::invalid_argument(fmt::format("collidePolyhedronSphere: radius must be positive (got {})", radius));
+  if (!(radius > 0.0))
+    throw std::invalid_argument(fmt::format("collidePolyhedronSphere: radius must be positive (got {})", radius));
   if (a.shape == nullptr) throw std::invalid_argument("collidePolyhedronSphere: PlacedPolyhedron.shape is null");
   const double reach = a.shape->boundingRadius() + radius + alert;
   if ((centre - a.position).squaredNorm() > reach * reach) return std::nullopt;
@@ -763,9 +777,12 @@ std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron&
         best = dist;
         closest = q;
         c.normal = (centre - q) / dist;
-        if (t <= 0.0) c.featureA = {FeatureKind::Vertex, edges[e][0]};
-        else if (t >= 1.0) c.featureA = {FeatureKind::Vertex, edges[e][1]};
-        else c.featureA = {FeatureKind::Edge, static_cast<int>(e)};
+        if (t <= 0.0)
+          c.featureA = {FeatureKind::Vertex, edges[e][0]};
+        else if (t >= 1.0)
+          c.featureA = {FeatureKind::Vertex, edges[e][1]};
+        else
+          c.featureA = {FeatureKind::Edge, static_cast<int>(e)};
       }
     }
     c.gap = best - radius;
@@ -801,7 +818,7 @@ std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& 
   c.featureB = {FeatureKind::Face, 0};
   c.type = sa.feature.kind == FeatureKind::Vertex ? ContactType::Simple
            : sa.feature.kind == FeatureKind::Edge ? ContactType::Double
-                                                   : ContactType::Triple;
+                                                  : ContactType::Triple;
   // Points: every vertex within alert, and every vertex of the support feature (so a Triple
   // contact always has >= 3 points even if the alert is smaller than its tilt).
   const double reachH = std::max(alert, gap + A.featureEps(angleTol));
@@ -833,7 +850,8 @@ Feature supportFeature(const PlacedPolyhedron& p, const Vec3& dir, double angleT
 }
 
 ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double angleTol) {
-  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
   const WorldPoly A(a), B(b);
   Vec3 normal = Vec3::UnitZ();
   double gap = 0.0;
@@ -841,9 +859,9 @@ ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b
   return buildContact(A, B, normal, gap, angleTol).type;
 }
 
-ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal,
-                            double angleTol) {
-  if (a.shape == nullptr || b.shape == nullptr) throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
+ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal, double angleTol) {
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
   const WorldPoly A(a), B(b);
   return buildContact(A, B, unitOrThrow(normal, "classifyContact"), 0.0, angleTol).type;
 }
@@ -852,7 +870,7 @@ ContactType classifyPlaneContact(const PlacedPolyhedron& a, const Vec3& inwardNo
   const Feature f = supportFeature(a, -unitOrThrow(inwardNormal, "classifyPlaneContact"), angleTol);
   return f.kind == FeatureKind::Vertex ? ContactType::Simple
          : f.kind == FeatureKind::Edge ? ContactType::Double
-                                        : ContactType::Triple;
+                                       : ContactType::Triple;
 }
 
 }  // namespace confpack::core

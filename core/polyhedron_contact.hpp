@@ -53,8 +53,8 @@ namespace confpack::core {
 /// Does not own the shape: the ConvexPolyhedron must outlive it.
 struct PlacedPolyhedron {
   const ConvexPolyhedron* shape = nullptr;
-  Vec3 position = Vec3::Zero();       ///< world position of the body origin [d_L]
-  Mat3 rotation = Mat3::Identity();   ///< body-to-world rotation
+  Vec3 position = Vec3::Zero();      ///< world position of the body origin [d_L]
+  Mat3 rotation = Mat3::Identity();  ///< body-to-world rotation
 
   Vec3 toWorld(const Vec3& body) const { return position + rotation * body; }
   /// World coordinates of every vertex, in the shape's vertex order.
@@ -78,27 +78,26 @@ struct Feature {
 inline constexpr double kFeatureAngleTol = 1e-3;
 
 struct PolyhedronContact {
-  double gap = 0.0;                ///< signed distance between the surfaces along normal (< 0: penetration depth) [d_L]
-  Vec3 normal = Vec3::UnitZ();     ///< unit, from a towards b (for a wall: into the wall)
+  double gap = 0.0;             ///< signed distance between the surfaces along normal (< 0: penetration depth) [d_L]
+  Vec3 normal = Vec3::UnitZ();  ///< unit, from a towards b (for a wall: into the wall)
   ContactType type = ContactType::Simple;
-  Feature featureA{};              ///< feature of a in contact (stable key for a contact cache)
-  Feature featureB{};              ///< feature of b (for a wall or a sphere: kind Face/Vertex, index 0)
-  std::vector<Vec3> points;        ///< world points on the contact plane, midway between the surfaces
-  std::vector<double> pointGaps;   ///< gap along normal at each point [d_L]
+  Feature featureA{};             ///< feature of a in contact (stable key for a contact cache)
+  Feature featureB{};             ///< feature of b (for a wall or a sphere: kind Face/Vertex, index 0)
+  std::vector<Vec3> points;       ///< world points on the contact plane, midway between the surfaces
+  std::vector<double> pointGaps;  ///< gap along normal at each point [d_L]
 };
 
 /// Contact between two placed polyhedra, or nullopt if their distance exceeds alert [d_L].
 /// angleTol [rad]: tolerance for a face/edge to count as lying in the contact plane.
-std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b,
-                                                  double alert, double angleTol = kFeatureAngleTol);
+std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,
+                                                  double angleTol = kFeatureAngleTol);
 
 /// Contact between a placed polyhedron a and a sphere (b), or nullopt if the gap exceeds alert.
 /// Exact: the closest point of the polyhedron to the centre (if the centre is inside, the nearest
 /// face plane). Always Simple, one point midway between the surfaces; featureA is the closest
 /// feature of a, featureB = {Vertex, 0}.
-std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron& a, const Vec3& centre,
-                                                         double radius, double alert,
-                                                         double angleTol = kFeatureAngleTol);
+std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron& a, const Vec3& centre, double radius,
+                                                         double alert, double angleTol = kFeatureAngleTol);
 
 /// Contact between a placed polyhedron a and a flat wall {x : inwardNormal.(x - planePoint) >= 0}
 /// (b), or nullopt if the lowest vertex is farther than alert. normal = -inwardNormal.
@@ -119,8 +118,7 @@ Feature supportFeature(const PlacedPolyhedron& p, const Vec3& dir, double angleT
 /// Geometric contact type of two touching polyhedra (SPEC 6.9), from their poses only: the
 /// normal is recomputed by the narrow phase above, so the answer does not depend on which backend
 /// produced the contact nor on the number of points it used. Works for any gap (no alert).
-ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b,
-                            double angleTol = kFeatureAngleTol);
+ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double angleTol = kFeatureAngleTol);
 
 /// Same, with an imposed unit normal (from a towards b), e.g. a backend's normal.
 ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal,

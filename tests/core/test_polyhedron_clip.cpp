@@ -126,14 +126,16 @@ TEST_CASE("clip: slab volumes over a partition of z sum to the volume") {
 TEST_CASE("clip: box volume of a cuboid equals the analytic overlap box") {
   const ConvexPolyhedron cube = makeCuboid(1.0, 0.6, 0.8);
   const PlacedPolyhedron c{&cube, Vec3(0.2, -0.1, 0.3), Mat3::Identity()};  // [-0.3,0.7]x[-0.4,0.2]x[-0.1,0.7]
-  auto overlap = [](double lo1, double hi1, double lo2, double hi2) { return std::max(0.0, std::min(hi1, hi2) - std::max(lo1, lo2)); };
+  auto overlap = [](double lo1, double hi1, double lo2, double hi2) {
+    return std::max(0.0, std::min(hi1, hi2) - std::max(lo1, lo2));
+  };
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 100; ++trial) {
     Vec3 lo(u(rng), u(rng), u(rng));
     const Vec3 hi = lo + Vec3(0.5 + 0.5 * (u(rng) + 1), 0.3 + 0.5 * (u(rng) + 1), 0.2 + 0.5 * (u(rng) + 1));
-    const double expected = overlap(-0.3, 0.7, lo.x(), hi.x()) * overlap(-0.4, 0.2, lo.y(), hi.y()) *
-                            overlap(-0.1, 0.7, lo.z(), hi.z());
+    const double expected =
+        overlap(-0.3, 0.7, lo.x(), hi.x()) * overlap(-0.4, 0.2, lo.y(), hi.y()) * overlap(-0.1, 0.7, lo.z(), hi.z());
     CHECK(boxVolume(c, lo, hi) == Approx(expected).margin(1e-14));
   }
   // Box faces coinciding with the cuboid faces (degenerate planes through whole faces).
@@ -249,7 +251,9 @@ TEST_CASE("clip: the two sides of any plane add up to the volume, also through v
     Vec3 n = Vec3(g(rng), g(rng), g(rng)).normalized();
     Vec3 through = placed.position + 0.3 * Vec3(g(rng), g(rng), g(rng));
     switch (trial % 5) {
-      case 1: through = w[pick(rng)]; break;
+      case 1:
+        through = w[pick(rng)];
+        break;
       case 2: {  // through two vertices
         const int i = pick(rng), j = (i + 1 + pick(rng) % 7) % 8;
         through = w[i];
@@ -266,8 +270,11 @@ TEST_CASE("clip: the two sides of any plane add up to the volume, also through v
         n = c.normalized();
         break;
       }
-      case 4: through = w[pick(rng)] + (trial % 2 ? 1e-13 : 1e-9) * n; break;
-      default: break;
+      case 4:
+        through = w[pick(rng)] + (trial % 2 ? 1e-13 : 1e-9) * n;
+        break;
+      default:
+        break;
     }
     const Plane below[1] = {{n, n.dot(through)}};
     const Plane above[1] = {{-n, -n.dot(through)}};

@@ -1,8 +1,9 @@
 // Pinacoid narrow phase and contact classifier (core/polyhedron_contact): hand-placed pairs with
 // known answers, symmetry, and FCL / brute-force cross-checks.
+#include <fcl/fcl.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <fcl/fcl.h>
 #include <memory>
 #include <random>
 #include <stdexcept>
@@ -14,7 +15,7 @@ using namespace confpack::core;
 
 namespace {
 
-const PinacoidParams kParams{};  // L = G = E = 1, alpha = 60 deg
+const PinacoidParams kParams{};                           // L = G = E = 1, alpha = 60 deg
 const double kL = pinacoidRidgeHalfLength(1.0, kParams);  // ridge half-length l
 // Top trapezoid y > 0 of the unit pinacoid: the plane y + z = 1/2, normal (0,1,1)/sqrt2.
 const Vec3 kN1 = Vec3(0, 1, 1).normalized();
@@ -199,7 +200,9 @@ TEST_CASE("contact: trapezoid on trapezoid is Triple with 4 supporting points") 
     // order by angle around the mean
     Eigen::Vector2d m = Eigen::Vector2d::Zero();
     for (auto& x : q) m += x / 4.0;
-    std::sort(q.begin(), q.end(), [&](auto& s, auto& t) { return std::atan2(s.y() - m.y(), s.x() - m.x()) < std::atan2(t.y() - m.y(), t.x() - m.x()); });
+    std::sort(q.begin(), q.end(), [&](auto& s, auto& t) {
+      return std::atan2(s.y() - m.y(), s.x() - m.x()) < std::atan2(t.y() - m.y(), t.x() - m.x());
+    });
     double area = 0;
     for (int i = 0; i < 4; ++i) area += 0.5 * (q[i].x() * q[(i + 1) % 4].y() - q[i].y() * q[(i + 1) % 4].x());
     const double slant = std::sqrt(0.5);
