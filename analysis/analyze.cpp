@@ -112,7 +112,8 @@ nlohmann::json toJson(const Analysis& a) {
                                    {"lattice_max", orNull(ip.latticeMaxPercent)},
                                    {"overlapping_pairs", ip.overlappingPairs},
                                    {"max_sphere_depth", ip.maxSphereDepth},
-                                   {"lattice_cells", ip.latticeCells}};
+                                   {"lattice_cells", ip.latticeCells},
+                                   {"lattice_skipped", ip.latticeSkipped.empty() ? json(nullptr) : json(ip.latticeSkipped)}};
 
   const Fabric& f = a.fabric;
   j["anisotropy"] = f.contacts > 0 ? json(f.anisotropy) : json(nullptr);

@@ -4,7 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <array>
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <tuple>
@@ -25,12 +26,47 @@ namespace {
 
 struct OverlapPair {
   int a = 0, b = 0;
-  core::Vec3 separation;
-  core::Vec3 lo, hi;  // bounds of the in-slab intersection, in a's frame
+  core::ConvexPolytope intersection;  // in the slab, in a's frame (unwrapped)
 };
 
-// Lattice bounds (header comment) for the overlapping pinacoid pairs.
-void latticeBounds(const core::Packing& packing, const BulkRegion& region, const InterpenetrationDef& def,
+// Splits `poly` into the cells of a lattice with origin `origin` and cell sides h, calling
+// fn(ix, iy, iz, piece) for every non-empty piece (unwrapped indices). Successive cuts (x slabs,
+// then y columns, then z cells), each of an ever smaller polytope, so the cost follows the number
+// of cells the polytope actually crosses, not its bounding box.
+template <class Fn>
+void forEachCellPiece(const core::ConvexPolytope& poly, const core::Vec3& origin, const core::Vec3& h, Fn&& fn) {
+  if (poly.empty()) return;
+  const auto [lo, hi] = poly.bounds();
+  std::array<int, 3> first{}, last{};
+  for (int d = 0; d < 3; ++d) {
+    first[d] = static_cast<int>(std::floor((lo[d] - origin[d]) / h[d]));
+    last[d] = static_cast<int>(std::floor((hi[d] - origin[d]) / h[d]));
+  }
+  // Cuts along `axis` from index first..last; level 0 = x, 1 = y, 2 = z.
+  std::array<core::ConvexPolytope, 3> rest, piece, next;
+  std::array<int, 3> index{};
+  auto sweep = [&](auto&& self, const core::ConvexPolytope& in, int axis) -> void {
+    core::Vec3 e = core::Vec3::Zero();
+    e[axis] = 1.0;
+    rest[axis] = in;
+    for (int i = first[axis]; i <= last[axis] && !rest[axis].empty(); ++i) {
+      const double upper = origin[axis] + (i + 1) * h[axis];
+      core::clip(rest[axis], core::Plane{e, upper}, piece[axis]);
+      if (!piece[axis].empty()) {
+        index[axis] = i;
+        if (axis == 2) fn(index[0], index[1], index[2], piece[axis]);
+        else self(self, piece[axis], axis + 1);
+      }
+      core::clip(rest[axis], core::Plane{-e, -upper}, next[axis]);
+      std::swap(rest[axis], next[axis]);
+    }
+  };
+  sweep(sweep, poly, 0);
+}
+
+// Lattice bounds (header comment) for the overlapping pinacoid pairs. Returns false (bounds not
+// computed) when more than maxCells cells would be visited.
+bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const InterpenetrationDef& def,
                    const std::vector<NeighbourPair>& neighbours, const std::vector<OverlapPair>& pairs,
                    double& lower, double& upper, int& cellCount) {
   const core::BoxDef& box = packing.box;
@@ -38,71 +74,96 @@ void latticeBounds(const core::Packing& packing, const BulkRegion& region, const
   const int ny = std::max(1, static_cast<int>(std::lround(box.width / def.cell)));
   const int nz = std::max(1, static_cast<int>(std::lround(region.height() / def.cell)));
   const core::Vec3 h(box.lengthX / nx, box.width / ny, region.height() / nz);
+  const core::Vec3 origin(0.0, 0.0, region.zLow);
   const double cellVolume = h.prod();
 
-  // Cells that can hold overlap, each with the pairs whose intersection box reaches it.
-  std::map<std::tuple<int, int, int>, std::vector<int>> cells;
+  // (cell key, pair) for every cell that holds part of a pair's overlap, sorted by cell.
+  auto key = [&](int ix, int iy, int iz) {
+    const std::uint64_t wx = static_cast<std::uint64_t>(((ix % nx) + nx) % nx);
+    const std::uint64_t wy = static_cast<std::uint64_t>(box.periodicY ? ((iy % ny) + ny) % ny : std::clamp(iy, 0, ny - 1));
+    return (static_cast<std::uint64_t>(iz) * ny + wy) * nx + wx;
+  };
+  std::vector<std::pair<std::uint64_t, int>> entries;
   for (int p = 0; p < static_cast<int>(pairs.size()); ++p) {
-    const OverlapPair& op = pairs[p];
-    const int x0 = static_cast<int>(std::floor(op.lo.x() / h.x())), x1 = static_cast<int>(std::floor(op.hi.x() / h.x()));
-    const int y0 = static_cast<int>(std::floor(op.lo.y() / h.y())), y1 = static_cast<int>(std::floor(op.hi.y() / h.y()));
-    const int z0 = std::max(0, static_cast<int>(std::floor((op.lo.z() - region.zLow) / h.z())));
-    const int z1 = std::min(nz - 1, static_cast<int>(std::floor((op.hi.z() - region.zLow) / h.z())));
-    for (int iz = z0; iz <= z1; ++iz)
-      for (int iy = y0; iy <= y1; ++iy)
-        for (int ix = x0; ix <= x1; ++ix) {
-          const int wx = ((ix % nx) + nx) % nx;
-          int wy = iy;
-          if (box.periodicY) wy = ((iy % ny) + ny) % ny;
-          else if (iy < 0 || iy >= ny) continue;  // outside the walls: no grain material there
-          cells[{wx, wy, iz}].push_back(p);
-        }
+    forEachCellPiece(pairs[p].intersection, origin, h, [&](int ix, int iy, int iz, const core::ConvexPolytope&) {
+      if (iz < 0 || iz >= nz) return;
+      entries.emplace_back(key(ix, iy, iz), p);
+    });
+    if (entries.size() > def.maxCells) return false;
   }
+  std::sort(entries.begin(), entries.end());
 
-  // Neighbour lists, to find every grain that reaches a cell.
-  std::vector<std::vector<int>> adjacent(packing.grains.size());
+  const std::size_t n = packing.grains.size();
+  std::vector<std::vector<int>> adjacent(n);
   for (const NeighbourPair& np : neighbours) {
     adjacent[np.i].push_back(np.j);
     adjacent[np.j].push_back(np.i);
   }
-  std::vector<std::optional<PlacedGrain>> placed(packing.grains.size());
+  // Each grain's polytope at its own position, built once; a cell is moved into the grain's
+  // periodic frame instead of moving the grain.
+  std::vector<core::ConvexPolytope> polytope(n);
+  std::vector<std::pair<core::Vec3, core::Vec3>> bounds(n);
+  std::vector<char> built(n, 0);
+  std::vector<std::size_t> stamp(n, 0);
+  std::vector<double> volumeOf(n, 0.0);
   std::vector<int> candidates;
-  std::map<int, double> volumeOf;
-  for (const auto& [key, pairList] : cells) {
-    const auto [ix, iy, iz] = key;
-    const core::Vec3 lo(ix * h.x(), iy * h.y(), region.zLow + iz * h.z());
-    const core::Vec3 hi = lo + h;
-    const core::Vec3 centre = 0.5 * (lo + hi);
-    const double halfDiagonal = 0.5 * h.norm();
+  core::ConvexPolytope work[2];
+  std::size_t cellId = 0;
+  for (std::size_t begin = 0; begin < entries.size();) {
+    std::size_t end = begin;
+    while (end < entries.size() && entries[end].first == entries[begin].first) ++end;
+    ++cellId;
+    const std::uint64_t k = entries[begin].first;
+    const int ix = static_cast<int>(k % nx), iy = static_cast<int>((k / nx) % ny), iz = static_cast<int>(k / (static_cast<std::uint64_t>(nx) * ny));
+    const core::Vec3 lo = origin + core::Vec3(ix * h.x(), iy * h.y(), iz * h.z());
+    const core::Vec3 centre = lo + 0.5 * h;
     candidates.clear();
-    for (int p : pairList) {
-      for (int g : {pairs[p].a, pairs[p].b}) {
-        candidates.push_back(g);
-        candidates.insert(candidates.end(), adjacent[g].begin(), adjacent[g].end());
+    auto consider = [&](int g) {
+      if (stamp[g] == cellId) return;
+      stamp[g] = cellId;
+      candidates.push_back(g);
+    };
+    for (std::size_t e = begin; e < end; ++e) {
+      for (int g : {pairs[entries[e].second].a, pairs[entries[e].second].b}) {
+        consider(g);
+        for (int j : adjacent[g]) consider(j);
       }
     }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    volumeOf.clear();
     double solid = 0.0;
     for (int g : candidates) {
       const core::Grain& grain = packing.grains[g];
-      const core::Vec3 image = centre + box.minimumImage(grain.position - centre);
-      if ((image - centre).norm() > grain.boundingRadius() + halfDiagonal) continue;
-      if (!placed[g]) placed[g].emplace(grain);
-      core::PlacedPolyhedron at = placed[g]->placed;
-      at.position = image;
-      const double v = core::boxVolume(at, lo, hi);
-      volumeOf[g] = v;
-      solid += v;
+      // The cell seen from the grain's own (stored) position.
+      const core::Vec3 shift = grain.position - (centre + box.minimumImage(grain.position - centre));
+      const core::Vec3 cLo = lo + shift, cHi = lo + h + shift;
+      if (!built[g]) {
+        const PlacedGrain placed(grain);
+        polytope[g] = core::toPolytope(placed.placed);
+        bounds[g] = polytope[g].bounds();
+        built[g] = 1;
+      }
+      volumeOf[g] = 0.0;
+      if ((bounds[g].first.array() >= cHi.array()).any() || (bounds[g].second.array() <= cLo.array()).any()) continue;
+      const core::Plane planes[6] = {{core::Vec3::UnitX(), cHi.x()},  {-core::Vec3::UnitX(), -cLo.x()},
+                                     {core::Vec3::UnitY(), cHi.y()},  {-core::Vec3::UnitY(), -cLo.y()},
+                                     {core::Vec3::UnitZ(), cHi.z()},  {-core::Vec3::UnitZ(), -cLo.z()}};
+      core::clip(polytope[g], planes[0], work[0]);
+      int cur = 0;
+      for (int pl = 1; pl < 6 && !work[cur].empty(); ++pl) {
+        core::clip(work[cur], planes[pl], work[1 - cur]);
+        cur = 1 - cur;
+      }
+      volumeOf[g] = work[cur].volume();
+      solid += volumeOf[g];
     }
     lower += std::max(0.0, solid - cellVolume);
-    for (int p : pairList) {
-      const auto va = volumeOf.find(pairs[p].a), vb = volumeOf.find(pairs[p].b);
-      if (va != volumeOf.end() && vb != volumeOf.end()) upper += std::min(va->second, vb->second);
+    for (std::size_t e = begin; e < end; ++e) {
+      const OverlapPair& op = pairs[entries[e].second];
+      upper += std::min(volumeOf[op.a], volumeOf[op.b]);
     }
     ++cellCount;
+    begin = end;
   }
+  return true;
 }
 
 }  // namespace
@@ -144,17 +205,19 @@ Interpenetration interpenetration(const core::Packing& packing, const BulkRegion
       if (!(v > 0.0)) continue;
       r.overlapVolume += v;
       ++r.overlappingPairs;
-      const auto [lo, hi] = inter.bounds();
-      pinacoidPairs.push_back({np.i, np.j, np.separation, lo, hi});
+      pinacoidPairs.push_back({np.i, np.j, std::move(inter)});
     }
   }
   const double scale = r.grainVolume > 0.0 ? 100.0 / r.grainVolume : 0.0;
   r.exactPercent = r.overlapVolume * scale;
   if (anyPinacoid && def.lattice) {
     double lower = 0.0, upper = 0.0;
-    latticeBounds(packing, region, def, neighbours, pinacoidPairs, lower, upper, r.latticeCells);
-    r.latticeMinPercent = lower * scale;
-    r.latticeMaxPercent = upper * scale;
+    if (latticeBounds(packing, region, def, neighbours, pinacoidPairs, lower, upper, r.latticeCells)) {
+      r.latticeMinPercent = lower * scale;
+      r.latticeMaxPercent = upper * scale;
+    } else {
+      r.latticeSkipped = fmt::format("more than {} lattice cells hold overlap", def.maxCells);
+    }
   }
   return r;
 }

@@ -18,12 +18,16 @@
 // For two grains in a cell the upper bound is <= V_sol / 2, and a cell with V_sol/2 = V_cell
 // (two grains each filling it) has O_c = V_cell exactly: SPEC's two statements. I_min and I_max
 // sum these bounds over the cells. Only cells inside the bounding box of an overlapping pair's
-// intersection can hold overlap, so only those cells are visited (other cells contribute 0 to
-// both bounds); a cell's V_sol still counts every grain that reaches it. Both bounds are
+// intersection can hold overlap, so only the cells crossed by an intersection polytope are visited
+// (found by cutting the polytope into x slabs, y columns and z cells; other cells contribute 0 to
+// both bounds); a cell's V_sol still counts every grain that reaches it (the pair's grains and
+// their neighbours). Both bounds are
 // rigorous, so I_min <= I <= I_max, and their gap is the cells cut by the overlap boundary: it
 // shrinks linearly with the cell side.
 // Spheres have no exact sphere-box volume here, so their lattice bounds are absent (null).
+#include <cstddef>
 #include <optional>
+#include <string>
 
 #include "analysis/bulk_region.hpp"
 
@@ -32,6 +36,7 @@ namespace confpack::analysis {
 struct InterpenetrationDef {
   double cell = 0.05;    ///< lattice cell side [d_L] (SPEC: d_L/20), > 0
   bool lattice = true;   ///< compute the lattice bounds (pinacoids only)
+  std::size_t maxCells = 20'000'000;  ///< cost cap: skip the bounds (null) beyond this many (cell, pair) entries
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field
 };
@@ -45,6 +50,7 @@ struct Interpenetration {
   int overlappingPairs = 0;                 ///< pairs with a positive overlap counted in the slab
   double maxSphereDepth = 0.0;              ///< largest r_i + r_j - |x_ij| over sphere pairs [d_L]
   int latticeCells = 0;                     ///< cells visited by the lattice method
+  std::string latticeSkipped;               ///< why the bounds are absent for pinacoids (cost cap)
 };
 
 Interpenetration interpenetration(const core::Packing& packing, const BulkRegion& region,
