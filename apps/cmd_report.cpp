@@ -1,19 +1,53 @@
-// Placeholder until the `report` subcommand lands: it exists (with --help) so that the command
-// line is complete, and refuses to run.
-#include <CLI/CLI.hpp>
-#include <cstdio>
+// `confpack report SWEEPDIR`: the study report (HTML + Markdown + figures) of a sweep folder.
+#include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+#include <memory>
+
+#include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "apps/report.hpp"
 
 namespace confpack::app {
 
-void registerReport(CLI::App& app) {
-  auto* sub = app.add_subcommand("report", "Tables and figures of a study, the two backends side by side");
-  sub->allow_extras();
-  sub->callback([] {
-    std::fputs("confpack report: not implemented yet\n", stderr);
-    throw CLI::RuntimeError(2);
+namespace {
+
+struct ReportState {
+  std::filesystem::path sweepDir;
+  std::filesystem::path out;
+  std::filesystem::path gnuplot = "gnuplot";
+  bool noFigures = false;
+};
+
+void runReportCommand(const ReportState& st) {
+  const std::filesystem::path out = st.out.empty() ? st.sweepDir / "report" : st.out;
+  checkInput("report", [&] {
+    readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
+    checkOutputTarget(out);
   });
+  runWork("report", [&] {
+    ReportOptions o;
+    o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
+    const ReportSummary s = writeReport(st.sweepDir, out, o);
+    fmt::print("report: {} runs ({} done, {} failed, {} missing, {} not equilibrated), {} figures{}\n  {}\n  {}\n",
+               s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures,
+               s.gnuplotUsed ? "" : " (not drawn: gnuplot unavailable)", s.html.string(), s.markdown.string());
+  });
+}
+
+}  // namespace
+
+void registerReport(CLI::App& app) {
+  auto st = std::make_shared<ReportState>();
+  auto* sub = app.add_subcommand("report", "Tables and figures of a study, the two backends side by side "
+                                           "(writes report.html, report.md and figures/)");
+  sub->add_option("sweepdir", st->sweepDir, "Sweep folder (made by confpack sweep or reproduce)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--out", st->out, "Report folder (default: SWEEPDIR/report)");
+  sub->add_option("--gnuplot", st->gnuplot, "gnuplot executable used to draw the SVG figures");
+  sub->add_flag("--no-figures", st->noFigures, "Write the figure data and scripts but do not run gnuplot");
+  sub->callback([st] { runReportCommand(*st); });
 }
 
 }  // namespace confpack::app

@@ -35,29 +35,29 @@ namespace {
 // A list value may be given as a scalar for convenience ("backend": "nscd").
 json asList(const json& v) { return v.is_array() ? v : json::array({v}); }
 
-// Keys of `given` that the resolved configuration does not know are typos: refuse them rather
-// than silently running the default. Recurses where both sides are objects.
-void checkKnownKeys(const json& given, const json& resolved, const std::string& path, std::string_view source) {
+// Keys of `given` that the configuration does not know are typos: refuse them rather than
+// silently running the default. Recurses where both sides are objects; an object that is empty by
+// default (backend_options) is free-form and left to its owner to check.
+void checkKnownKeys(const json& given, const json& known, const std::string& path, std::string_view source) {
   for (const auto& [key, value] : given.items()) {
     const std::string here = path.empty() ? key : path + "." + key;
-    if (!resolved.contains(key)) bad(source, here, "unknown key");
-    if (value.is_object() && resolved.at(key).is_object()) checkKnownKeys(value, resolved.at(key), here, source);
+    if (!known.contains(key)) bad(source, here, "unknown key");
+    const json& k = known.at(key);
+    if (value.is_object() && k.is_object() && !k.empty()) checkKnownKeys(value, k, here, source);
   }
 }
 
 core::RunConfig resolveBase(const json& base, std::string_view source) {
   json merged;
   core::to_json(merged, core::RunConfig{});
+  checkKnownKeys(base, merged, "base", source);
   merged.merge_patch(base);
   core::RunConfig cfg;
   try {
     core::from_json(merged, cfg);
-  } catch (const json::exception& e) {
-    bad(source, "base", fmt::format("cannot be read as a run configuration ({})", e.what()));
+  } catch (const std::exception& e) {
+    bad(source, "base", e.what());
   }
-  json back;
-  core::to_json(back, cfg);
-  checkKnownKeys(base, back, "base", source);
   return cfg;
 }
 

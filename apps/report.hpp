@@ -1,0 +1,74 @@
+#pragma once
+// The study report (SPEC 7): reads a sweep folder and writes one self-contained HTML file (figures
+// inlined as SVG) and the same content as Markdown (figures linked), with every quantity of
+// result.json tabulated per configuration (shape, x_S, W, mu_w), the two backends side by side as
+// mean +- standard deviation over the replicas, their difference with its uncertainty, the
+// geometrical-model fits phi(W) = phi_bulk - C/W and Z(W) = Z_bulk - C_Z/W per backend, lambda_L
+// against x_S and against C, the profiles of the runs, and the cost of every run. Runs that are
+// missing, failed or did not reach equilibrium are listed as such, never dropped silently.
+//
+// Figures: for each one a CSV with its data, a gnuplot script and, when gnuplot is installed, the
+// SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts.
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "apps/sweep.hpp"
+
+namespace confpack::app {
+
+/// Mean and sample standard deviation of replicas.
+struct ReplicaStat {
+  std::size_t n = 0;
+  double mean = 0.0;
+  double std = 0.0;  ///< sample standard deviation (n - 1 in the denominator); 0 when n < 2
+};
+
+ReplicaStat replicaStat(const std::vector<double>& values);
+
+/// Difference a - b of two replica means with its uncertainty sqrt(s_a^2/n_a + s_b^2/n_b)
+/// (the standard error of a difference of independent means). The uncertainty is undefined
+/// (nullopt) when either side has fewer than two replicas.
+struct BackendDifference {
+  double value = 0.0;
+  std::optional<double> uncertainty;
+};
+
+BackendDifference backendDifference(const ReplicaStat& a, const ReplicaStat& b);
+
+/// One run as the report sees it.
+struct RunRecord {
+  SweepRun run;
+  RunStatus status = RunStatus::Pending;
+  nlohmann::json result;  ///< result.json (null unless done)
+  nlohmann::json marker;  ///< done.json or failed.json
+  std::map<std::string, std::optional<double>> values;  ///< flattened numeric leaves ("coordination/Z")
+};
+
+/// Reads the run table and every run folder of a sweep.
+std::vector<RunRecord> loadStudy(const std::filesystem::path& sweepDir, SweepSpec* spec = nullptr);
+
+/// Numeric (and boolean, as 0/1) leaves of a result, keyed by their path joined with '/'. Arrays
+/// and strings are skipped; null leaves are kept as nullopt (a quantity that does not apply).
+/// The resolved configuration and the backend settings are not quantities and are skipped.
+std::map<std::string, std::optional<double>> flattenResult(const nlohmann::json& result);
+
+struct ReportOptions {
+  std::filesystem::path gnuplot = "gnuplot";  ///< executable; empty = do not draw figures
+};
+
+struct ReportSummary {
+  std::size_t runs = 0, done = 0, failed = 0, missing = 0, unequilibrated = 0;
+  std::size_t figures = 0;
+  bool gnuplotUsed = false;
+  std::filesystem::path html, markdown;
+};
+
+/// Writes report.html, report.md and figures/ (CSV, .gp, .svg) into outDir.
+ReportSummary writeReport(const std::filesystem::path& sweepDir, const std::filesystem::path& outDir,
+                          const ReportOptions& options = {});
+
+}  // namespace confpack::app

@@ -1,0 +1,84 @@
+#include "apps/reproduce.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace confpack::app {
+
+using nlohmann::json;
+
+const std::vector<std::string_view>& reproductionScales() {
+  static const std::vector<std::string_view> s = {"tiny", "quick", "paper"};
+  return s;
+}
+
+namespace {
+
+// The three families of SPEC 7 as groups of one sweep file. Values that do not vary within a
+// group are given as one-element lists so that the file reads as the study's definition.
+json studyGroups(const json& widths, const json& fractions, const json& frictions, int replicas,
+                 bool pinacoids) {
+  const json backends = {"nscd", "bullet"};
+  json groups = json::array();
+  // Spheres, mono- and bidisperse, frictionless walls: phi(W), Z(W), profiles, lambda_L(x_S).
+  groups.push_back({{"shape", {"sphere"}}, {"small_fraction", fractions}, {"width", widths},
+                    {"wall_friction", {0.0}}, {"replicas", replicas}, {"backend", backends}});
+  // Wall friction (SPEC 6.7), monodisperse spheres, confined widths only (biperiodic has no wall).
+  json confined = json::array();
+  for (const json& w : widths)
+    if (w.is_number()) confined.push_back(w);
+  if (frictions.size() > 1)
+    groups.push_back({{"shape", {"sphere"}}, {"small_fraction", {0.0}}, {"width", confined},
+                      {"wall_friction", frictions}, {"replicas", replicas}, {"backend", backends}});
+  // Monodisperse pinacoids.
+  if (pinacoids)
+    groups.push_back({{"shape", {"pinacoid"}}, {"small_fraction", {0.0}}, {"width", widths},
+                      {"wall_friction", {0.0}}, {"replicas", replicas}, {"backend", backends}});
+  return groups;
+}
+
+}  // namespace
+
+json reproductionSweep(std::string_view scale) {
+  if (scale == "paper") {
+    // SPEC 3 sizes: L_x = 20 d_L, h = 16 d_L, biperiodic period 20 d_L; SPEC 7 study in full.
+    return {{"format", kSweepFormat},
+            {"version", kSweepVersion},
+            {"name", "paper"},
+            {"description", "SPEC 7 confinement study at the sizes of SPEC 3"},
+            {"base", {{"box", {{"length_x", 20.0}, {"height", 16.0}}}}},
+            {"biperiodic_width", 20.0},
+            {"groups", studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3,
+                                   true)}};
+  }
+  if (scale == "quick") {
+    // Shrunken box (L_x = 6, h = 5) and widths scaled down with it (3, 4.5, 6 and biperiodic 6),
+    // two x_S, two wall frictions, pinacoids, one replica: every family and every figure of the
+    // report appears, in minutes. Compaction stops at 25 t0 (a pile of 5 d_L settles in a few t0;
+    // a run that has not equilibrated by then is flagged, not hidden).
+    return {{"format", kSweepFormat},
+            {"version", kSweepVersion},
+            {"name", "quick"},
+            {"description", "SPEC 7 study shrunk to run in under 20 minutes on 2 cores"},
+            {"base", {{"box", {{"length_x", 6.0}, {"height", 5.0}}}, {"compaction", {{"time_limit", 25.0}}}}},
+            {"biperiodic_width", 6.0},
+            {"groups", studyGroups({3.0, 4.5, 6.0, "biperiodic"}, {0.0, 25.0}, {0.0, 0.5}, 1, true)}};
+  }
+  if (scale == "tiny") {
+    // Smoke test: monodisperse spheres, W = 3 and 5 and biperiodic 5, one seed, both backends:
+    // 6 runs of 50-120 grains.
+    return {{"format", kSweepFormat},
+            {"version", kSweepVersion},
+            {"name", "tiny"},
+            {"description", "smoke test of the whole chain (deposit, both backends, analysis, report)"},
+            {"base", {{"box", {{"length_x", 5.0}, {"height", 4.0}}}, {"compaction", {{"time_limit", 15.0}}}}},
+            {"biperiodic_width", 5.0},
+            {"vary",
+             {{"shape", {"sphere"}}, {"small_fraction", {0.0}}, {"width", {3.0, 5.0, "biperiodic"}},
+              {"wall_friction", {0.0}}, {"seed", {1}}, {"backend", {"nscd", "bullet"}}}}};
+  }
+  throw std::invalid_argument(fmt::format("--scale: expected tiny, quick or paper (got '{}')", scale));
+}
+
+}  // namespace confpack::app

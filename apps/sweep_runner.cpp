@@ -1,0 +1,21 @@
+#include "apps/sweep_runner.hpp"
+
+#include "apps/run_pipeline.hpp"
+#include "core/deposition.hpp"
+
+namespace confpack::app {
+
+SweepRunFn pipelineRunner(int threads) {
+  return [threads](const core::RunConfig& cfg, const std::filesystem::path& runDir, const core::Deposit& deposit,
+                   const RunProgressFn& progress) {
+    core::RunConfig c = cfg;
+    if (threads > 0) c.threads = threads;
+    return runAndWrite(c, runDir, progress, &deposit);
+  };
+}
+
+SweepDepositFn pipelineDepositor() {
+  return [](const core::RunConfig& cfg) { return core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed); };
+}
+
+}  // namespace confpack::app

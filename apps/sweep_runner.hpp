@@ -1,0 +1,16 @@
+#pragma once
+// The real physics behind a sweep: core::deposit for the deposits and runAndWrite (deposit given,
+// compact, analyse, write) for the runs. Kept apart from the sweep engine so that the engine and
+// its tests do not depend on the backends.
+#include "apps/sweep.hpp"
+
+namespace confpack::app {
+
+/// Runs one sweep run with runAndWrite on the shared deposit. `threads` > 0 overrides the run's
+/// thread count at run time (it is not part of the run's identity in the table).
+SweepRunFn pipelineRunner(int threads = 0);
+
+/// Makes a run's deposit with core::deposit (box, population, deposition settings and seed).
+SweepDepositFn pipelineDepositor();
+
+}  // namespace confpack::app
