@@ -376,24 +376,43 @@ bool clipSegment(Vec2& p, Vec2& q, const std::vector<Vec2>& poly) {
   return true;
 }
 
-// The 4 vertices of a convex polygon spanning the largest area (brute force over ordered
-// 4-subsets; a face-face polygon of two pinacoid faces has at most 8 vertices: 70 subsets).
-std::vector<Vec2> reduceToFour(const std::vector<Vec2>& poly) {
-  const int n = static_cast<int>(poly.size());
-  if (n <= 4) return poly;
+// Area of the convex hull of 4 points. In convex position one of the 3 cyclic orders is the
+// convex quadrilateral and has the largest |shoelace| area (the other two self-intersect); with
+// one point inside the triangle of the others, the largest triangle is the hull.
+double hullArea4(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  auto quad = [](const Vec2& p, const Vec2& q, const Vec2& r, const Vec2& t) {
+    return 0.5 * std::abs(cross2(p, q) + cross2(q, r) + cross2(r, t) + cross2(t, p));
+  };
+  auto tri = [](const Vec2& p, const Vec2& q, const Vec2& r) { return 0.5 * std::abs(cross2(q - p, r - p)); };
+  return std::max(
+      {quad(a, b, c, d), quad(a, b, d, c), quad(a, c, b, d), tri(a, b, c), tri(a, b, d), tri(a, c, d), tri(b, c, d)});
+}
+
+// Indices of at most 4 of the points (a contact polygon's vertices) keeping the deepest one
+// (smallest gap) and, with it, the 3 others of largest supported area (convex hull area).
+// SPEC says 3 points; 4 of maximal area keep a rectangle-on-rectangle support stable (3 put the
+// centre of mass on an edge of the support triangle), and always keeping the deepest point
+// means the solver never loses the point that penetrates most.
+std::vector<int> pickFour(const std::vector<Vec2>& pts, const std::vector<double>& gaps) {
+  const int n = static_cast<int>(pts.size());
+  std::vector<int> all(n);
+  for (int i = 0; i < n; ++i) all[i] = i;
+  if (n <= 4) return all;
+  const int deep = static_cast<int>(std::min_element(gaps.begin(), gaps.end()) - gaps.begin());
   double best = -1.0;
-  std::array<int, 4> pick{0, 1, 2, 3};
+  std::vector<int> pick{0, 1, 2, 3};
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j)
-      for (int k = j + 1; k < n; ++k)
-        for (int l = k + 1; l < n; ++l) {
-          const double a = polygonArea({poly[i], poly[j], poly[k], poly[l]});
-          if (a > best) {
-            best = a;
-            pick = {i, j, k, l};
-          }
+      for (int k = j + 1; k < n; ++k) {
+        if (i == deep || j == deep || k == deep) continue;
+        const double a = hullArea4(pts[deep], pts[i], pts[j], pts[k]);
+        if (a > best) {
+          best = a;
+          pick = {deep, i, j, k};
         }
-  return {poly[pick[0]], poly[pick[1]], poly[pick[2]], poly[pick[3]]};
+      }
+  std::sort(pick.begin(), pick.end());  // keep the polygon order of the input
+  return pick;
 }
 
 // Height (coordinate along n) of a body's contact feature above the lateral point x.
@@ -599,7 +618,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     std::vector<Vec2> poly = clipPolygon(pa, pb);
     if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
       r.type = ContactType::Triple;
-      r.points = reduceToFour(poly);
+      r.points = poly;  // reduced to 4 in buildContact, once the gaps are known
     } else if (!poly.empty()) {
       finishSegmentOrPoint(poly);
     } else {
@@ -638,10 +657,16 @@ PolyhedronContact buildContact(const WorldPoly& A, const WorldPoly& B, const Vec
     }
     return c;
   }
+  std::vector<Vec3> points;
+  std::vector<double> gaps;
   for (const Vec2& x : region.points) {
     const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
-    c.points.push_back(fr.world(x, 0.5 * (ha + hb)));
-    c.pointGaps.push_back(hb - ha);
+    points.push_back(fr.world(x, 0.5 * (ha + hb)));
+    gaps.push_back(hb - ha);
+  }
+  for (int i : pickFour(region.points, gaps)) {
+    c.points.push_back(points[i]);
+    c.pointGaps.push_back(gaps[i]);
   }
   return c;
 }
@@ -673,25 +698,6 @@ bool pairNormal(const WorldPoly& A, const WorldPoly& B, double alert, Vec3& norm
   const double sepClosest = B.minAlong(normal) - A.maxAlong(normal);
   if (sat.sep > sepClosest + 1e-13 * (A.radius + B.radius)) normal = sat.axis;
   return true;
-}
-
-std::vector<Vec2> convexHull2(std::vector<Vec2> p) {
-  // Andrew's monotone chain; CCW output. Used for the (at most 8) points of a wall contact.
-  if (p.size() < 3) return p;
-  std::sort(p.begin(), p.end(),
-            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-  std::vector<Vec2> h(2 * p.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross2(h[k - 1] - h[k - 2], p[i] - h[k - 2]) <= 0.0) --k;
-    h[k++] = p[i];
-  }
-  for (std::size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross2(h[k - 1] - h[k - 2], p[i - 1] - h[k - 2]) <= 0.0) --k;
-    h[k++] = p[i - 1];
-  }
-  h.resize(k - 1);
-  return h;
 }
 
 void checkAlert(double alert, const char* who) {
@@ -830,13 +836,9 @@ std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& 
       lat.push_back(fr.lateral(A.v[i]));
       idx.push_back(static_cast<int>(i));
     }
-  std::vector<Vec2> keep = lat;
-  if (lat.size() > 4) keep = reduceToFour(convexHull2(lat));
-  for (const Vec2& x : keep) {
-    // Find the vertex this lateral point came from (hull and reduction keep input points).
-    std::size_t k = 0;
-    for (std::size_t j = 0; j < lat.size(); ++j)
-      if ((lat[j] - x).squaredNorm() < (lat[k] - x).squaredNorm()) k = j;
+  std::vector<double> latGaps;
+  for (int i : idx) latGaps.push_back(h[i]);
+  for (int k : pickFour(lat, latGaps)) {
     const int i = idx[k];
     c.points.push_back(A.v[i] - 0.5 * h[i] * m);
     c.pointGaps.push_back(h[i]);

@@ -33,11 +33,12 @@
 //    normal at each point (they differ for a tilted face-face contact). Single-point contacts
 //    whose features do not overlap in projection (vertex-vertex, vertex-edge, or a large angleTol)
 //    use the closest pair of points of the two features instead: point = their midpoint,
-//    pointGap = normal.(onB - onA). A face-face polygon with
-//    more than 4 vertices is reduced to the 4 vertices spanning the largest area: SPEC says 3
-//    points, but 3 points of a rectangle-on-rectangle contact put the centre of mass on an edge
-//    of the support triangle (marginal static support); 4 points of maximal area keep the true
-//    support polygon as far as 4 points can. Triple contacts therefore carry 3 or 4 points.
+//    pointGap = normal.(onB - onA). A face-face polygon with more than 4 vertices is reduced to
+//    4: its deepest vertex (smallest gap, so the solver never loses the most penetrating point)
+//    and the 3 others that, with it, span the largest area. SPEC says 3 points, but 3 points of a
+//    rectangle-on-rectangle contact put the centre of mass on an edge of the support triangle
+//    (marginal static support); 4 points of maximal area keep the true support polygon as far
+//    as 4 points can. Triple contacts therefore carry 3 or 4 points.
 //
 // The same routine computes the type for every caller, so a contact is classified identically
 // whichever backend produced it (classifyContact).
@@ -101,8 +102,8 @@ std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron&
 
 /// Contact between a placed polyhedron a and a flat wall {x : inwardNormal.(x - planePoint) >= 0}
 /// (b), or nullopt if the lowest vertex is farther than alert. normal = -inwardNormal.
-/// Points: every vertex within alert of the plane, projected halfway to the plane (reduced to the
-/// 4 of largest area if more), with their own gaps. The type is the geometric one
+/// Points: every vertex within alert of the plane, projected halfway to the plane (reduced to 4,
+/// the deepest and the 3 of largest area with it, if more), with their own gaps. The type is the geometric one
 /// (classifyPlaneContact, angle tolerance), not the point count: a slightly tilted face gives
 /// several predictive points but stays a Simple contact until it lies flat within angleTol.
 /// featureA: the support feature of a; featureB = {Face, 0}.

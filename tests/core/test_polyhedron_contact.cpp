@@ -534,3 +534,23 @@ TEST_CASE("contact: random near-contact pairs give consistent points, gaps and t
   CHECK(tested > 7500);
   if (angleTol > 0.0) CHECK(doubles > 10);  // random poses are never exactly edge-on-face
 }
+
+TEST_CASE("contact: reducing a contact polygon to 4 points keeps the deepest point") {
+  // Trapezoid on flipped trapezoid (hexagonal overlap, see above) with b tilted by 3e-4 rad
+  // about the slant direction of the face: the gap then grows linearly with x, so the deepest
+  // points are the hexagon vertices (+-(1/2 + l)/2, s = 1/2), which are not among the 4 corners
+  // (+-l, 0), (+-l, 1) of the largest-area quadrilateral. The deepest must still be kept.
+  const ConvexPolyhedron p = makePinacoid(1.0, kParams);
+  const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
+  const Vec3 slant = Vec3(0, -1, 1).normalized();
+  for (double tilt : {3e-4, -3e-4}) {
+    const PlacedPolyhedron b{&p, kN1 * (2 * kOff1 + 0.002), Eigen::AngleAxisd(tilt, slant).toRotationMatrix()};
+    const auto c = collidePolyhedra(a, b, 0.01);
+    REQUIRE(c);
+    CHECK(c->type == ContactType::Triple);
+    REQUIRE(c->points.size() == 4);
+    const auto deepest = std::min_element(c->pointGaps.begin(), c->pointGaps.end()) - c->pointGaps.begin();
+    CHECK(c->pointGaps[deepest] == Approx(c->gap).margin(1e-9));
+    CHECK(std::abs(c->points[deepest].x()) == Approx(0.5 * (0.5 + kL)).margin(1e-3));  // moved by the tilt
+  }
+}
