@@ -554,3 +554,20 @@ TEST_CASE("contact: reducing a contact polygon to 4 points keeps the deepest poi
     CHECK(std::abs(c->points[deepest].x()) == Approx(0.5 * (0.5 + kL)).margin(1e-3));  // moved by the tilt
   }
 }
+
+TEST_CASE("contact: a wall contact with many vertices within alert keeps 4 points, the deepest among them") {
+  const ConvexPolyhedron p = makePinacoid(1.0, kParams);
+  std::mt19937_64 rng(12);
+  for (int trial = 0; trial < 50; ++trial) {
+    const PlacedPolyhedron a{&p, Vec3(0, 0, 0.45), randomRotation(rng)};
+    // An alert of 2 d takes every vertex: 8 candidates reduced to 4.
+    const auto c = collidePolyhedronPlane(a, Vec3::Zero(), Vec3::UnitZ(), 2.0);
+    REQUIRE(c);
+    REQUIRE(c->points.size() == 4);
+    const double lowest = *std::min_element(c->pointGaps.begin(), c->pointGaps.end());
+    CHECK(lowest == Approx(c->gap).margin(1e-15));
+    double minZ = 1e9;
+    for (const Vec3& x : a.worldVertices()) minZ = std::min(minZ, x.z());
+    CHECK(c->gap == Approx(minZ).margin(1e-15));
+  }
+}
