@@ -1,19 +1,88 @@
-// Placeholder until the `reproduce` subcommand lands: it exists (with --help) so that the command
-// line is complete, and refuses to run.
-#include <CLI/CLI.hpp>
-#include <cstdio>
+// `confpack reproduce --scale tiny|quick|paper --out DIR`: runs the study of SPEC 7 (apps/reproduce.hpp)
+// into DIR (a resumable sweep folder) and writes its report into DIR/report/.
+#include <fmt/format.h>
+#include <unistd.h>
 
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <memory>
+#include <thread>
+
+#include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "apps/report.hpp"
+#include "apps/reproduce.hpp"
+#include "apps/sweep.hpp"
+#include "apps/sweep_runner.hpp"
+#include "core/packing_io.hpp"
 
 namespace confpack::app {
 
-void registerReproduce(CLI::App& app) {
-  auto* sub = app.add_subcommand("reproduce", "Rerun a run from its written configuration and compare");
-  sub->allow_extras();
-  sub->callback([] {
-    std::fputs("confpack reproduce: not implemented yet\n", stderr);
-    throw CLI::RuntimeError(2);
+namespace {
+
+struct ReproduceState {
+  std::string scale = "quick";
+  std::filesystem::path out;
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  bool list = false;
+  bool quiet = false;
+};
+
+void runReproduceCommand(const ReproduceState& st) {
+  SweepSpec spec;
+  std::vector<SweepRun> runs;
+  checkInput("reproduce", [&] {
+    spec = parseSweepSpec(reproductionSweep(st.scale), st.scale);
+    runs = expandRuns(spec);
+    checkOutputTarget(st.out);
   });
+  if (st.list) {
+    std::fputs(formatRunTable(runs, std::filesystem::exists(st.out / kSweepTable) ? st.out : std::filesystem::path{})
+                   .c_str(),
+               stdout);
+    return;
+  }
+  SweepSummary summary;
+  ReportSummary report;
+  runWork("reproduce", [&] {
+    SweepOptions opt;
+    opt.jobs = st.jobs;
+    opt.quiet = st.quiet;
+    opt.live = ::isatty(STDERR_FILENO) != 0;
+    std::filesystem::create_directories(st.out);
+    // The study's definition next to its results, as a sweep file a user can edit and rerun.
+    core::writeFileAtomically(st.out / "study.json", reproductionSweep(st.scale).dump(2));
+    summary = runSweep(spec, st.out, opt, pipelineRunner(1), pipelineDepositor());
+    report = writeReport(st.out, st.out / "report");
+  });
+  fmt::print("reproduce {}: {} runs ({} finished now, {} earlier, {} failed) in {:.0f} s\nreport: {}\n        {}\n",
+             st.scale, summary.total, summary.ran, summary.alreadyDone, summary.failed, summary.wallSeconds,
+             report.html.string(), report.markdown.string());
+  if (summary.failed > 0) {
+    fmt::print(stderr, "confpack reproduce: error: {} run(s) failed (listed in the report); run the same command "
+                       "again to retry them\n",
+               summary.failed);
+    throw CLI::RuntimeError(kExitRuntimeFailure);
+  }
+}
+
+}  // namespace
+
+void registerReproduce(CLI::App& app) {
+  auto st = std::make_shared<ReproduceState>();
+  auto* sub = app.add_subcommand(
+      "reproduce",
+      "Run the confinement study of SPEC 7 with both backends and write its report (DIR/report/report.html). "
+      "Rerunning the same command resumes an interrupted study.");
+  sub->add_option("--scale", st->scale, "tiny (smoke test, minutes), quick (shrunk box, < 20 min on 2 cores) or "
+                                        "paper (SPEC 3 sizes, for a cluster)")
+      ->check(CLI::IsMember({"tiny", "quick", "paper"}))
+      ->capture_default_str();
+  sub->add_option("--out", st->out, "Study folder (sweep runs, deposits, report/)")->required();
+  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_flag("--list", st->list, "Print the run table and exit");
+  sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
+  sub->callback([st] { runReproduceCommand(*st); });
 }
 
 }  // namespace confpack::app

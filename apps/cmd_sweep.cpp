@@ -1,19 +1,90 @@
-// Placeholder until the `sweep` subcommand lands: it exists (with --help) so that the command
-// line is complete, and refuses to run.
+// `confpack sweep FILE`: runs a study described by a sweep file (docs/sweeps.md), resumably, in
+// parallel (--jobs) or as one slice of a cluster job array (--task-index/--task-count).
+#include <fmt/format.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <iostream>
+#include <memory>
 
+#include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "apps/sweep.hpp"
+#include "apps/sweep_runner.hpp"
 
 namespace confpack::app {
 
-void registerSweep(CLI::App& app) {
-  auto* sub = app.add_subcommand("sweep", "Run a study: every combination of widths, shapes, fractions, frictions, seeds and backends");
-  sub->allow_extras();
-  sub->callback([] {
-    std::fputs("confpack sweep: not implemented yet\n", stderr);
-    throw CLI::RuntimeError(2);
+namespace {
+
+struct SweepState {
+  std::filesystem::path file;
+  std::filesystem::path out;
+  int jobs = 1;
+  int threads = 0;
+  std::size_t taskIndex = 0;
+  std::size_t taskCount = 1;
+  bool list = false;
+  bool quiet = false;
+};
+
+void runSweepCommand(const SweepState& st) {
+  SweepSpec spec;
+  std::vector<SweepRun> runs;
+  std::filesystem::path out = st.out.empty() ? std::filesystem::path(st.file.stem()) : st.out;
+  checkInput("sweep", [&] {
+    spec = readSweepSpec(st.file);
+    runs = expandRuns(spec);
+    sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
+    if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
+    checkOutputTarget(out);
   });
+  if (st.list) {
+    const bool sliced = st.taskCount > 1;
+    std::fputs(formatRunTable(runs, std::filesystem::exists(out / kSweepTable) ? out : std::filesystem::path{},
+                              sliced ? std::optional<std::size_t>(st.taskIndex) : std::nullopt, st.taskCount)
+                   .c_str(),
+               stdout);
+    return;
+  }
+  SweepSummary summary;
+  runWork("sweep", [&] {
+    SweepOptions opt;
+    opt.jobs = st.jobs;
+    opt.taskIndex = st.taskIndex;
+    opt.taskCount = st.taskCount;
+    opt.quiet = st.quiet;
+    opt.live = ::isatty(STDERR_FILENO) != 0;
+    summary = runSweep(spec, out, opt, pipelineRunner(st.threads), pipelineDepositor());
+  });
+  if (summary.failed > 0) {
+    fmt::print(stderr, "confpack sweep: error: {} run(s) failed (see runs/*/failed.json); run the same command again to retry them\n",
+               summary.failed);
+    throw CLI::RuntimeError(kExitRuntimeFailure);
+  }
+  fmt::print("sweep {}: {} of {} runs in this task finished ({} now, {} earlier); report with: confpack report {}\n",
+             spec.name, summary.ran + summary.alreadyDone, summary.inSlice, summary.ran, summary.alreadyDone,
+             out.string());
+}
+
+}  // namespace
+
+void registerSweep(CLI::App& app) {
+  auto st = std::make_shared<SweepState>();
+  auto* sub = app.add_subcommand(
+      "sweep",
+      "Run a study: every combination of widths, shapes, fractions, frictions, seeds and backends of a sweep file "
+      "(docs/sweeps.md). Resumable: finished runs are never redone.");
+  sub->add_option("file", st->file, "Sweep file (JSON, format confpack-sweep)")->required()->check(CLI::ExistingFile);
+  sub->add_option("--out", st->out, "Sweep folder (default: the sweep file's name without extension)");
+  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::PositiveNumber);
+  sub->add_option("--threads", st->threads, "Threads per run (default: from the sweep file)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--task-index", st->taskIndex, "This task's slice, 0-based (e.g. $SLURM_ARRAY_TASK_ID)");
+  sub->add_option("--task-count", st->taskCount, "Number of tasks sharing the sweep (e.g. $SLURM_ARRAY_TASK_COUNT)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--list", st->list, "Print the run table (with each run's status when the folder exists) and exit");
+  sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
+  sub->callback([st] { runSweepCommand(*st); });
 }
 
 }  // namespace confpack::app
