@@ -592,11 +592,17 @@ void BulletBackend::wrapIntoBox() {
     btTransform t = body->getWorldTransform();
     const Vec3 p = fromBt(t.getOrigin());
     const Vec3 w = system_.box.wrap(p);
-    if (w != p) {
-      t.setOrigin(toBt(w));
-      body->setWorldTransform(t);
-      body->setInterpolationWorldTransform(t);
-    }
+    if (w == p) continue;
+    t.setOrigin(toBt(w));
+    body->setWorldTransform(t);
+    body->setInterpolationWorldTransform(t);
+    // The grain jumped by a period: the cached points of its broad-phase manifolds now join
+    // anchors a period apart. Bullet would keep a point whose anchors are separated along the
+    // normal (it only drops points that open up or slide), i.e. a bogus overlap of a whole
+    // period, and the broad phase (btDbvtBroadphase) removes stale pairs only a few per step.
+    // Drop the grain's pair algorithms and their manifolds; the contacts it still has are found
+    // again as periodic pairs (they lose one step of warm starting).
+    broadphase_->getOverlappingPairCache()->cleanProxyFromPairs(body->getBroadphaseHandle(), dispatcher_.get());
   }
 }
 
