@@ -1,0 +1,214 @@
+#include "apps/bench.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+#include <thread>
+
+#include "analysis/bulk_region.hpp"
+#include "analysis/interpenetration.hpp"
+#include "apps/run_pipeline.hpp"
+#include "core/deposition.hpp"
+
+namespace confpack::app {
+
+namespace {
+
+/// Peak resident memory of this process [MiB] (VmHWM of /proc/self/status).
+double peakRssMb() {
+  std::ifstream in("/proc/self/status");
+  std::string key;
+  while (in >> key) {
+    if (key == "VmHWM:") {
+      double kb = 0.0;
+      in >> kb;
+      return kb / 1024.0;
+    }
+    std::string rest;
+    std::getline(in, rest);
+  }
+  return 0.0;
+}
+
+/// Resets VmHWM to the current RSS (Linux >= 4.0), so each backend's peak is its own.
+void resetPeakRss() {
+  std::ofstream out("/proc/self/clear_refs");
+  out << "5";
+}
+
+nlohmann::json machineInfo() {
+  std::string model;
+  std::ifstream cpu("/proc/cpuinfo");
+  for (std::string line; std::getline(cpu, line);)
+    if (line.rfind("model name", 0) == 0) {
+      model = line.substr(line.find(':') + 2);
+      break;
+    }
+  return {{"cpu", model},
+          {"hardware_threads", std::thread::hardware_concurrency()},
+          {"compiler", __VERSION__},
+          {"confpack_version", CONFPACK_VERSION}};
+}
+
+core::RunConfig baseConfig(const BenchDef& def, core::ShapeKind shape) {
+  core::RunConfig cfg;
+  cfg.population.shape = shape;
+  cfg.box.lengthX = 20.0 * def.scale;
+  cfg.box.width = 10.0 * def.scale;
+  cfg.box.height = 16.0;
+  cfg.seed = def.seed;
+  cfg.threads = def.threads;
+  cfg.compaction.timeLimit = def.timeLimit;
+  return cfg;
+}
+
+struct BackendRun {
+  nlohmann::json json;
+  double finalInterpenetration = 0.0;
+  CompactionOutcome outcome;
+};
+
+BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const core::Deposit& dep) {
+  cfg.backend = backend;
+  resetPeakRss();
+  BackendRun run;
+  run.outcome = compact(cfg, dep);
+  const CompactionOutcome& out = run.outcome;
+  const analysis::Interpenetration inter =
+      analysis::interpenetration(out.packing, analysis::bulkRegion(out.packing), analysis::InterpenetrationDef{});
+  run.finalInterpenetration = inter.exactPercent;
+  const double wall = out.timing["compaction_s"].get<double>();
+  const long steps = out.timing["steps"].get<long>();
+  nlohmann::json phases = nlohmann::json::object();
+  for (const auto& [name, seconds] : out.timing["phases"].items())
+    phases[name] = steps > 0 ? seconds.get<double>() / steps : 0.0;  // per step
+  run.json = {{"time_to_equilibrium_s", out.reached ? nlohmann::json(wall) : nlohmann::json(nullptr)},
+              {"wall_s", wall},
+              {"equilibrium_reached", out.reached},
+              {"equilibrium", out.equilibrium},
+              {"interpenetration_percent", inter.exactPercent},
+              {"steps", steps},
+              {"dt", out.dt},
+              {"sweeps_per_step", out.timing["iterations_per_step"]},
+              {"time_per_step_s", steps > 0 ? wall / steps : 0.0},
+              {"contact_updates_per_s", out.timing["contact_updates_per_s"]},
+              {"phases", phases},
+              {"peak_rss_mb", peakRssMb()},
+              {"settings", out.backendSettings},
+              {"history", out.timing["history"]}};
+  return run;
+}
+
+nlohmann::json compareCase(const BenchDef& def, core::ShapeKind shape,
+                           const std::function<void(const std::string&)>& log) {
+  const core::RunConfig cfg = baseConfig(def, shape);
+  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  nlohmann::json c = {{"n_grains", dep.grains.size()},
+                      {"shape", std::string(core::toString(shape))},
+                      {"box", cfg.box},
+                      {"deposit_s", dep.seconds}};
+  BackendRun nscd = runBackend(cfg, "nscd", dep);
+  if (log) log(fmt::format("  nscd: {:.1f} s, {} steps, reached {}", nscd.json["wall_s"].get<double>(),
+                           nscd.json["steps"].get<long>(), nscd.outcome.reached));
+  BackendRun bullet = runBackend(cfg, "bullet", dep);
+  if (log) log(fmt::format("  bullet: {:.1f} s, {} steps, reached {}", bullet.json["wall_s"].get<double>(),
+                           bullet.json["steps"].get<long>(), bullet.outcome.reached));
+  // When did Bullet first get to nscd's final interpenetration or lower?
+  nlohmann::json bulletAtNscdOverlap = nullptr;
+  for (const CheckPoint& p : bullet.outcome.history)
+    if (p.interpenetrationPercent <= nscd.finalInterpenetration) {
+      bulletAtNscdOverlap = p.wallSeconds;
+      break;
+    }
+  bullet.json["time_to_nscd_interpenetration_s"] = bulletAtNscdOverlap;
+  c["nscd"] = nscd.json;
+  c["bullet"] = bullet.json;
+  const bool both = nscd.outcome.reached && bullet.outcome.reached;
+  c["ratio_time_to_equilibrium"] =
+      both ? nlohmann::json(nscd.json["wall_s"].get<double>() / bullet.json["wall_s"].get<double>()) : nlohmann::json(nullptr);
+  c["ratio_wall_time"] = nscd.json["wall_s"].get<double>() / bullet.json["wall_s"].get<double>();
+  return c;
+}
+
+/// Least-squares slope of log t against log n: the scaling exponent k of t_step ~ n^k.
+double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  const double mx = std::accumulate(x.begin(), x.end(), 0.0) / n, my = std::accumulate(y.begin(), y.end(), 0.0) / n;
+  double sxy = 0.0, sxx = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+  }
+  return sxy / sxx;
+}
+
+nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
+                             const std::function<void(const std::string&)>& log) {
+  nlohmann::json points = nlohmann::json::array();
+  std::map<std::string, std::vector<double>> logN, logT;
+  for (int n : def.scalingSizes) {
+    core::RunConfig cfg = baseConfig(def, core::ShapeKind::Sphere);
+    // Keep W = 10 and h = 16 and stretch the periodic length so that n grains fit.
+    cfg.deposition.grainCount = static_cast<std::size_t>(n);
+    cfg.box.lengthX = n * cfg.population.meanGrainVolume(cfg.population.largeSize) /
+                      (cfg.deposition.expectedSolidFraction * cfg.box.width * cfg.box.height);
+    cfg.compaction.timeLimit = 1e9;
+    const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+    // Fall long enough for the pile to collapse (contacts everywhere), then time scalingSteps steps.
+    nlohmann::json point = {{"n_grains", dep.grains.size()}, {"length_x", cfg.box.lengthX}};
+    for (const std::string backend : {"nscd", "bullet"}) {
+      core::RunConfig c = cfg;
+      c.backend = backend;
+      const double dt = defaultTimeStep(c, dep);
+      c.compaction.dt = dt;
+      c.compaction.checkInterval = def.scalingSteps;
+      c.compaction.timeLimit = 2.0 * def.scalingSteps * dt;
+      const CompactionOutcome out = compact(c, dep);
+      const auto& h = out.history;
+      const double perStep = h.size() >= 2 ? (h.back().wallSeconds - h.front().wallSeconds) / (h.back().steps - h.front().steps)
+                                           : out.timing["compaction_s"].get<double>() / std::max(1L, out.timing["steps"].get<long>());
+      point[backend] = {{"time_per_step_s", perStep}, {"contact_updates_per_s", out.timing["contact_updates_per_s"]}};
+      logN[backend].push_back(std::log(static_cast<double>(dep.grains.size())));
+      logT[backend].push_back(std::log(perStep));
+      if (log) log(fmt::format("  scaling n={} {}: {:.3e} s/step", dep.grains.size(), backend, perStep));
+    }
+    points.push_back(point);
+  }
+  exponents = nlohmann::json::object();
+  for (const auto& [backend, x] : logN)
+    exponents[backend] = x.size() >= 2 ? nlohmann::json(logLogSlope(x, logT[backend])) : nlohmann::json(nullptr);
+  return points;
+}
+
+}  // namespace
+
+const std::vector<std::string>& benchCaseNames() {
+  static const std::vector<std::string> names = {"msp-w10", "mpp-w10", "scaling"};
+  return names;
+}
+
+nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log) {
+  nlohmann::json cases = nlohmann::json::object();
+  for (const std::string& name : def.cases) {
+    if (log) log(fmt::format("case {}", name));
+    if (name == "msp-w10")
+      cases[name] = compareCase(def, core::ShapeKind::Sphere, log);
+    else if (name == "mpp-w10")
+      cases[name] = compareCase(def, core::ShapeKind::Pinacoid, log);
+    else if (name == "scaling") {
+      nlohmann::json exponents;
+      cases[name] = scalingSeries(def, exponents, log);
+      cases["scaling_exponent"] = exponents;  // t_step ~ n^k, least squares in log-log
+    }
+    else
+      throw std::invalid_argument(fmt::format("unknown bench case '{}' (expected msp-w10, mpp-w10 or scaling)", name));
+  }
+  return {{"machine", machineInfo()}, {"cases", cases}};
+}
+
+}  // namespace confpack::app

@@ -1,0 +1,35 @@
+#pragma once
+// `confpack bench`: the two backends on the same deposits, in one process (issue 7).
+//
+// Cases:
+//   msp-w10  monodisperse spheres, L_x = 20, W = 10, h = 16 (about 3,700 grains at phi 0.6)
+//   mpp-w10  monodisperse pinacoids, same box
+//   scaling  spheres from about 2,000 to 30,400 grains: cost per step over a fixed number of
+//            steps from the deposit, fitted as t_step ~ n^k
+// For each backend: wall time to equilibrium (or to the time limit), final interpenetration and
+// equilibrium ratios, steps, sweeps per step, time per step and per phase, contact updates per
+// second, peak memory; and nscd/bullet ratios. Bullet is also credited with the first check at
+// which its interpenetration was at or below nscd's final value.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace confpack::app {
+
+struct BenchDef {
+  std::vector<std::string> cases = {"msp-w10", "mpp-w10", "scaling"};  ///< which cases to run
+  double timeLimit = 200.0;       ///< simulated time limit of a compaction [t0]
+  double scale = 1.0;             ///< multiplies the box length and width (smaller = quicker) [-]
+  int scalingSteps = 200;         ///< steps timed per scaling point [-]
+  std::vector<int> scalingSizes = {2000, 4000, 8000, 16000, 30400};  ///< grains per scaling point
+  std::uint64_t seed = 1;
+  int threads = 1;
+};
+
+/// Names accepted in BenchDef::cases.
+const std::vector<std::string>& benchCaseNames();
+
+/// Runs the benchmark and returns bench.json (shape documented in the README).
+nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log = {});
+
+}  // namespace confpack::app
