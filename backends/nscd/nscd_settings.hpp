@@ -13,8 +13,10 @@ struct NscdSettings {
   double theta = 0.5;
   /// ["tolerance"] Gauss-Seidel stopping threshold on the relative impulse change of one sweep,
   /// eps = sqrt(sum_rows |r^k - r^(k-1)|^2 / sum_rows |r^k|^2) (a "Quad"-type norm: every row
-  /// counts with its impulse vector, normal and tangential) [-], > 0.
-  double tolerance = 1e-5;
+  /// counts with its impulse vector, normal and tangential) [-], > 0. 1e-4 is not enough for the
+  /// SPEC 6.1 equilibrium test: a 536-sphere pile then never gets below |sum F| ~ 1e-2 d^2 P (the
+  /// unconverged impulses keep it jiggling); 1e-6 is the default.
+  double tolerance = 1e-6;
   /// ["max_iterations"] cap on Gauss-Seidel sweeps per step [-], >= 1.
   int maxIterations = 2000;
   /// ["min_iterations"] sweeps done even when the first ones already look converged [-], >= 1.
@@ -22,7 +24,10 @@ struct NscdSettings {
   /// ["relaxation"] over-relaxation factor omega in (0, 2) of the projected Gauss-Seidel update
   /// r <- proj(r - omega (u + c) / W) [-]. 1 is plain Gauss-Seidel; projected SOR converges for
   /// any omega in (0, 2) on the frictionless (symmetric) problem, friction rows use omega = 1.
-  double relaxation = 1.0;
+  /// Default 1.5: on a 536-sphere pile compacting under gravity at tolerance 1e-6 it needed 2.6x
+  /// fewer sweeps than plain Gauss-Seidel over the first 10 t0 (223 versus 587 per step). With 1,
+  /// an isolated contact is solved exactly in one sweep; with 1.5 to within the tolerance.
+  double relaxation = 1.5;
   /// ["alert_distance"] a pair becomes a contact row when its gap in the predicted configuration
   /// is below alert_distance x (the smaller size of the pair, or the grain size for a wall)
   /// [fraction of d]. Must exceed the largest approach per step (SPEC 4: d/100). >= 0.

@@ -132,7 +132,9 @@ TEST_CASE("nscd: a sphere falling on the floor stops dead at contact (no bounce,
   {
     core::SystemDef s = box(20.0, 10.0);
     s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 1.5037)));
-    auto b = nscd::makeNscdBackend(s, {});
+    // Plain Gauss-Seidel solves an isolated contact exactly in one sweep (over-relaxation would
+    // only get within the tolerance), so the oracle can be exact.
+    auto b = nscd::makeNscdBackend(s, {{"relaxation", 1.0}});
     double minGap = 0.0, maxUp = 0.0;
     bool touched = false;
     for (int k = 0; k < static_cast<int>(2.0 / dt); ++k) {
@@ -245,7 +247,7 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
       mix(st.position[i]);
       mix(st.velocity[i]);
     }
-  constexpr std::uint64_t kExpectedHash = 0x51865b572343b17eull;
+  constexpr std::uint64_t kExpectedHash = 0x42aada79cb35fc08ull;
   CHECK(hash == kExpectedHash);
   // The same run twice gives the same bits (no hidden state, no uninitialised memory).
   auto again = nscd::makeNscdBackend(s, {});
