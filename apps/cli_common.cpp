@@ -55,13 +55,10 @@ const CLI::Validator kUnsigned(
 void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired) {
   // A string checked against the names, then converted: the help then reads {sphere,pinacoid}.
   sub.add_option_function<std::string>(
-         "--shape", [&cfg](const std::string& s) { cfg.population.shape = core::shapeFromString(s); },
-         "Grain shape")
+         "--shape", [&cfg](const std::string& s) { cfg.population.shape = core::shapeFromString(s); }, "Grain shape")
       ->check(CLI::IsMember({"sphere", "pinacoid"}))
       ->default_str(std::string(core::toString(cfg.population.shape)));
-  sub.add_option("--length-x", cfg.box.lengthX, "Period L_x along x [d_L]")
-      ->check(kPositive)
-      ->capture_default_str();
+  sub.add_option("--length-x", cfg.box.lengthX, "Period L_x along x [d_L]")->check(kPositive)->capture_default_str();
   sub.add_option("--width", cfg.box.width, "Gap W between the side walls, or period along y with --periodic-y [d_L]")
       ->check(kPositive)
       ->capture_default_str();
@@ -69,10 +66,12 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
   sub.add_option("--height", cfg.box.height, "Target final packing height h [d_L]")
       ->check(kPositive)
       ->capture_default_str();
-  sub.add_option("--small-fraction", cfg.population.smallFraction, "x_S, volume percentage of small grains (d_S = d_L/2)")
+  sub.add_option("--small-fraction", cfg.population.smallFraction,
+                 "x_S, volume percentage of small grains (d_S = d_L/2)")
       ->check(realIn(0.0, 100.0, false, false, "a percentage in [0, 100]", "PERCENT"))
       ->capture_default_str();
-  sub.add_option("--wall-friction", cfg.box.wallFriction, "Coulomb friction mu_w of the side walls (floor frictionless)")
+  sub.add_option("--wall-friction", cfg.box.wallFriction,
+                 "Coulomb friction mu_w of the side walls (floor frictionless)")
       ->check(kNonNegative)
       ->capture_default_str();
   std::vector<std::string> names;
@@ -83,7 +82,10 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
       ->capture_default_str();
   auto* out = sub.add_option("--out", opts.out, "Output directory (created; written all or nothing)")->type_name("DIR");
   if (outRequired) out->required();
-  sub.add_option("--threads", cfg.threads, "Worker threads")->type_name("N")->check(CLI::Range(1, 4096))->capture_default_str();
+  sub.add_option("--threads", cfg.threads, "Worker threads")
+      ->type_name("N")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
   auto* quiet = sub.add_flag("-q,--quiet", opts.quiet, "No progress output");
   sub.add_flag("-v,--verbose", opts.verbosity, "More detail on stderr (repeatable)")->excludes(quiet);
   sub.add_option("--pinacoid-G", cfg.population.pinacoid.widthRatio, "Pinacoid width G / L")
@@ -195,6 +197,8 @@ void StagedOutput::commit() {
   committed_ = true;
 }
 
-void writeJson(const fs::path& path, const nlohmann::json& j) { core::writeFileAtomically(path, j.dump(2) + "\n"); }
+void writeJson(const fs::path& path, const nlohmann::json& j) {
+  core::writeFileAtomically(path, j.dump(2) + "\n");
+}
 
 }  // namespace confpack::app

@@ -4,6 +4,7 @@
 //
 // Exit codes: 0 ok, 2 bad input (refused before any work, nothing written), 1 runtime failure
 // (nothing partial left behind). Every failure prints exactly one line on stderr.
+#include <exception>
 #include <filesystem>
 #include <functional>
 #include <string>

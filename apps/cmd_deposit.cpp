@@ -35,12 +35,11 @@ void runDeposit(const DepositState& st) {
     applyThreads(cfg.threads);
     // Staged before the work so that an unwritable --out fails at once, not after the deposit.
     StagedOutput output(st.opts.out);
-    if (st.opts.verbosity > 0)
-      fmt::print(stderr, "deposit: configuration {}\n", nlohmann::json(cfg).dump());
+    if (st.opts.verbosity > 0) fmt::print(stderr, "deposit: configuration {}\n", nlohmann::json(cfg).dump());
 
     Progress progress("deposit", !st.opts.quiet, 5.0);
-    const core::Deposit pile = core::deposit(
-        cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
+    const core::Deposit pile =
+        core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
           progress.update(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
                           fmt::format("{}/{} placeholders", done, total));
         });

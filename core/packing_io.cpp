@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cmath>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -34,7 +34,9 @@ constexpr double kForceSumTolerance = 1e-9;
   throw std::invalid_argument(fmt::format("{}: {}: {}", source, where, what));
 }
 
-std::string typeName(const json& j) { return j.type_name(); }
+std::string typeName(const json& j) {
+  return j.type_name();
+}
 
 /// A field reader for one JSON object, carrying the "grains[3]" path for messages.
 class ObjectReader {
@@ -73,8 +75,7 @@ class ObjectReader {
   }
   int integer(std::string_view key) const {
     const json& v = at(key);
-    if (!v.is_number_integer())
-      fail(source_, field(key), fmt::format("must be an integer (got {})", v.dump()));
+    if (!v.is_number_integer()) fail(source_, field(key), fmt::format("must be an integer (got {})", v.dump()));
     const auto i = v.get<std::int64_t>();
     if (i < -1000000000 || i > 1000000000) fail(source_, field(key), fmt::format("out of range (got {})", i));
     return static_cast<int>(i);
@@ -94,8 +95,7 @@ class ObjectReader {
   double toNumber(const json& v, const std::string& where) const {
     // NaN and infinities have no JSON spelling; nlohmann writes them as null, so a null here
     // usually means a non-finite value was written.
-    if (!v.is_number())
-      fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
+    if (!v.is_number()) fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
     const double x = v.get<double>();
     if (!std::isfinite(x)) fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
     return x;
@@ -114,7 +114,9 @@ class ObjectReader {
   std::string where_;
 };
 
-json toJsonVec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+json toJsonVec(const Vec3& v) {
+  return json::array({v.x(), v.y(), v.z()});
+}
 
 Vec3 unitOrFail(Vec3 v, std::string_view source, const std::string& where) {
   const double n = v.norm();
@@ -173,10 +175,14 @@ Contact readContact(const json& j, std::string_view source, std::size_t index) {
   c.a = r.integer("a");
   c.b = r.integer("b");
   const std::string type = r.string("type");
-  if (type == "simple") c.type = ContactType::Simple;
-  else if (type == "double") c.type = ContactType::Double;
-  else if (type == "triple") c.type = ContactType::Triple;
-  else fail(source, r.field("type"), fmt::format("unknown contact type '{}' (expected simple, double or triple)", type));
+  if (type == "simple")
+    c.type = ContactType::Simple;
+  else if (type == "double")
+    c.type = ContactType::Double;
+  else if (type == "triple")
+    c.type = ContactType::Triple;
+  else
+    fail(source, r.field("type"), fmt::format("unknown contact type '{}' (expected simple, double or triple)", type));
   c.normal = unitOrFail(r.vec3("normal"), source, r.field("normal"));
 
   const json& pts = r.array("points");
@@ -297,7 +303,8 @@ void validatePacking(const Packing& p, std::string_view source) {
            fmt::format("y must lie between the side walls, in [0, width = {}] (got {})", box.width, x.y()));
     }
     // A centre below the floor would mean a grain more than half sunk into it.
-    if (!(x.z() >= 0.0)) fail(source, where + ".position[2]", fmt::format("z must be >= 0, above the floor (got {})", x.z()));
+    if (!(x.z() >= 0.0))
+      fail(source, where + ".position[2]", fmt::format("z must be >= 0, above the floor (got {})", x.z()));
     const double qn = g.orientation.coeffs().norm();
     if (!std::isfinite(qn) || std::abs(qn - 1.0) > 1e-9)
       fail(source, where + ".orientation", fmt::format("must be a unit quaternion (norm {})", qn));
@@ -307,14 +314,17 @@ void validatePacking(const Packing& p, std::string_view source) {
   for (std::size_t k = 0; k < p.contacts->size(); ++k) {
     const Contact& c = (*p.contacts)[k];
     const std::string where = fmt::format("contacts[{}]", k);
-    if (!(c.a >= 0 && c.a < n)) fail(source, where + ".a", fmt::format("must be a grain index in [0, {}) (got {})", n, c.a));
+    if (!(c.a >= 0 && c.a < n))
+      fail(source, where + ".a", fmt::format("must be a grain index in [0, {}) (got {})", n, c.a));
     const bool wall = isWall(c.b);
     if (wall) {
-      if (c.b < -3) fail(source, where + ".b", fmt::format("wall ids are -1 (floor), -2 (y = 0), -3 (y = W) (got {})", c.b));
+      if (c.b < -3)
+        fail(source, where + ".b", fmt::format("wall ids are -1 (floor), -2 (y = 0), -3 (y = W) (got {})", c.b));
       if (box.periodicY && c.b != static_cast<int>(WallId::Floor))
         fail(source, where + ".b", fmt::format("no side wall {} in a box with periodic_y", c.b));
     } else {
-      if (c.b >= n) fail(source, where + ".b", fmt::format("must be a grain index in [0, {}) or a wall id (got {})", n, c.b));
+      if (c.b >= n)
+        fail(source, where + ".b", fmt::format("must be a grain index in [0, {}) or a wall id (got {})", n, c.b));
       if (c.b == c.a) fail(source, where + ".b", fmt::format("a grain cannot touch itself (a = b = {})", c.a));
     }
     if (!c.normal.allFinite() || std::abs(c.normal.norm() - 1.0) > 1e-9)
@@ -341,10 +351,11 @@ json toJson(const Packing& p) {
   j["box"] = p.box;
   json grains = json::array();
   for (const Grain& g : p.grains) {
-    json e = {{"shape", std::string(toString(g.shape))},
-              {"size", g.size},
-              {"position", toJsonVec(g.position)},
-              {"orientation", json::array({g.orientation.w(), g.orientation.x(), g.orientation.y(), g.orientation.z()})}};
+    json e = {
+        {"shape", std::string(toString(g.shape))},
+        {"size", g.size},
+        {"position", toJsonVec(g.position)},
+        {"orientation", json::array({g.orientation.w(), g.orientation.x(), g.orientation.y(), g.orientation.z()})}};
     if (g.shape == ShapeKind::Pinacoid) e["params"] = g.params;
     grains.push_back(std::move(e));
   }
@@ -384,13 +395,14 @@ json toJson(const Packing& p) {
 Packing packingFromJson(const json& j, std::string_view source) {
   ObjectReader top(j, source, "");
   // Format and version first: a file of another kind gets that message, not a field complaint.
-  if (!j.is_object() || !j.contains("format")) fail(source, "format", fmt::format("missing (expected \"{}\")", kPackingFormat));
+  if (!j.is_object() || !j.contains("format"))
+    fail(source, "format", fmt::format("missing (expected \"{}\")", kPackingFormat));
   if (!j["format"].is_string() || j["format"].get<std::string>() != kPackingFormat)
     fail(source, "format", fmt::format("must be \"{}\" (got {})", kPackingFormat, j["format"].dump()));
   if (!j.contains("version")) fail(source, "version", "missing");
   if (!j["version"].is_number_integer() || j["version"].get<std::int64_t>() != kPackingVersion)
-    fail(source, "version", fmt::format("unsupported version {} (this build reads version {})", j["version"].dump(),
-                                        kPackingVersion));
+    fail(source, "version",
+         fmt::format("unsupported version {} (this build reads version {})", j["version"].dump(), kPackingVersion));
   top.onlyKeys({"format", "version", "box", "grains", "contacts", "metadata"});
 
   Packing p;
@@ -444,8 +456,7 @@ Packing readPacking(const std::filesystem::path& path) {
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
   static std::atomic<unsigned> counter{0};
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  const std::filesystem::path tmp =
-      dir / fmt::format(".{}.tmp-{}-{}", path.filename().string(), ::getpid(), counter++);
+  const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}-{}", path.filename().string(), ::getpid(), counter++);
   // No fsync: rename() already guarantees that readers see the old file or the whole new one,
   // which is the property we need; durability across a power cut is not worth a disk flush per
   // VTK frame.

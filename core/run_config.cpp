@@ -17,7 +17,8 @@ using nlohmann::json;
 /// A configuration file is written by us or edited by a user: refuse a misspelt key rather than
 /// silently run with its default.
 void onlyKeys(const json& j, std::string_view where, std::initializer_list<std::string_view> allowed) {
-  if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where, j.type_name()));
+  if (!j.is_object())
+    throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where, j.type_name()));
   for (const auto& [key, value] : j.items()) {
     if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
       std::string list;
@@ -57,7 +58,8 @@ void to_json(json& j, const CompactionDef& c) {
 
 void from_json(const json& j, CompactionDef& c) {
   constexpr std::string_view w = "compaction";
-  onlyKeys(j, w, {"dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio", "kinetic_ratio"});
+  onlyKeys(j, w,
+           {"dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio", "kinetic_ratio"});
   const CompactionDef d;
   c.dt = valueOr(j, w, "dt", d.dt);
   c.timeLimit = valueOr(j, w, "time_limit", d.timeLimit);

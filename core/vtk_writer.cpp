@@ -19,7 +19,9 @@ void header(Buffer& b) {
                  "<PolyData>\n");
 }
 
-void footer(Buffer& b) { fmt::format_to(std::back_inserter(b), "</Piece>\n</PolyData>\n</VTKFile>\n"); }
+void footer(Buffer& b) {
+  fmt::format_to(std::back_inserter(b), "</Piece>\n</PolyData>\n</VTKFile>\n");
+}
 
 template <class T>
 void dataArray(Buffer& b, std::string_view type, std::string_view name, int components, const std::vector<T>& values) {
@@ -75,8 +77,8 @@ VtkFrameCounts writeGrainsVtp(const Packing& packing, const std::filesystem::pat
                               std::span<const Vec3> velocities) {
   const auto& grains = packing.grains;
   if (!velocities.empty() && velocities.size() != grains.size())
-    throw std::invalid_argument(
-        fmt::format("vtk: velocities must be empty or one per grain ({} grains, got {})", grains.size(), velocities.size()));
+    throw std::invalid_argument(fmt::format("vtk: velocities must be empty or one per grain ({} grains, got {})",
+                                            grains.size(), velocities.size()));
   std::vector<double> points, diameter, velocity;
   std::vector<std::int32_t> pointId, cellIdVerts, cellIdPolys;
   std::vector<double> cellSizeVerts, cellSizePolys;

@@ -1,12 +1,13 @@
 // Packing file (SPEC 8.2): exact round trip of every double, the documented keys, and one clear
 // message naming element and field for each kind of bad input.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
-#include <unistd.h>
 
 #include "core/packing_io.hpp"
 #include "core/random.hpp"
@@ -18,7 +19,8 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path freshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("confpack_test_packing_io_" + name + "_" + std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("confpack_test_packing_io_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
@@ -42,9 +44,9 @@ Packing samplePacking() {
     g.orientation = rng.uniformQuaternion();
     p.grains.push_back(g);
   }
-  p.grains[0].position.x() = 0.0;                 // the closed end of [0, length_x)
-  p.grains[1].position.y() = p.box.width;         // touching the far wall is allowed
-  p.grains[3].position.z() = 1e-300;              // tiny but valid
+  p.grains[0].position.x() = 0.0;          // the closed end of [0, length_x)
+  p.grains[1].position.y() = p.box.width;  // touching the far wall is allowed
+  p.grains[3].position.z() = 1e-300;       // tiny but valid
   std::vector<Contact> cs;
   auto contact = [&](int a, int b, ContactType t, int points) {
     Contact c;
@@ -178,7 +180,7 @@ TEST_CASE("the packing document has exactly the SPEC 8.2 keys") {
   // normal_force is the sum over the points.
   CHECK(c.at("normal_force").get<double>() ==
         Approx(c.at("point_forces")[0].get<double>() + c.at("point_forces")[1].get<double>()));
-  CHECK_FALSE(c.contains("tangent_force"));        // grain-grain: frictionless
+  CHECK_FALSE(c.contains("tangent_force"));              // grain-grain: frictionless
   CHECK(j.at("contacts")[4].contains("tangent_force"));  // wall contact
 }
 
@@ -230,14 +232,21 @@ TEST_CASE("bad packing files are refused with the element and field named") {
   requireRefused(with([](json& j) { j["grains"][7]["size"] = -1; }), "grains[7].size: must be > 0 (got -1)");
   requireRefused(with([](json& j) { j["grains"][7]["size"] = nullptr; }), "grains[7].size: must be a finite number");
   requireRefused(with([](json& j) { j["grains"][3]["shape"] = "cube"; }), "grains[3].shape: unknown shape 'cube'");
-  requireRefused(with([](json& j) { j["grains"][0]["params"] = {{"G", 1}, {"E", 1}, {"alpha_deg", 60}}; }),
+  requireRefused(with([](json& j) {
+                   j["grains"][0]["params"] = {{"G", 1}, {"E", 1}, {"alpha_deg", 60}};
+                 }),
                  "grains[0].params: only pinacoids have params");
   requireRefused(with([](json& j) { j["grains"][2].erase("params"); }), "grains[2].params: missing");
   requireRefused(with([](json& j) { j["grains"][2]["params"]["alpha_deg"] = 95; }), "grains[2].params");
-  requireRefused(with([](json& j) { j["grains"][4]["position"] = {1, 2}; }), "grains[4].position: must be an array of 3");
-  requireRefused(with([](json& j) { j["grains"][4]["position"][0] = 6.0; }), "grains[4].position[0]: x must be in [0, length_x = 6)");
+  requireRefused(with([](json& j) {
+                   j["grains"][4]["position"] = {1, 2};
+                 }),
+                 "grains[4].position: must be an array of 3");
+  requireRefused(with([](json& j) { j["grains"][4]["position"][0] = 6.0; }),
+                 "grains[4].position[0]: x must be in [0, length_x = 6)");
   requireRefused(with([](json& j) { j["grains"][4]["position"][0] = -0.1; }), "grains[4].position[0]");
-  requireRefused(with([](json& j) { j["grains"][4]["position"][1] = -0.01; }), "grains[4].position[1]: y must lie between the side walls");
+  requireRefused(with([](json& j) { j["grains"][4]["position"][1] = -0.01; }),
+                 "grains[4].position[1]: y must lie between the side walls");
   requireRefused(with([](json& j) { j["grains"][4]["position"][2] = -0.5; }), "grains[4].position[2]: z must be >= 0");
   requireRefused(with([](json& j) {
                    j["box"]["periodic_y"] = true;
@@ -245,21 +254,44 @@ TEST_CASE("bad packing files are refused with the element and field named") {
                    j["grains"][1]["position"][1] = j["box"]["width"];
                  }),
                  "grains[1].position[1]: y must be in [0, width");
-  requireRefused(with([](json& j) { j["grains"][5]["orientation"] = {0, 0, 0, 0}; }), "grains[5].orientation: cannot be normalised");
-  requireRefused(with([](json& j) { j["grains"][5]["orientation"] = {1, 0, 0}; }), "grains[5].orientation: must be [w, x, y, z]");
-  requireRefused(with([](json& j) { j["grains"][5]["orientaion"] = {1, 0, 0, 0}; }), "grains[5].orientaion: unknown key");
-  requireRefused(with([](json& j) { j["contacts"][0]["a"] = 12; }), "contacts[0].a: must be a grain index in [0, 12) (got 12)");
+  requireRefused(with([](json& j) {
+                   j["grains"][5]["orientation"] = {0, 0, 0, 0};
+                 }),
+                 "grains[5].orientation: cannot be normalised");
+  requireRefused(with([](json& j) {
+                   j["grains"][5]["orientation"] = {1, 0, 0};
+                 }),
+                 "grains[5].orientation: must be [w, x, y, z]");
+  requireRefused(with([](json& j) {
+                   j["grains"][5]["orientaion"] = {1, 0, 0, 0};
+                 }),
+                 "grains[5].orientaion: unknown key");
+  requireRefused(with([](json& j) { j["contacts"][0]["a"] = 12; }),
+                 "contacts[0].a: must be a grain index in [0, 12) (got 12)");
   requireRefused(with([](json& j) { j["contacts"][0]["a"] = 1.5; }), "contacts[0].a: must be an integer");
   requireRefused(with([](json& j) { j["contacts"][0]["b"] = -4; }), "contacts[0].b: wall ids are -1");
   requireRefused(with([](json& j) { j["contacts"][0]["b"] = 0; }), "contacts[0].b: a grain cannot touch itself");
-  requireRefused(with([](json& j) { j["box"]["periodic_y"] = true; j["grains"][1]["position"][1] = 1.0; }),
+  requireRefused(with([](json& j) {
+                   j["box"]["periodic_y"] = true;
+                   j["grains"][1]["position"][1] = 1.0;
+                 }),
                  "contacts[4].b: no side wall -2 in a box with periodic_y");
-  requireRefused(with([](json& j) { j["contacts"][2]["type"] = "quadruple"; }), "contacts[2].type: unknown contact type");
-  requireRefused(with([](json& j) { j["contacts"][2]["normal"] = {0, 0, 0}; }), "contacts[2].normal: cannot be normalised");
-  requireRefused(with([](json& j) { j["contacts"][2]["points"] = json::array(); }), "contacts[2].points: must hold at least one point");
-  requireRefused(with([](json& j) { j["contacts"][2]["point_forces"] = {1.0}; }), "contacts[2].point_forces: must have one entry per point");
-  requireRefused(with([](json& j) { j["contacts"][2]["normal_force"] = 99.0; }), "contacts[2].normal_force: must equal the sum");
-  requireRefused(with([](json& j) { j["contacts"][0]["point_forces"] = {-1.0}; j["contacts"][0].erase("normal_force"); }),
+  requireRefused(with([](json& j) { j["contacts"][2]["type"] = "quadruple"; }),
+                 "contacts[2].type: unknown contact type");
+  requireRefused(with([](json& j) {
+                   j["contacts"][2]["normal"] = {0, 0, 0};
+                 }),
+                 "contacts[2].normal: cannot be normalised");
+  requireRefused(with([](json& j) { j["contacts"][2]["points"] = json::array(); }),
+                 "contacts[2].points: must hold at least one point");
+  requireRefused(with([](json& j) { j["contacts"][2]["point_forces"] = {1.0}; }),
+                 "contacts[2].point_forces: must have one entry per point");
+  requireRefused(with([](json& j) { j["contacts"][2]["normal_force"] = 99.0; }),
+                 "contacts[2].normal_force: must equal the sum");
+  requireRefused(with([](json& j) {
+                   j["contacts"][0]["point_forces"] = {-1.0};
+                   j["contacts"][0].erase("normal_force");
+                 }),
                  "contacts[0].point_forces[0]: must be a finite force >= 0");
   requireRefused(json::array(), "document: must be an object");
 }

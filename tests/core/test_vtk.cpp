@@ -1,5 +1,7 @@
 // ParaView output (SPEC 8.4): the files are well-formed XML whose declared counts match both the
 // arrays they contain and the packing they were written from.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
@@ -8,7 +10,6 @@
 #include <numbers>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "core/random.hpp"
@@ -101,13 +102,16 @@ const Element& piece(const std::vector<Element>& es) {
 /// The DataArray named `name` under the element `parent` (the Points array has no name).
 const Element& array(const std::vector<Element>& es, const std::string& parent, const std::string& name) {
   for (const auto& e : es)
-    if (e.name == "DataArray" && e.parent == parent && (name.empty() || e.attributes.count("Name") && e.attributes.at("Name") == name))
+    if (e.name == "DataArray" && e.parent == parent &&
+        (name.empty() || e.attributes.count("Name") && e.attributes.at("Name") == name))
       return e;
   FAIL("no DataArray " << name << " under " << parent);
   return es.front();
 }
 
-int components(const Element& e) { return e.attributes.count("NumberOfComponents") ? std::stoi(e.attributes.at("NumberOfComponents")) : 1; }
+int components(const Element& e) {
+  return e.attributes.count("NumberOfComponents") ? std::stoi(e.attributes.at("NumberOfComponents")) : 1;
+}
 
 Packing mixedPacking(int spheres, int pinacoids, bool withContacts) {
   Packing p;
