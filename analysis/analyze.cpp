@@ -62,8 +62,8 @@ Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
   a.nematic = nematic(packing, a.region, options.boundaryDistance);
   a.homogeneity = homogeneity(packing, a.region, options.homogeneity);
   if (options.equilibrium && packing.contacts)
-    a.equilibrium = equilibrium(packing, {}, options.gravity, options.density, options.forceRatio,
-                                options.momentRatio, options.kineticRatio, options.region);
+    a.equilibrium = equilibrium(packing, {}, options.gravity, options.density, options.forceRatio, options.momentRatio,
+                                options.kineticRatio, options.region);
   return a;
 }
 
@@ -74,7 +74,9 @@ nlohmann::json orNull(const std::optional<double>& v) {
 nlohmann::json nematicJson(const std::optional<NematicOrder>& n) {
   if (!n) return nullptr;
   static const char* axes[] = {"u", "v", "w"};
-  return {{"q00", n->q00}, {"axis", axes[n->axis]}, {"director", {n->director.x(), n->director.y(), n->director.z()}},
+  return {{"q00", n->q00},
+          {"axis", axes[n->axis]},
+          {"director", {n->director.x(), n->director.y(), n->director.z()}},
           {"grains", n->grains}};
 }
 }  // namespace
@@ -86,8 +88,11 @@ nlohmann::json toJson(const Analysis& a) {
   j["mean_size"] = a.meanSize;
   j["bidisperse"] = a.bidisperse;
   j["free_surface"] = a.region.freeSurface;
-  j["bulk_region"] = {{"z_low", a.region.zLow}, {"z_high", a.region.zHigh}, {"free_surface", a.region.freeSurface},
-                      {"volume", a.solid.regionVolume}, {"grains", a.coordination.bulkGrains}};
+  j["bulk_region"] = {{"z_low", a.region.zLow},
+                      {"z_high", a.region.zHigh},
+                      {"free_surface", a.region.freeSurface},
+                      {"volume", a.solid.regionVolume},
+                      {"grains", a.coordination.bulkGrains}};
   j["solid_fraction"] = a.region.empty() ? json(nullptr) : json(a.solid.phi);
 
   const Coordination& c = a.coordination;
@@ -107,13 +112,14 @@ nlohmann::json toJson(const Analysis& a) {
                        {"mean_normal_force", c.meanNormalForce}};
 
   const Interpenetration& ip = a.interpenetration;
-  j["interpenetration_percent"] = {{"exact", ip.exactPercent},
-                                   {"lattice_min", orNull(ip.latticeMinPercent)},
-                                   {"lattice_max", orNull(ip.latticeMaxPercent)},
-                                   {"overlapping_pairs", ip.overlappingPairs},
-                                   {"max_sphere_depth", ip.maxSphereDepth},
-                                   {"lattice_cells", ip.latticeCells},
-                                   {"lattice_skipped", ip.latticeSkipped.empty() ? json(nullptr) : json(ip.latticeSkipped)}};
+  j["interpenetration_percent"] = {
+      {"exact", ip.exactPercent},
+      {"lattice_min", orNull(ip.latticeMinPercent)},
+      {"lattice_max", orNull(ip.latticeMaxPercent)},
+      {"overlapping_pairs", ip.overlappingPairs},
+      {"max_sphere_depth", ip.maxSphereDepth},
+      {"lattice_cells", ip.latticeCells},
+      {"lattice_skipped", ip.latticeSkipped.empty() ? json(nullptr) : json(ip.latticeSkipped)}};
 
   const Fabric& f = a.fabric;
   j["anisotropy"] = f.contacts > 0 ? json(f.anisotropy) : json(nullptr);
@@ -209,9 +215,11 @@ void writeLayers(const std::filesystem::path& path, const nlohmann::json& metada
 void writeProfiles(const std::filesystem::path& dir, const Analysis& a, const nlohmann::json& metadata) {
   {
     std::string s = header(metadata, a.phiProfile.folded ? "solid fraction profile phi(y), averaged over the two walls"
-                                                        : "solid fraction profile phi(y)");
-    s += fmt::format("# slice: {}\n# z_low: {}\n# z_high: {}\ny,phi\n", a.phiProfile.slice, a.region.zLow, a.region.zHigh);
-    for (std::size_t k = 0; k < a.phiProfile.y.size(); ++k) s += fmt::format("{},{}\n", a.phiProfile.y[k], a.phiProfile.phi[k]);
+                                                         : "solid fraction profile phi(y)");
+    s += fmt::format("# slice: {}\n# z_low: {}\n# z_high: {}\ny,phi\n", a.phiProfile.slice, a.region.zLow,
+                     a.region.zHigh);
+    for (std::size_t k = 0; k < a.phiProfile.y.size(); ++k)
+      s += fmt::format("{},{}\n", a.phiProfile.y[k], a.phiProfile.phi[k]);
     core::writeFileAtomically(dir / "phi_y.csv", s);
   }
   {
@@ -222,7 +230,8 @@ void writeProfiles(const std::filesystem::path& dir, const Analysis& a, const nl
       s += fmt::format("{},{},{},{},{},{}\n", p.y[k], p.grains[k], p.z[k], p.simple[k], p.dbl[k], p.triple[k]);
     core::writeFileAtomically(dir / "z_y.csv", s);
   }
-  writeLayers(dir / "homogeneity_z.csv", metadata, a.homogeneity.alongZ, "z", "fractions of large and small grains per layer along z");
+  writeLayers(dir / "homogeneity_z.csv", metadata, a.homogeneity.alongZ, "z",
+              "fractions of large and small grains per layer along z");
   writeLayers(dir / "homogeneity_y.csv", metadata, a.homogeneity.alongY, "y",
               "fractions of large and small grains per layer along y (bulk region)");
   writeHistogram(dir / "orientation_cos.csv", metadata, a.fabric, true);

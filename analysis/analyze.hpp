@@ -19,8 +19,8 @@
 #include "analysis/coordination.hpp"
 #include "analysis/equilibrium.hpp"
 #include "analysis/fabric.hpp"
-#include "analysis/geometric_model.hpp"
 #include "analysis/geometric_contacts.hpp"
+#include "analysis/geometric_model.hpp"
 #include "analysis/homogeneity.hpp"
 #include "analysis/interpenetration.hpp"
 #include "analysis/nematic.hpp"
@@ -37,11 +37,11 @@ struct AnalysisOptions {
   GeometricContactDef geometricContacts{};
   FabricDef fabric{};
   HomogeneityDef homogeneity{};
-  ProfileFitDef profileFit{};          ///< `bidisperse` is decided from the grains
-  double boundaryDistance = 2.0;       ///< nematic boundary layer thickness [d_L]
-  bool equilibrium = true;             ///< evaluate SPEC 6.1 (zero velocities) when forces are present
+  ProfileFitDef profileFit{};                       ///< `bidisperse` is decided from the grains
+  double boundaryDistance = 2.0;                    ///< nematic boundary layer thickness [d_L]
+  bool equilibrium = true;                          ///< evaluate SPEC 6.1 (zero velocities) when forces are present
   core::Vec3 gravity = core::Vec3(0.0, 0.0, -1.0);  ///< [g]
-  double density = 1.0;                ///< rho
+  double density = 1.0;                             ///< rho
   double forceRatio = 1e-4, momentRatio = 1e-4, kineticRatio = 1e-8;  ///< SPEC 6.1 thresholds
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field
@@ -50,12 +50,12 @@ struct AnalysisOptions {
 /// Everything measured on one packing.
 struct Analysis {
   int grains = 0;
-  double meanSize = 0.0;               ///< d_avg [d_L]
+  double meanSize = 0.0;  ///< d_avg [d_L]
   bool bidisperse = false;
   BulkRegion region;
   SolidFraction solid;
   SolidFractionProfile phiProfile;
-  ProfileFit profileFit;               ///< ok = false with a reason when absent
+  ProfileFit profileFit;                   ///< ok = false with a reason when absent
   std::optional<double> profileIntegralC;  ///< 2 int (phi_bulk - phi(y)) dy with the fitted phi_bulk
   Interpenetration interpenetration;
   bool geometricContacts = false;

@@ -42,7 +42,8 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
       m.a = a;
       m.b = b;
       m.normal = normal;
-      if (!core::isWall(b)) m.branch = packing.box.minimumImage(packing.grains[b].position - packing.grains[a].position);
+      if (!core::isWall(b))
+        m.branch = packing.box.minimumImage(packing.grains[b].position - packing.grains[a].position);
     }
     m.normalForce += c.normalForce();
   }
@@ -88,8 +89,10 @@ Coordination coordination(const core::Packing& packing, const BulkRegion& region
   for (const CountedContact& c : counted) {
     if (core::isWall(c.b)) {
       ++r.wallContacts;
-      if (c.b == static_cast<int>(core::WallId::Floor)) ++floor[c.a];
-      else ++walls[c.a];
+      if (c.b == static_cast<int>(core::WallId::Floor))
+        ++floor[c.a];
+      else
+        ++walls[c.a];
       continue;
     }
     forceSum += c.normalForce;
@@ -149,7 +152,8 @@ Coordination coordination(const core::Packing& packing, const BulkRegion& region
     if (!inBulk[i]) continue;
     const core::Vec3 x = box.wrap(packing.grains[i].position);
     const double y = box.periodicY ? x.y() : std::min(x.y(), box.width - x.y());
-    const auto k = static_cast<std::size_t>(std::clamp(static_cast<int>(std::floor(y / dy)), 0, static_cast<int>(ns) - 1));
+    const auto k =
+        static_cast<std::size_t>(std::clamp(static_cast<int>(std::floor(y / dy)), 0, static_cast<int>(ns) - 1));
     ++p.grains[k];
     p.simple[k] += byType[i][0];
     p.dbl[k] += byType[i][1];

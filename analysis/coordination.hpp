@@ -39,12 +39,12 @@ struct CoordinationDef {
 
 /// A merged, force-carrying, classified contact.
 struct CountedContact {
-  int a = 0;                                  ///< grain index
-  int b = 0;                                  ///< grain index (> a) or wall id
+  int a = 0;  ///< grain index
+  int b = 0;  ///< grain index (> a) or wall id
   core::ContactType type = core::ContactType::Simple;
-  core::Vec3 normal = core::Vec3::UnitZ();    ///< unit, from a to b
-  core::Vec3 branch = core::Vec3::Zero();     ///< minimum-image x_b - x_a (grain pairs) [d_L]
-  double normalForce = 0.0;                   ///< summed over merged contacts and points
+  core::Vec3 normal = core::Vec3::UnitZ();  ///< unit, from a to b
+  core::Vec3 branch = core::Vec3::Zero();   ///< minimum-image x_b - x_a (grain pairs) [d_L]
+  double normalForce = 0.0;                 ///< summed over merged contacts and points
 };
 
 /// The force-carrying contacts (definition above), merged by pair and classified.
@@ -55,27 +55,26 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
                                                   double forceThreshold = 1e-3);
 
 struct CoordinationProfile {
-  std::vector<double> y;                      ///< slice centres [d_L]
-  std::vector<int> grains;                    ///< bulk grains per slice
-  std::vector<double> z, simple, dbl, triple; ///< contacts per grain of the slice
+  std::vector<double> y;                       ///< slice centres [d_L]
+  std::vector<int> grains;                     ///< bulk grains per slice
+  std::vector<double> z, simple, dbl, triple;  ///< contacts per grain of the slice
 };
 
 struct Coordination {
   int bulkGrains = 0;
-  int contacts = 0;             ///< force-carrying grain-grain contacts touching the bulk
+  int contacts = 0;  ///< force-carrying grain-grain contacts touching the bulk
   double z = 0.0, zSimple = 0.0, zDouble = 0.0, zTriple = 0.0;  ///< per bulk grain
-  double zNonRattler = 0.0;     ///< Z over non-rattling bulk grains
-  double rattlerFraction = 0.0; ///< bulk grains with no force-carrying contact / n_bulk
-  double wallZ = 0.0;           ///< side-wall contacts of bulk grains / n_bulk
-  int wallContacts = 0;         ///< force-carrying wall contacts of all grains (floor included)
+  double zNonRattler = 0.0;                                     ///< Z over non-rattling bulk grains
+  double rattlerFraction = 0.0;                                 ///< bulk grains with no force-carrying contact / n_bulk
+  double wallZ = 0.0;                                           ///< side-wall contacts of bulk grains / n_bulk
+  int wallContacts = 0;                  ///< force-carrying wall contacts of all grains (floor included)
   std::optional<double> hyperstaticity;  ///< Z_s + 2 Z_d + 3 Z_t - 12 over non-rattlers (pinacoids)
-  double meanNormalForce = 0.0; ///< mean f_n of grain-grain contacts with f_n > 0 (1 if geometric)
-  bool geometric = false;       ///< contacts were found geometrically
+  double meanNormalForce = 0.0;          ///< mean f_n of grain-grain contacts with f_n > 0 (1 if geometric)
+  bool geometric = false;                ///< contacts were found geometrically
   CoordinationProfile profile;
 };
 
 Coordination coordination(const core::Packing& packing, const BulkRegion& region,
-                          const std::vector<CountedContact>& counted, bool geometric,
-                          const CoordinationDef& def = {});
+                          const std::vector<CountedContact>& counted, bool geometric, const CoordinationDef& def = {});
 
 }  // namespace confpack::analysis

@@ -51,13 +51,12 @@ core::Mat3 contactStress(const core::Packing& packing, const BulkRegion& region,
 }
 
 EquilibriumReport equilibrium(const core::Packing& packing, const std::vector<core::BodyState>& states,
-                              const core::Vec3& gravity, double density, double forceRatio,
-                              double momentRatio, double kineticRatio, const BulkRegionDef& regionDef) {
+                              const core::Vec3& gravity, double density, double forceRatio, double momentRatio,
+                              double kineticRatio, const BulkRegionDef& regionDef) {
   if (!packing.contacts) throw std::invalid_argument("equilibrium: the packing has no contact list");
   const std::size_t n = packing.grains.size();
   if (!states.empty() && states.size() != n)
-    throw std::invalid_argument(
-        fmt::format("equilibrium: states has {} entries for {} grains", states.size(), n));
+    throw std::invalid_argument(fmt::format("equilibrium: states has {} entries for {} grains", states.size(), n));
 
   EquilibriumReport r;
   const BulkRegion region = bulkRegion(packing, regionDef);

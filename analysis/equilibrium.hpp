@@ -40,17 +40,16 @@ struct EquilibriumReport {
 
 /// Contact stress tensor (definition above) of the grains whose centre is in `region` (all grains
 /// and the volume L_x W freeSurface when the region holds none) [rho g d_L]. Requires contacts.
-core::Mat3 contactStress(const core::Packing& packingWithContacts, const BulkRegion& region,
-                         bool* usedBulk = nullptr);
+core::Mat3 contactStress(const core::Packing& packingWithContacts, const BulkRegion& region, bool* usedBulk = nullptr);
 
 /// Equilibrium report of SPEC 6.1. `states` gives velocities (empty = all at rest); positions and
 /// orientations are read from packing.grains. Throws std::invalid_argument if the packing has no
 /// contact list or `states` has the wrong size. When P <= 0 (no forces at all) the ratios are
 /// +infinity and `reached` is false.
-EquilibriumReport equilibrium(const core::Packing& packingWithContacts,
-                              const std::vector<core::BodyState>& states, const core::Vec3& gravity,
-                              double density, double forceRatio = 1e-4, double momentRatio = 1e-4,
-                              double kineticRatio = 1e-8, const BulkRegionDef& regionDef = {});
+EquilibriumReport equilibrium(const core::Packing& packingWithContacts, const std::vector<core::BodyState>& states,
+                              const core::Vec3& gravity, double density, double forceRatio = 1e-4,
+                              double momentRatio = 1e-4, double kineticRatio = 1e-8,
+                              const BulkRegionDef& regionDef = {});
 
 /// {"reached", "max_force_ratio", "max_moment_ratio", "max_kinetic_ratio", "pressure",
 ///  "worst_grain", "pressure_from_bulk"}; infinite ratios are written as null.

@@ -47,8 +47,8 @@ Fabric fabric(const core::Packing& packing, const BulkRegion& region, const std:
   std::array<std::vector<double>, 3> normalWeights;
   for (const CountedContact& c : counted) {
     if (core::isWall(c.b)) continue;
-    const double w = 0.5 * (region.contains(packing.grains[c.a].position.z()) +
-                            region.contains(packing.grains[c.b].position.z()));
+    const double w =
+        0.5 * (region.contains(packing.grains[c.a].position.z()) + region.contains(packing.grains[c.b].position.z()));
     if (w == 0.0) continue;
     branches.push_back(c.branch);
     weights.push_back(w);

@@ -35,10 +35,10 @@ struct OrientationHistogram {
 };
 
 struct Fabric {
-  core::Mat3 tensor = core::Mat3::Zero();   ///< F
-  core::Vec3 eigenvalues = core::Vec3::Zero(); ///< F1 >= F2 >= F3
-  core::Vec3 majorAxis = core::Vec3::UnitZ();  ///< eigenvector of F1
-  double anisotropy = 0.0;                  ///< a = (5/2)(F1 - F3)
+  core::Mat3 tensor = core::Mat3::Zero();       ///< F
+  core::Vec3 eigenvalues = core::Vec3::Zero();  ///< F1 >= F2 >= F3
+  core::Vec3 majorAxis = core::Vec3::UnitZ();   ///< eigenvector of F1
+  double anisotropy = 0.0;                      ///< a = (5/2)(F1 - F3)
   int contacts = 0;
   /// Index 0..2 = Simple, Double, Triple; index 3 = all types together.
   std::array<OrientationHistogram, 4> orientation;

@@ -37,7 +37,9 @@ std::vector<core::Contact> geometricContacts(const core::Packing& packing, const
   def.validate();
   std::vector<core::Contact> out;
   const auto& grains = packing.grains;
-  auto tolerance = [&](double sizeA, double sizeB) { return def.absTolerance + def.relTolerance * 0.5 * (sizeA + sizeB); };
+  auto tolerance = [&](double sizeA, double sizeB) {
+    return def.absTolerance + def.relTolerance * 0.5 * (sizeA + sizeB);
+  };
   const double maxTol = def.absTolerance + def.relTolerance * 2.0;  // generous pre-filter
   for (const NeighbourPair& np : neighbourPairs(packing, maxTol + 1e-9)) {
     const core::Grain& a = grains[np.i];
@@ -59,7 +61,8 @@ std::vector<core::Contact> geometricContacts(const core::Packing& packing, const
       out.push_back(c);
     } else {
       const PlacedGrain pa(a), pb(b, a.position + np.separation);
-      if (auto pc = core::collidePolyhedra(pa.placed, pb.placed, tol)) out.push_back(fromPolyhedronContact(np.i, np.j, *pc));
+      if (auto pc = core::collidePolyhedra(pa.placed, pb.placed, tol))
+        out.push_back(fromPolyhedronContact(np.i, np.j, *pc));
     }
   }
   if (!def.walls) return out;

@@ -16,7 +16,8 @@ void checkSizes(std::size_t n, std::size_t m, const std::vector<double>& sigma, 
   if (!sigma.empty() && sigma.size() != n)
     throw std::invalid_argument(fmt::format("fit: {} sigmas for {} values", sigma.size(), n));
   for (double s : sigma)
-    if (!(s > 0.0) || !std::isfinite(s)) throw std::invalid_argument(fmt::format("fit: sigma must be positive (got {})", s));
+    if (!(s > 0.0) || !std::isfinite(s))
+      throw std::invalid_argument(fmt::format("fit: sigma must be positive (got {})", s));
 }
 }  // namespace
 

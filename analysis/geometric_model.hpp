@@ -18,13 +18,13 @@
 namespace confpack::analysis {
 
 struct ConfinementFit {
-  double bulk = 0.0;        ///< intercept: phi_bulk (or Z_bulk) [-]
-  double c = 0.0;           ///< C = -slope [d_L]
-  double bulkError = 0.0;   ///< standard error of the intercept
-  double cError = 0.0;      ///< standard error of C
-  double covariance = 0.0;  ///< cov(bulk, C)
-  double chiSquare = 0.0;   ///< weighted: sum ((y - fit)/sigma)^2; unweighted: sum of squared residuals
-  int dof = 0;              ///< n - 2
+  double bulk = 0.0;              ///< intercept: phi_bulk (or Z_bulk) [-]
+  double c = 0.0;                 ///< C = -slope [d_L]
+  double bulkError = 0.0;         ///< standard error of the intercept
+  double cError = 0.0;            ///< standard error of C
+  double covariance = 0.0;        ///< cov(bulk, C)
+  double chiSquare = 0.0;         ///< weighted: sum ((y - fit)/sigma)^2; unweighted: sum of squared residuals
+  int dof = 0;                    ///< n - 2
   std::optional<double> quality;  ///< Q of the chi^2 (weighted fits with dof > 0)
   bool weighted = false;
   double zeta() const { return bulk != 0.0 ? c / bulk : 0.0; }  ///< C / bulk [d_L]

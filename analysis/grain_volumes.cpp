@@ -22,8 +22,7 @@ double grainSlabVolume(const core::Grain& g, int axis, double lo, double hi) {
   return core::slabVolume(p.placed, axis, lo, hi);
 }
 
-std::vector<double> grainSlabVolumes(const core::Grain& g, int axis, std::span<const double> edges,
-                                     double period) {
+std::vector<double> grainSlabVolumes(const core::Grain& g, int axis, std::span<const double> edges, double period) {
   std::vector<double> out(edges.size() > 1 ? edges.size() - 1 : 0, 0.0);
   if (out.empty()) return out;
   const double reach = g.boundingRadius();
@@ -49,8 +48,8 @@ std::vector<double> grainSlabVolumes(const core::Grain& g, int axis, std::span<c
       while (first < out.size() && shifted[first + 1] < g.position[axis] - reach) ++first;
       while (last > first && shifted[last - 1] > g.position[axis] + reach) --last;
       if (first >= last) continue;
-      const std::vector<double> v = core::slabVolumes(
-          poly->placed, axis, std::span<const double>(shifted.data() + first, last - first + 1));
+      const std::vector<double> v =
+          core::slabVolumes(poly->placed, axis, std::span<const double>(shifted.data() + first, last - first + 1));
       for (std::size_t k = 0; k < v.size(); ++k) out[first + k] += v[k];
     }
   }
@@ -78,8 +77,7 @@ core::ConvexPolytope pinacoidIntersection(const core::PlacedPolyhedron& a, const
 }
 
 double grainOverlapVolume(const core::Grain& a, const core::Grain& b, const core::Vec3& separation) {
-  if (a.shape != b.shape)
-    throw std::invalid_argument("overlap volume of a sphere and a pinacoid is not supported");
+  if (a.shape != b.shape) throw std::invalid_argument("overlap volume of a sphere and a pinacoid is not supported");
   if (a.shape == core::ShapeKind::Sphere) return sphereLensVolume(0.5 * a.size, 0.5 * b.size, separation.norm());
   if (separation.norm() > a.boundingRadius() + b.boundingRadius()) return 0.0;
   const PlacedGrain pa(a), pb(b, a.position + separation);

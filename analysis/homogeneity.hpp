@@ -12,15 +12,15 @@
 namespace confpack::analysis {
 
 struct HomogeneityDef {
-  double layer = 1.0;          ///< layer thickness [d_L], > 0
-  double sizeThreshold = 0.75; ///< large if size > threshold [d_L]
+  double layer = 1.0;           ///< layer thickness [d_L], > 0
+  double sizeThreshold = 0.75;  ///< large if size > threshold [d_L]
   void validate() const;
 };
 
 struct LayerFractions {
-  std::vector<double> position;     ///< layer centres [d_L]
-  std::vector<int> large, small;    ///< grain counts
-  std::vector<double> pLarge, pSmall; ///< fractions (0 for an empty layer)
+  std::vector<double> position;        ///< layer centres [d_L]
+  std::vector<int> large, small;       ///< grain counts
+  std::vector<double> pLarge, pSmall;  ///< fractions (0 for an empty layer)
 };
 
 struct Homogeneity {

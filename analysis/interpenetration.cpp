@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -54,8 +54,10 @@ void forEachCellPiece(const core::ConvexPolytope& poly, const core::Vec3& origin
       core::clip(rest[axis], core::Plane{e, upper}, piece[axis]);
       if (!piece[axis].empty()) {
         index[axis] = i;
-        if (axis == 2) fn(index[0], index[1], index[2], piece[axis]);
-        else self(self, piece[axis], axis + 1);
+        if (axis == 2)
+          fn(index[0], index[1], index[2], piece[axis]);
+        else
+          self(self, piece[axis], axis + 1);
       }
       core::clip(rest[axis], core::Plane{-e, -upper}, next[axis]);
       std::swap(rest[axis], next[axis]);
@@ -67,8 +69,8 @@ void forEachCellPiece(const core::ConvexPolytope& poly, const core::Vec3& origin
 // Lattice bounds (header comment) for the overlapping pinacoid pairs. Returns false (bounds not
 // computed) when more than maxCells cells would be visited.
 bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const InterpenetrationDef& def,
-                   const std::vector<NeighbourPair>& neighbours, const std::vector<OverlapPair>& pairs,
-                   double& lower, double& upper, int& cellCount) {
+                   const std::vector<NeighbourPair>& neighbours, const std::vector<OverlapPair>& pairs, double& lower,
+                   double& upper, int& cellCount) {
   const core::BoxDef& box = packing.box;
   const int nx = std::max(1, static_cast<int>(std::lround(box.lengthX / def.cell)));
   const int ny = std::max(1, static_cast<int>(std::lround(box.width / def.cell)));
@@ -80,7 +82,8 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
   // (cell key, pair) for every cell that holds part of a pair's overlap, sorted by cell.
   auto key = [&](int ix, int iy, int iz) {
     const std::uint64_t wx = static_cast<std::uint64_t>(((ix % nx) + nx) % nx);
-    const std::uint64_t wy = static_cast<std::uint64_t>(box.periodicY ? ((iy % ny) + ny) % ny : std::clamp(iy, 0, ny - 1));
+    const std::uint64_t wy =
+        static_cast<std::uint64_t>(box.periodicY ? ((iy % ny) + ny) % ny : std::clamp(iy, 0, ny - 1));
     return (static_cast<std::uint64_t>(iz) * ny + wy) * nx + wx;
   };
   std::vector<std::pair<std::uint64_t, int>> entries;
@@ -114,7 +117,8 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
     while (end < entries.size() && entries[end].first == entries[begin].first) ++end;
     ++cellId;
     const std::uint64_t k = entries[begin].first;
-    const int ix = static_cast<int>(k % nx), iy = static_cast<int>((k / nx) % ny), iz = static_cast<int>(k / (static_cast<std::uint64_t>(nx) * ny));
+    const int ix = static_cast<int>(k % nx), iy = static_cast<int>((k / nx) % ny),
+              iz = static_cast<int>(k / (static_cast<std::uint64_t>(nx) * ny));
     const core::Vec3 lo = origin + core::Vec3(ix * h.x(), iy * h.y(), iz * h.z());
     const core::Vec3 centre = lo + 0.5 * h;
     candidates.clear();
@@ -143,9 +147,9 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
       }
       volumeOf[g] = 0.0;
       if ((bounds[g].first.array() >= cHi.array()).any() || (bounds[g].second.array() <= cLo.array()).any()) continue;
-      const core::Plane planes[6] = {{core::Vec3::UnitX(), cHi.x()},  {-core::Vec3::UnitX(), -cLo.x()},
-                                     {core::Vec3::UnitY(), cHi.y()},  {-core::Vec3::UnitY(), -cLo.y()},
-                                     {core::Vec3::UnitZ(), cHi.z()},  {-core::Vec3::UnitZ(), -cLo.z()}};
+      const core::Plane planes[6] = {{core::Vec3::UnitX(), cHi.x()}, {-core::Vec3::UnitX(), -cLo.x()},
+                                     {core::Vec3::UnitY(), cHi.y()}, {-core::Vec3::UnitY(), -cLo.y()},
+                                     {core::Vec3::UnitZ(), cHi.z()}, {-core::Vec3::UnitZ(), -cLo.z()}};
       core::clip(polytope[g], planes[0], work[0]);
       int cur = 0;
       for (int pl = 1; pl < 6 && !work[cur].empty(); ++pl) {

@@ -34,8 +34,8 @@
 namespace confpack::analysis {
 
 struct InterpenetrationDef {
-  double cell = 0.05;    ///< lattice cell side [d_L] (SPEC: d_L/20), > 0
-  bool lattice = true;   ///< compute the lattice bounds (pinacoids only)
+  double cell = 0.05;                 ///< lattice cell side [d_L] (SPEC: d_L/20), > 0
+  bool lattice = true;                ///< compute the lattice bounds (pinacoids only)
   std::size_t maxCells = 20'000'000;  ///< cost cap: skip the bounds (null) beyond this many (cell, pair) entries
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field

@@ -62,8 +62,10 @@ std::vector<NeighbourPair> neighbourPairs(const core::Packing& packing, double e
       if (iz < 0 || iz >= nz) continue;
       for (int dy = -1; dy <= 1; ++dy) {
         int iy = c[1] + dy;
-        if (box.periodicY) iy = (iy + ny) % ny;
-        else if (iy < 0 || iy >= ny) continue;
+        if (box.periodicY)
+          iy = (iy + ny) % ny;
+        else if (iy < 0 || iy >= ny)
+          continue;
         for (int dx = -1; dx <= 1; ++dx) {
           const int ix = (c[0] + dx + nx) % nx;
           neighbours.push_back(flat(ix, iy, iz));
@@ -81,9 +83,8 @@ std::vector<NeighbourPair> neighbourPairs(const core::Packing& packing, double e
         if (sep.squaredNorm() <= reach * reach) out.push_back({i, j, sep});
       }
   }
-  std::sort(out.begin(), out.end(), [](const NeighbourPair& a, const NeighbourPair& b) {
-    return a.i != b.i ? a.i < b.i : a.j < b.j;
-  });
+  std::sort(out.begin(), out.end(),
+            [](const NeighbourPair& a, const NeighbourPair& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; });
   return out;
 }
 

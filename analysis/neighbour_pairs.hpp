@@ -9,9 +9,9 @@
 namespace confpack::analysis {
 
 struct NeighbourPair {
-  int i = 0;                                    ///< i < j
+  int i = 0;  ///< i < j
   int j = 0;
-  core::Vec3 separation = core::Vec3::Zero();   ///< minimum image of x_j - x_i [d_L]
+  core::Vec3 separation = core::Vec3::Zero();  ///< minimum image of x_j - x_i [d_L]
 };
 
 /// Pairs with |separation| <= R_i + R_j + extra, R the bounding radii. Assumes the periods are

@@ -18,8 +18,8 @@
 namespace confpack::analysis {
 
 struct NematicOrder {
-  double q00 = 0.0;                         ///< Q00^2, the largest eigenvalue [-]
-  int axis = 0;                             ///< 0: u (length), 1: v (width), 2: w (height)
+  double q00 = 0.0;  ///< Q00^2, the largest eigenvalue [-]
+  int axis = 0;      ///< 0: u (length), 1: v (width), 2: w (height)
   core::Vec3 director = core::Vec3::UnitZ();
   int grains = 0;
 };

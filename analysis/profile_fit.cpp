@@ -31,7 +31,9 @@ void ProfileFitDef::validate() const {
 namespace {
 
 // Parameter vector layout: alpha, phi_b, beta_L, gamma_L, lambda_L [, beta_S, gamma_S, lambda_S].
-int parameterCount(bool bi) { return bi ? 8 : 5; }
+int parameterCount(bool bi) {
+  return bi ? 8 : 5;
+}
 
 ProfileLaw fromVector(const gsl_vector* x, bool bi) {
   ProfileLaw l;
@@ -86,7 +88,8 @@ int jacobian(const gsl_vector* x, void* params, gsl_matrix* jac) {
       const double c = std::cos(arg), s = std::sin(arg), e = std::exp(-y / l.lambda[i]);
       b += l.beta[i] * c * e;
       gsl_matrix_set(jac, k, 2 + 3 * i, a * c * e);
-      gsl_matrix_set(jac, k, 3 + 3 * i, a * l.beta[i] * e * s * std::numbers::pi * (2.0 * y - 1.0) / (l.gamma[i] * l.gamma[i]));
+      gsl_matrix_set(jac, k, 3 + 3 * i,
+                     a * l.beta[i] * e * s * std::numbers::pi * (2.0 * y - 1.0) / (l.gamma[i] * l.gamma[i]));
       gsl_matrix_set(jac, k, 4 + 3 * i, a * l.beta[i] * c * e * y / (l.lambda[i] * l.lambda[i]));
     }
     gsl_matrix_set(jac, k, 0, -(y / (l.alpha * l.alpha)) * ea * b);
@@ -134,7 +137,8 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   toVector(start, x0);
   int info = 0;
   int status = gsl_multifit_nlinear_init(x0, &fdf, w);
-  if (status == GSL_SUCCESS) status = gsl_multifit_nlinear_driver(def.maxIterations, 1e-10, 1e-10, 1e-10, nullptr, nullptr, &info, w);
+  if (status == GSL_SUCCESS)
+    status = gsl_multifit_nlinear_driver(def.maxIterations, 1e-10, 1e-10, 1e-10, nullptr, nullptr, &info, w);
   ProfileFit& f = at.fit;
   f.iterations = static_cast<int>(gsl_multifit_nlinear_niter(w));
   const gsl_vector* x = gsl_multifit_nlinear_position(w);
@@ -161,8 +165,10 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
     const ProfileLaw& l = f.law;
     bool physical = l.alpha > 0.0 && l.gamma[0] > 0.0 && l.lambda[0] > 0.0 && std::isfinite(chisq);
     if (bi) physical = physical && l.gamma[1] > 0.0 && l.lambda[1] > 0.0;
-    if (!physical) f.reason = "non-physical parameters (alpha, gamma or lambda <= 0)";
-    else if (!finite) f.reason = "singular covariance (parameters not determined by the data)";
+    if (!physical)
+      f.reason = "non-physical parameters (alpha, gamma or lambda <= 0)";
+    else if (!finite)
+      f.reason = "singular covariance (parameters not determined by the data)";
     else {
       f.ok = true;
       at.valid = true;

@@ -38,19 +38,19 @@ struct ProfileLaw {
 struct ProfileFitDef {
   bool bidisperse = false;  ///< fit the S term too
   int maxIterations = 500;
-  double yMin = 0.0;        ///< fit only points with y > yMin [d_L]
+  double yMin = 0.0;  ///< fit only points with y > yMin [d_L]
   void validate() const;
 };
 
 struct ProfileFit {
   bool ok = false;
-  std::string reason;        ///< why not ok (empty if ok)
-  ProfileLaw law;            ///< best-fit parameters
-  ProfileLaw error;          ///< standard errors, same layout
-  double chiSquare = 0.0;    ///< sum of squared residuals
-  int dof = 0;               ///< points - parameters
+  std::string reason;      ///< why not ok (empty if ok)
+  ProfileLaw law;          ///< best-fit parameters
+  ProfileLaw error;        ///< standard errors, same layout
+  double chiSquare = 0.0;  ///< sum of squared residuals
+  int dof = 0;             ///< points - parameters
   int iterations = 0;
-  double rms = 0.0;          ///< sqrt(chi^2 / dof)
+  double rms = 0.0;  ///< sqrt(chi^2 / dof)
 };
 
 /// Fits the law to (y, phi). Does not throw on a failed fit: ok = false with a reason (too few

@@ -23,9 +23,9 @@
 namespace confpack::analysis {
 
 struct SolidFraction {
-  double phi = 0.0;          ///< grain volume / region volume [-]; 0 for an empty region
-  double grainVolume = 0.0;  ///< grain material inside the slab [d_L^3]
-  double regionVolume = 0.0; ///< L_x W (zHigh - zLow) [d_L^3]
+  double phi = 0.0;           ///< grain volume / region volume [-]; 0 for an empty region
+  double grainVolume = 0.0;   ///< grain material inside the slab [d_L^3]
+  double regionVolume = 0.0;  ///< L_x W (zHigh - zLow) [d_L^3]
 };
 
 /// Solid fraction of the slab zLow < z < zHigh of `region` (definition above).

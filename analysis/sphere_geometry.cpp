@@ -14,7 +14,9 @@ double volumeBelow(double r, double u) {
 }
 }  // namespace
 
-double sphereVolume(double radius) { return 4.0 / 3.0 * std::numbers::pi * radius * radius * radius; }
+double sphereVolume(double radius) {
+  return 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
+}
 
 double sphereSlabVolume(double radius, double centre, double lo, double hi) {
   if (!(hi > lo) || radius <= 0.0) return 0.0;

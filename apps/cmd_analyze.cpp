@@ -62,8 +62,8 @@ void runAnalyze(AnalyzeState& st) {
     j["seed"] = nullptr;
     j["version"] = CONFPACK_VERSION;
     j["analysis_options"] = optionsJson(st.options);
-    const nlohmann::json metadata = {{"source", st.file.string()}, {"seed", nullptr}, {"backend", nullptr},
-                                     {"version", CONFPACK_VERSION}};
+    const nlohmann::json metadata = {
+        {"source", st.file.string()}, {"seed", nullptr}, {"backend", nullptr}, {"version", CONFPACK_VERSION}};
     analysis::writeProfiles(output.dir(), result, metadata);
     writeJson(output.dir() / "result.json", j);
     output.commit();
@@ -82,7 +82,8 @@ void runAnalyze(AnalyzeState& st) {
 
 void registerAnalyze(CLI::App& app) {
   auto st = std::make_shared<AnalyzeState>();
-  auto* sub = app.add_subcommand("analyze", "Analyse a packing file (SPEC 8.2): writes DIR/result.json and CSV profiles");
+  auto* sub =
+      app.add_subcommand("analyze", "Analyse a packing file (SPEC 8.2): writes DIR/result.json and CSV profiles");
   sub->add_option("file", st->file, "Packing file (confpack-packing JSON)")->required();
   sub->add_option("--out", st->out, "Output directory (created; written all or nothing)")->required();
   sub->add_flag("--quiet,-q", st->quiet, "No summary line");
@@ -93,7 +94,9 @@ void registerAnalyze(CLI::App& app) {
   sub->add_option("--surface-cell", o.region.cellSize, "Free surface: side of the horizontal grid cells [d_L]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  sub->add_option("--slice", o.profile.slice, "phi(y) slice thickness [d_L]")->capture_default_str()->check(CLI::PositiveNumber);
+  sub->add_option("--slice", o.profile.slice, "phi(y) slice thickness [d_L]")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   sub->add_option("--lattice-cell", o.interpenetration.cell, "Interpenetration lattice cell side [d_L]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

@@ -43,7 +43,8 @@ TEST_CASE("sphere lens volume", "[analysis][sphere]") {
   const double r1 = 0.5, r2 = 0.3, dd = 0.6;
   const double x = (dd * dd + r1 * r1 - r2 * r2) / (2 * dd);
   const double h1 = r1 - x, h2 = r2 - (dd - x);
-  const double expected = std::numbers::pi * h1 * h1 * (3 * r1 - h1) / 3 + std::numbers::pi * h2 * h2 * (3 * r2 - h2) / 3;
+  const double expected =
+      std::numbers::pi * h1 * h1 * (3 * r1 - h1) / 3 + std::numbers::pi * h2 * h2 * (3 * r2 - h2) / 3;
   CHECK(analysis::sphereLensVolume(r1, r2, dd) == Approx(expected).epsilon(1e-13));
 }
 

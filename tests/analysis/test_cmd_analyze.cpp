@@ -37,7 +37,8 @@ TEST_CASE("confpack analyze writes result.json and profiles", "[analysis][cli]")
   p.contacts = std::vector<core::Contact>{c};
   core::writePacking(p, dir / "packing.json");
 
-  REQUIRE(run("analyze \"" + (dir / "packing.json").string() + "\" --out \"" + (dir / "res").string() + "\" --quiet") == 0);
+  REQUIRE(run("analyze \"" + (dir / "packing.json").string() + "\" --out \"" + (dir / "res").string() + "\" --quiet") ==
+          0);
   std::ifstream in(dir / "res" / "result.json");
   const nlohmann::json j = nlohmann::json::parse(in);
   CHECK(j["n_grains"] == 200);
@@ -57,9 +58,11 @@ TEST_CASE("confpack analyze writes result.json and profiles", "[analysis][cli]")
   }
   CHECK(run("analyze \"" + (dir / "bad.json").string() + "\" --out \"" + (dir / "bad_out").string() + "\"") == 2);
   CHECK_FALSE(fs::exists(dir / "bad_out"));
-  CHECK(run("analyze \"" + (dir / "missing.json").string() + "\" --out \"" + (dir / "missing_out").string() + "\"") == 2);
+  CHECK(run("analyze \"" + (dir / "missing.json").string() + "\" --out \"" + (dir / "missing_out").string() + "\"") ==
+        2);
   CHECK_FALSE(fs::exists(dir / "missing_out"));
-  CHECK(run("analyze \"" + (dir / "packing.json").string() + "\" --out \"" + (dir / "neg").string() + "\" --slice -1") == 2);
+  CHECK(run("analyze \"" + (dir / "packing.json").string() + "\" --out \"" + (dir / "neg").string() +
+            "\" --slice -1") == 2);
   CHECK_FALSE(fs::exists(dir / "neg"));
   fs::remove_all(dir);
 }

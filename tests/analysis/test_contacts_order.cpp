@@ -107,7 +107,8 @@ TEST_CASE("contact types of hand-placed pinacoids", "[analysis][coordination][pi
   }
   SECTION("crossed ridges: edge-edge, simple") {
     p.grains.push_back(pinacoid(core::Vec3(3, 3, 2.0), core::Quat::Identity()));
-    p.grains.push_back(pinacoid(core::Vec3(3, 3, 3.0), core::Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, core::Vec3::UnitZ()))));
+    p.grains.push_back(
+        pinacoid(core::Vec3(3, 3, 3.0), core::Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, core::Vec3::UnitZ()))));
     CHECK(onlyType(p, false) == core::ContactType::Simple);
   }
   SECTION("face on the opposite face of a copy: face-face, triple") {
@@ -171,7 +172,8 @@ TEST_CASE("fabric of a simple cubic lattice", "[analysis][fabric]") {
 }
 
 TEST_CASE("nematic order: aligned and random pinacoids", "[analysis][nematic]") {
-  std::vector<core::Mat3> aligned(50, core::Quat(Eigen::AngleAxisd(0.4, core::Vec3(1, 2, 3).normalized())).toRotationMatrix());
+  std::vector<core::Mat3> aligned(
+      50, core::Quat(Eigen::AngleAxisd(0.4, core::Vec3(1, 2, 3).normalized())).toRotationMatrix());
   const auto a = analysis::nematicOrder(aligned);
   CHECK(a.q00 == Approx(1.0));
   core::Rng rng(11, core::StreamId::Test);

@@ -145,7 +145,8 @@ TEST_CASE("pinacoid overlap: exact volume inside the lattice bounds", "[analysis
   p.grains.push_back(pinacoid(core::Vec3(3.0, 2.0, 5.0), q0));
   p.grains.push_back(pinacoid(core::Vec3(3.05, 2.93, 5.02), core::Quat(Eigen::AngleAxisd(0.3, core::Vec3::UnitZ()))));
   const analysis::BulkRegion region{10.0, 3.0, 7.0};
-  const double exactPair = analysis::grainOverlapVolume(p.grains[0], p.grains[1], p.grains[1].position - p.grains[0].position);
+  const double exactPair =
+      analysis::grainOverlapVolume(p.grains[0], p.grains[1], p.grains[1].position - p.grains[0].position);
   REQUIRE(exactPair > 1e-4);
   double previousGap = 1e9;
   for (double cell : {0.1, 0.05, 0.025}) {
