@@ -4,18 +4,28 @@
 // btDispatcherInfo and the persistent manifolds. Every key of the options JSON is a field below;
 // unknown keys are refused so that a typo never silently runs with a default.
 //
-// The defaults aim at low interpenetration in dense piles under gravity with dt ~ 1e-3 t0
-// (measured numbers in the comments, from tests/backends and the conformance suite).
+// The defaults aim at low interpenetration in dense piles under gravity with dt ~ 1e-3 t0.
+// Measured with them (tests/backends, the conformance suite, small piles):
+// - sphere contacts start 0.02 d before touching, so spheres stop at the surface: largest
+//   overlap ever 1.5e-7 d while a 163-sphere deposit compacts;
+// - polyhedron contacts (Bullet's SAT + clipping) appear only once hulls overlap: impacts
+//   overlap by up to ~1e-2 d (the approach per step), removed by the erp bias within a few
+//   steps; at rest the mean overlap is ~1e-7 d and the largest ~1e-5 d (60 pinacoids);
+// - with those overlaps below 0.02 d the split impulse never engages; a threshold of 0 (all
+//   corrections by split impulse) left 20x larger resting overlaps in the same pinacoid pile;
+// - statics: 10-bead column 7.7e-7 (dt 1e-3) and 1.1e-6 (dt 4e-3) relative error on k m g,
+//   settled pile floor reaction 8.7e-9 of the weight, resting sphere / pinacoid m g to 1e-16 /
+//   3e-11; frictional wall (rolling and sliding spheres) to 1e-13.
 #include <nlohmann/json.hpp>
 
 namespace confpack::bullet {
 
 /// Options of the bullet backend. JSON keys in brackets.
 struct BulletSettings {
-  /// ["iterations"] sequential-impulse sweeps per step (btContactSolverInfo::m_numIterations)
-  /// [-], >= 1. Bullet's default of 10 leaves a column of beads visibly elastic (the bottom
-  /// contact carries only part of the weight); the force chains of a 16 d deep pile need
-  /// hundreds.
+  /// ["iterations"] cap on the sequential-impulse sweeps per step
+  /// (btContactSolverInfo::m_numIterations) [-], >= 1. Bullet's default of 10 leaves a column of
+  /// beads elastic; a 91-sphere pile compacting in `confpack run` used 187 sweeps per step on
+  /// average with this cap (the early exit below usually ends them sooner once settled).
   int iterations = 200;
   /// ["residual_threshold"] early exit: the sweeps stop when the largest velocity correction of
   /// one sweep, relative to the velocity gravity adds in one step (|g| dt), falls below this
