@@ -44,10 +44,16 @@ using Clock = std::chrono::steady_clock;
 using core::Phase;
 using core::Vec3;
 
-btVector3 toBt(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+btVector3 toBt(const Vec3& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Vec3 fromBt(const btVector3& v) {
+  return {v.x(), v.y(), v.z()};
+}
 
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // ---- Material rule ---------------------------------------------------------------------------
 // Grains carry their index as user index (>= 0), walls their negative WallId and their own
@@ -113,10 +119,12 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
       btPersistentManifold* m = manifolds[i];
       bool frictionless = skipZeroFriction;
       for (int k = 0; frictionless && k < m->getNumContacts(); ++k)
-        frictionless = m->getContactPoint(k).m_combinedFriction == 0.0 &&
-                       m->getContactPoint(k).m_combinedRollingFriction == 0.0;
-      if (frictionless) convertFrictionlessContact(m, info);
-      else convertContact(m, info);
+        frictionless =
+            m->getContactPoint(k).m_combinedFriction == 0.0 && m->getContactPoint(k).m_combinedRollingFriction == 0.0;
+      if (frictionless)
+        convertFrictionlessContact(m, info);
+      else
+        convertContact(m, info);
     }
   }
 
@@ -153,8 +161,9 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
     (*profile)[Phase::PrepareContacts] += secondsSince(t0);
     return r;
   }
-  btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
-                                             int numManifolds, btTypedConstraint** constraints, int numConstraints,
+  btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
+                                             btPersistentManifold** manifolds, int numManifolds,
+                                             btTypedConstraint** constraints, int numConstraints,
                                              const btContactSolverInfo& info, btIDebugDraw* debugDrawer) override {
     // Split-impulse (position) sweeps, then velocity sweeps.
     const auto t0 = Clock::now();
@@ -549,7 +558,8 @@ void BulletBackend::collidePeriodicPairs() {
     b->setWorldTransform(image);
     btCollisionObjectWrapper wa(nullptr, a->getCollisionShape(), a, a->getWorldTransform(), -1, -1);
     btCollisionObjectWrapper wb(nullptr, b->getCollisionShape(), b, b->getWorldTransform(), -1, -1);
-    if (!pc.algorithm) pc.algorithm = dispatcher_->findAlgorithm(&wa, &wb, pc.manifold.get(), BT_CONTACT_POINT_ALGORITHMS);
+    if (!pc.algorithm)
+      pc.algorithm = dispatcher_->findAlgorithm(&wa, &wb, pc.manifold.get(), BT_CONTACT_POINT_ALGORITHMS);
     btManifoldResult result(&wa, &wb);
     result.setPersistentManifold(pc.manifold.get());
     pc.algorithm->processCollision(&wa, &wb, dispatch, &result);
@@ -693,7 +703,8 @@ void BulletBackend::readBack(double dt) {
       // Friction impulse on body0 is lat1 dir1 + lat2 dir2 (the solver's m_contactNormal1).
       if (core::isWall(c.b) && cp.m_combinedFriction > 0.0) {
         Vec3 onBody0 = cp.m_appliedImpulseLateral1 * fromBt(cp.m_lateralFrictionDir1);
-        if (settings_.frictionDirections == 2) onBody0 += cp.m_appliedImpulseLateral2 * fromBt(cp.m_lateralFrictionDir2);
+        if (settings_.frictionDirections == 2)
+          onBody0 += cp.m_appliedImpulseLateral2 * fromBt(cp.m_lateralFrictionDir2);
         p.tangentForce = (swapped ? onBody0 : Vec3(-onBody0)) / dt;
       }
       c.points.push_back(p);

@@ -103,8 +103,10 @@ std::vector<ImagePair> PeriodicPairFinder::find(const std::vector<core::Vec3>& p
         if (jz < 0 || jz >= nz) continue;
         for (int dy = -1; dy <= 1; ++dy) {
           int jy = iy + dy;
-          if (box_.periodicY) jy = (jy + ny) % ny;
-          else if (jy < 0 || jy >= ny) continue;
+          if (box_.periodicY)
+            jy = (jy + ny) % ny;
+          else if (jy < 0 || jy >= ny)
+            continue;
           for (int dx = -1; dx <= 1; ++dx) {
             const int jx = (ix + dx + nx) % nx;
             const std::size_t c = flat(jx, jy, jz);

@@ -12,9 +12,9 @@ namespace confpack::bullet {
 
 /// Grain a touches (within the reach) the image of grain b at position_b + shift.
 struct ImagePair {
-  int a = 0;                      ///< a < b
+  int a = 0;  ///< a < b
   int b = 0;
-  int shiftX = 0;                 ///< shift = (shiftX L_x, shiftY W, 0)
+  int shiftX = 0;  ///< shift = (shiftX L_x, shiftY W, 0)
   int shiftY = 0;
   core::Vec3 shift = core::Vec3::Zero();  ///< [d_L]
 };

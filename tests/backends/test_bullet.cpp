@@ -39,7 +39,7 @@ core::SystemDef boxSystem(double lengthX, double width, bool periodicY, double m
 }
 
 std::unique_ptr<core::ContactBackend> makeBullet(const core::SystemDef& s,
-                                             const nlohmann::json& options = nlohmann::json::object()) {
+                                                 const nlohmann::json& options = nlohmann::json::object()) {
   return backends::makeBackend("bullet", s, options);
 }
 
@@ -320,7 +320,7 @@ namespace {
 /// Runs the same little system placed at `origin` in a box, returns per-grain unwrapped
 /// displacement histories' end states and the contact forces by pair.
 struct Outcome {
-  std::vector<Vec3> displacement;          ///< minimum-image displacement from the start [d_L]
+  std::vector<Vec3> displacement;               ///< minimum-image displacement from the start [d_L]
   std::map<std::pair<int, int>, double> force;  ///< normal force by pair [m g]
   std::map<std::pair<int, int>, Vec3> normal;
   std::map<std::pair<int, int>, std::vector<Vec3>> points;  ///< relative to the placement origin
@@ -350,8 +350,10 @@ Outcome runPlaced(const core::SystemDef& proto, const Vec3& origin, int steps) {
 }
 
 void requireSame(const Outcome& interior, const Outcome& periodic, double tol) {
-  for (const auto& [pair, f] : interior.force) UNSCOPED_INFO("interior " << pair.first << " " << pair.second << " " << f);
-  for (const auto& [pair, f] : periodic.force) UNSCOPED_INFO("periodic " << pair.first << " " << pair.second << " " << f);
+  for (const auto& [pair, f] : interior.force)
+    UNSCOPED_INFO("interior " << pair.first << " " << pair.second << " " << f);
+  for (const auto& [pair, f] : periodic.force)
+    UNSCOPED_INFO("periodic " << pair.first << " " << pair.second << " " << f);
   REQUIRE(interior.force.size() == periodic.force.size());
   for (const auto& [pair, f] : interior.force) {
     INFO("pair " << pair.first << " " << pair.second);
@@ -469,8 +471,8 @@ TEST_CASE("bullet long run: a small pile only loses energy, no grain is lost or 
         for (int i = 0; i < 4; ++i) {
           // Sizes in [0.9, 0.95] and +-0.02 jitter on a unit lattice: no initial overlap.
           const double d = 0.9 + 0.05 * rng.uniform();
-          s.grains.push_back(sphere(d, {0.5 + i + 0.04 * (rng.uniform() - 0.5), 0.5 + j + 0.04 * (rng.uniform() - 0.5),
-                                        0.6 + 1.2 * k}));
+          s.grains.push_back(sphere(
+              d, {0.5 + i + 0.04 * (rng.uniform() - 0.5), 0.5 + j + 0.04 * (rng.uniform() - 0.5), 0.6 + 1.2 * k}));
         }
     auto b = makeBullet(s);
     auto energy = [&](const std::vector<core::BodyState>& st) {
@@ -528,8 +530,8 @@ TEST_CASE("bullet is deterministic, and skipping zero-friction rows changes noth
   for (int k = 0; k < 2; ++k)
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 4; ++i)
-        s.grains.push_back(sphere(0.9 + 0.05 * rng.uniform(),
-                                  {0.5 + i + 0.04 * (rng.uniform() - 0.5), 0.48 + j, 0.6 + 1.2 * k}));
+        s.grains.push_back(
+            sphere(0.9 + 0.05 * rng.uniform(), {0.5 + i + 0.04 * (rng.uniform() - 0.5), 0.48 + j, 0.6 + 1.2 * k}));
   auto trajectory = [&](const nlohmann::json& options) {
     auto b = makeBullet(s, options);
     double friction = 0.0;
