@@ -39,6 +39,7 @@ Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
 
   a.region = bulkRegion(packing, options.region);
   a.solid = solidFraction(packing, a.region);
+  if (options.voronoi) a.voronoi = voronoiSolidFraction(packing, a.region);
   a.phiProfile = solidFractionProfile(packing, a.region, options.profile);
   if (packing.box.periodicY) {
     a.profileFit.reason = "biperiodic box: no wall profile";
@@ -94,6 +95,7 @@ nlohmann::json toJson(const Analysis& a) {
                       {"volume", a.solid.regionVolume},
                       {"grains", a.coordination.bulkGrains}};
   j["solid_fraction"] = a.region.empty() ? json(nullptr) : json(a.solid.phi);
+  j["solid_fraction_voronoi"] = a.voronoi ? json(a.voronoi->phi) : json(nullptr);
 
   const Coordination& c = a.coordination;
   const bool haveBulk = c.bulkGrains > 0;

@@ -26,6 +26,7 @@
 #include "analysis/nematic.hpp"
 #include "analysis/profile_fit.hpp"
 #include "analysis/solid_fraction.hpp"
+#include "analysis/voronoi.hpp"
 
 namespace confpack::analysis {
 
@@ -39,6 +40,7 @@ struct AnalysisOptions {
   HomogeneityDef homogeneity{};
   ProfileFitDef profileFit{};                       ///< `bidisperse` is decided from the grains
   double boundaryDistance = 2.0;                    ///< nematic boundary layer thickness [d_L]
+  bool voronoi = true;                              ///< radical Voronoi check of sphere packings
   bool equilibrium = true;                          ///< evaluate SPEC 6.1 (zero velocities) when forces are present
   core::Vec3 gravity = core::Vec3(0.0, 0.0, -1.0);  ///< [g]
   double density = 1.0;                             ///< rho
@@ -54,6 +56,7 @@ struct Analysis {
   bool bidisperse = false;
   BulkRegion region;
   SolidFraction solid;
+  std::optional<VoronoiFraction> voronoi;  ///< radical Voronoi check (spheres with voro++)
   SolidFractionProfile phiProfile;
   ProfileFit profileFit;                   ///< ok = false with a reason when absent
   std::optional<double> profileIntegralC;  ///< 2 int (phi_bulk - phi(y)) dy with the fitted phi_bulk
