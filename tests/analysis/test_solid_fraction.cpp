@@ -187,3 +187,27 @@ TEST_CASE("radical Voronoi check of lattice solid fractions", "[analysis][phi][v
   const double loss = (1.0 - 0.8 * 0.8 * 0.8) * std::numbers::pi / 6;
   CHECK(p->phi == Approx((150 * std::numbers::pi / 6 - loss) / 150.0).epsilon(1e-6));
 }
+
+TEST_CASE("pinacoid overlap across the periodic boundary gives the same answer", "[analysis][interpenetration]") {
+  core::Packing p;
+  p.box.lengthX = 6;
+  p.box.width = 4;
+  p.box.periodicY = true;
+  const core::Quat q1(Eigen::AngleAxisd(0.7, core::Vec3(1, 2, 0.5).normalized()));
+  p.grains.push_back(pinacoid(core::Vec3(3.0, 2.0, 5.0), core::Quat::Identity()));
+  p.grains.push_back(pinacoid(core::Vec3(3.4, 2.5, 5.3), q1));
+  const analysis::BulkRegion region{10.0, 3.0, 7.0};
+  const auto inside = analysis::interpenetration(p, region);
+  REQUIRE(inside.overlappingPairs == 1);
+  // Shift by whole numbers of cells so that the overlap straddles x = 0 and y = 0, then wrap.
+  core::Packing q = p;
+  for (auto& g : q.grains) g.position = q.box.wrap(g.position - core::Vec3(3.2, 2.25, 0.0));
+  REQUIRE(q.grains[0].position.x() > 5.0);
+  REQUIRE(q.grains[1].position.x() < 1.0);
+  const auto across = analysis::interpenetration(q, region);
+  CHECK(across.overlappingPairs == 1);
+  CHECK(across.exactPercent == Approx(inside.exactPercent).epsilon(1e-10));
+  CHECK(*across.latticeMinPercent == Approx(*inside.latticeMinPercent).epsilon(1e-8));
+  CHECK(*across.latticeMaxPercent == Approx(*inside.latticeMaxPercent).epsilon(1e-8));
+  CHECK(across.latticeCells == inside.latticeCells);
+}
