@@ -20,10 +20,6 @@ namespace confpack::app {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-/// A finite real in an interval, with a message a user can act on. CLI11's own range validators
-/// print their bounds as 300-digit numbers and accept "inf", hence these.
 CLI::Validator realIn(double lo, double hi, bool loOpen, bool hiOpen, const std::string& what,
                       const std::string& typeName) {
   return CLI::Validator(
@@ -39,18 +35,22 @@ CLI::Validator realIn(double lo, double hi, bool loOpen, bool hiOpen, const std:
       typeName);
 }
 
-const CLI::Validator kPositive = realIn(0.0, HUGE_VAL, true, true, "a positive number", "POSITIVE");
-const CLI::Validator kNonNegative = realIn(0.0, HUGE_VAL, false, true, "a number >= 0", "NON-NEGATIVE");
+CLI::Validator positiveNumber() {
+  return realIn(0.0, HUGE_VAL, true, true, "a positive number", "POSITIVE");
+}
 
-/// Digits only: CLI11 would otherwise wrap "-1" into 2^64 - 1 for an unsigned seed.
-const CLI::Validator kUnsigned(
-    [](std::string& text) -> std::string {
-      const bool ok = !text.empty() && text.size() <= 19 && text.find_first_not_of("0123456789") == std::string::npos;
-      return ok ? std::string() : fmt::format("must be an integer in [0, 10^19) (got '{}')", text);
-    },
-    "UINT");
+CLI::Validator nonNegativeNumber() {
+  return realIn(0.0, HUGE_VAL, false, true, "a number >= 0", "NON-NEGATIVE");
+}
 
-}  // namespace
+CLI::Validator unsignedInteger() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        const bool ok = !text.empty() && text.size() <= 19 && text.find_first_not_of("0123456789") == std::string::npos;
+        return ok ? std::string() : fmt::format("must be an integer in [0, 10^19) (got '{}')", text);
+      },
+      "UINT");
+}
 
 void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired) {
   // A string checked against the names, then converted: the help then reads {sphere,pinacoid}.
@@ -58,13 +58,15 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
          "--shape", [&cfg](const std::string& s) { cfg.population.shape = core::shapeFromString(s); }, "Grain shape")
       ->check(CLI::IsMember({"sphere", "pinacoid"}))
       ->default_str(std::string(core::toString(cfg.population.shape)));
-  sub.add_option("--length-x", cfg.box.lengthX, "Period L_x along x [d_L]")->check(kPositive)->capture_default_str();
+  sub.add_option("--length-x", cfg.box.lengthX, "Period L_x along x [d_L]")
+      ->check(positiveNumber())
+      ->capture_default_str();
   sub.add_option("--width", cfg.box.width, "Gap W between the side walls, or period along y with --periodic-y [d_L]")
-      ->check(kPositive)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub.add_flag("--periodic-y", cfg.box.periodicY, "Periodic along y instead of side walls (unconfined reference)");
   sub.add_option("--height", cfg.box.height, "Target final packing height h [d_L]")
-      ->check(kPositive)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub.add_option("--small-fraction", cfg.population.smallFraction,
                  "x_S, volume percentage of small grains (d_S = d_L/2)")
@@ -72,13 +74,13 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
       ->capture_default_str();
   sub.add_option("--wall-friction", cfg.box.wallFriction,
                  "Coulomb friction mu_w of the side walls (floor frictionless)")
-      ->check(kNonNegative)
+      ->check(nonNegativeNumber())
       ->capture_default_str();
   std::vector<std::string> names;
   for (auto n : backends::backendNames()) names.emplace_back(n);
   sub.add_option("--backend", cfg.backend, "Contact backend")->check(CLI::IsMember(names))->capture_default_str();
   sub.add_option("--seed", cfg.seed, "Seed of every random stream (a run is a function of it)")
-      ->check(kUnsigned)
+      ->check(unsignedInteger())
       ->capture_default_str();
   auto* out = sub.add_option("--out", opts.out, "Output directory (created; written all or nothing)")->type_name("DIR");
   if (outRequired) out->required();
@@ -89,10 +91,10 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
   auto* quiet = sub.add_flag("-q,--quiet", opts.quiet, "No progress output");
   sub.add_flag("-v,--verbose", opts.verbosity, "More detail on stderr (repeatable)")->excludes(quiet);
   sub.add_option("--pinacoid-G", cfg.population.pinacoid.widthRatio, "Pinacoid width G / L")
-      ->check(kPositive)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub.add_option("--pinacoid-E", cfg.population.pinacoid.heightRatio, "Pinacoid height E / L")
-      ->check(kPositive)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub.add_option("--pinacoid-alpha", cfg.population.pinacoid.alphaDeg,
                  "Inclination of the pinacoid's triangular faces [degrees], in (0, 90)")

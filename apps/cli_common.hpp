@@ -15,7 +15,8 @@
 
 namespace CLI {
 class App;
-}
+class Validator;
+}  // namespace CLI
 
 namespace confpack::app {
 
@@ -36,6 +37,15 @@ struct CommonOptions {
 /// validators so that a bad value is refused by the parser, before any work. The defaults shown
 /// by --help are those of the core definition structs.
 void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired = true);
+
+/// Validators for real-valued flags with one readable message ("--width: must be a positive number
+/// (got -3)"). CLI11's PositiveNumber/Range print their bounds as 300-digit numbers and accept
+/// "inf"; use these instead. realIn: a finite real in [lo, hi] (open ends when loOpen/hiOpen).
+CLI::Validator realIn(double lo, double hi, bool loOpen, bool hiOpen, const std::string& what,
+                      const std::string& typeName);
+CLI::Validator positiveNumber();     ///< finite, > 0
+CLI::Validator nonNegativeNumber();  ///< finite, >= 0
+CLI::Validator unsignedInteger();    ///< digits only (CLI11 wraps "-1" to 2^64 - 1 for unsigned)
 
 /// The CLI11 failure message of `confpack`: one line, "confpack: error: <what> (see --help)".
 std::string oneLineFailure(const CLI::App* app, const std::exception& e);
