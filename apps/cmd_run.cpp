@@ -20,6 +20,11 @@ namespace confpack::app {
 
 namespace {
 
+/// A result number for the summary line; "n/a" when it does not apply (null), e.g. an empty bulk.
+std::string number(const nlohmann::json& v, const char* format = "{:.4f}") {
+  return v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>()) : std::string("n/a");
+}
+
 struct RunState {
   core::RunConfig cfg;
   CommonOptions opts;
@@ -43,11 +48,10 @@ void runRun(RunState& st) {
     progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
     writeJson(output.dir() / "config.json", result["config"]);
     output.commit();
-    const auto& coord = result["coordination"];
-    fmt::print("run: {} {} grains, phi = {:.4f}, Z = {:.3f}, interpenetration {:.2e} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
-               cfg.backend, result["n_grains"].get<int>(), result["solid_fraction"].get<double>(),
-               coord["Z"].is_number() ? coord["Z"].get<double>() : 0.0,
-               result["interpenetration_percent"]["exact"].get<double>(),
+    fmt::print("run: {} {} grains, phi = {}, Z = {}, interpenetration {} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
+               cfg.backend, result["n_grains"].get<int>(), number(result["solid_fraction"]),
+               number(result["coordination"]["Z"], "{:.3f}"),
+               number(result["interpenetration_percent"]["exact"], "{:.2e}"),
                result["equilibrium"]["reached"].get<bool>() ? "reached" : "NOT reached",
                result["timing"]["steps"].get<long>(), result["timing"]["wall_s"].get<double>(),
                output.target().string());
