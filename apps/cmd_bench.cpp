@@ -49,18 +49,18 @@ void registerBench(CLI::App& app) {
   sub->add_option("--case", st->cases, "Cases to run: msp-w10, mpp-w10, scaling (default: all)");
   sub->add_option("--out", st->out, "Output file")->capture_default_str();
   sub->add_option("--time-limit", st->def.timeLimit, "Simulated time limit of each compaction [t0]")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub->add_option("--scale", st->def.scale, "Multiplies the box length and width (0.5 = a quarter of the grains)")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub->add_option("--scaling-steps", st->def.scalingSteps, "Steps timed per scaling point")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub->add_option("--scaling-sizes", st->def.scalingSizes, "Grain counts of the scaling series")
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   sub->add_option("--seed", st->def.seed, "Seed of the deposits")->capture_default_str();
-  sub->add_option("--threads", st->def.threads, "Worker threads")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   sub->callback([st] { runBenchCommand(*st); });
 }

@@ -66,18 +66,18 @@ void registerRun(CLI::App& app) {
       "run", "Deposit, compact with a backend until equilibrium (or the time limit), analyse, write DIR/result.json");
   addRunConfigOptions(*sub, st->cfg, st->opts);
   sub->add_option("--dt", st->cfg.compaction.dt, "Time step [t0]; 0 = SPEC 4 rule from the deposit's drop")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonNegativeNumber())
       ->capture_default_str();
   sub->add_option("--time-limit", st->cfg.compaction.timeLimit,
                   "Simulated time after which the run stops, reported as not equilibrated [t0]")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub->add_option("--check-interval", st->cfg.compaction.checkInterval, "Steps between equilibrium checks")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveNumber())
       ->capture_default_str();
   sub->add_option("--frame-interval", st->cfg.compaction.frameInterval,
                   "Steps between ParaView frames (0 = first and last only)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonNegativeNumber())
       ->capture_default_str();
   sub->add_option("--grains", st->cfg.deposition.grainCount,
                   "Number of grains (0 = from --height and the expected solid fraction)")
