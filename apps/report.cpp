@@ -272,6 +272,7 @@ struct Series {
   bool dashed = false;  // second backend
   bool lines = true;
   std::vector<std::array<double, 3>> points;  // x, y, err
+  bool markers = true;  // false: a plain line (dense profiles)
 };
 
 struct Plot {
@@ -324,7 +325,7 @@ class FigureWriter {
       if (hasErr)
         terms.push_back(fmt::format("'{}.csv' skip 1 using {}:3:4 with yerrorbars {} notitle", p.stem, sel, style));
       terms.push_back(fmt::format("'{}.csv' skip 1 using {}:3 with {} {} title \"{}\" noenhanced", p.stem, sel,
-                                  s.lines ? "linespoints" : "points", style, s.name));
+                                  !s.markers ? "lines" : s.lines ? "linespoints" : "points", style, s.name));
     }
     for (const std::string& f : p.functions) terms.push_back(f);
     gp << "plot " << (terms.empty() ? std::string("NaN notitle") : "\\\n  ");
@@ -772,7 +773,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
       if (!byXs.series.empty()) doc.figure(byXs.stem, byXs.caption, figures.draw(byXs));
       if (!originRows.empty()) {
         doc.para("Linear fit through the origin lambda_L = k C per backend (SPEC 6.6):");
-        doc.table({"backend", "series", "k = lambda_L / C", "weights"}, originRows);
+        doc.table({"backend", "points", "k = lambda_L / C", "weights"}, originRows);
         doc.figure(byC.stem, byC.caption, figures.draw(byC));
       }
     }
@@ -809,6 +810,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
             for (std::size_t c = 1; c < avg.columns.size() && c <= 4; ++c) {
               if (!byColumn.count(avg.columns[c])) columnOrder.push_back(avg.columns[c]);
               Series s{fmt::format("W={} {} (n={})", widthText(k), backends[bi], tables.size()), color, bi > 0, true, {}};
+              s.markers = false;
               for (const auto& row : avg.rows)
                 if (std::isfinite(row[c])) s.points.push_back({row[0], row[c], 0.0});
               byColumn[avg.columns[c]].push_back(std::move(s));
