@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace confpack::nscd {
 
@@ -24,8 +25,10 @@ void ContactSolver::prepare(const std::vector<ContactGeometry>& contacts, const 
   normalRows_.clear();
   frictionRows_.clear();
   rowRef_.clear();
+  int contactIndex = -1;
   const int staticBody = static_cast<int>(bodies.size()) - 1;
   for (const ContactGeometry& c : contacts) {
+    ++contactIndex;
     const bool wall = c.b < 0;
     const double mu = wall ? box.wallFrictionOf(static_cast<core::WallId>(c.b)) : 0.0;
     const BodyInverseMass& ma = bodies[c.a];
@@ -81,9 +84,33 @@ void ContactSolver::prepare(const std::vector<ContactGeometry>& contacts, const 
       row.invMb = mb.invMass;
       row.invW = 1.0 / (ma.invMass + mb.invMass + row.axn.dot(row.iaAxn) + row.bxn.dot(row.ibBxn));
       row.bias = gapBias(c.gaps[p], dt, settings);
+      row.z = c.points[p].z();
+      row.c = contactIndex;
+      row.p = p;
       normalRows_.push_back(row);
     }
   }
+  // Sweep order: frictionless rows from the lowest contact point to the highest (ties by bodies,
+  // contact and point, so the order depends only on the configuration). See the header.
+  const int n = static_cast<int>(normalRows_.size());
+  std::vector<int> perm(n);
+  std::iota(perm.begin(), perm.end(), 0);
+  std::sort(perm.begin(), perm.end(), [&](int i, int j) {
+    const NormalRow& x = normalRows_[i];
+    const NormalRow& y = normalRows_[j];
+    if (x.z != y.z) return x.z < y.z;
+    if (x.a != y.a) return x.a < y.a;
+    if (x.b != y.b) return x.b < y.b;
+    if (x.c != y.c) return x.c < y.c;
+    return x.p < y.p;
+  });
+  sorted_.resize(n);
+  slot_.resize(n);
+  for (int k = 0; k < n; ++k) {
+    sorted_[k] = normalRows_[perm[k]];
+    slot_[perm[k]] = k;
+  }
+  normalRows_.swap(sorted_);
 }
 
 void ContactSolver::warmStart(const ContactCache& cache, const std::vector<ContactGeometry>& contacts, double dt,
@@ -113,7 +140,7 @@ void ContactSolver::warmStart(const ContactCache& cache, const std::vector<Conta
         va.v -= row.invMa * (row.rn * row.n + row.rt1 * row.t1 + row.rt2 * row.t2);
         va.w -= row.rn * row.iaAxn + row.rt1 * row.iaAxt1 + row.rt2 * row.iaAxt2;
       } else {
-        NormalRow& row = normalRows_[ref.first + p];
+        NormalRow& row = normalRows_[slot_[ref.first + p]];
         row.r = take(old->normal, p);
         vel[row.a].v -= row.invMa * row.r * row.n;
         vel[row.a].w -= row.r * row.iaAxn;
@@ -177,8 +204,10 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
       sumDelta2 += dn * dn + d1 * d1 + d2 * d2;
       sumR2 += rn * rn + rt1 * rt1 + rt2 * rt2;
     };
-    // Forward sweeps only: a symmetric (forward/backward) variant was measured slower on a
-    // 536-sphere pile (258 versus 166 sweeps per step on average over the first 5 t0).
+    // Forward sweeps only, bottom to top (rows sorted in prepare()). Measured on a 536-sphere pile:
+    // a symmetric (alternating) sweep is slower (258 versus 166 sweeps per step over the first
+    // 5 t0 in contact order; 19000 versus 4300 sweeps for one cold static solve at omega = 1.5,
+    // and no convergence within 50000 at 1.85), and top to bottom is no better than contact order.
     for (NormalRow& row : normalRows_) normalRow(row);
     for (FrictionRow& row : frictionRows_) frictionRow(row);
     residual_ = sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : (sumDelta2 > 0.0 ? 1.0 : 0.0);
@@ -189,7 +218,7 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
 
 double ContactSolver::normalImpulse(int c, int p) const {
   const RowRef ref = rowRef_[c];
-  return ref.friction ? frictionRows_[ref.first + p].rn : normalRows_[ref.first + p].r;
+  return ref.friction ? frictionRows_[ref.first + p].rn : normalRows_[slot_[ref.first + p]].r;
 }
 
 Vec3 ContactSolver::tangentImpulse(int c, int p) const {
@@ -215,7 +244,7 @@ void ContactSolver::exportImpulses(const std::vector<ContactGeometry>& contacts,
         e.tangent1[p] = row.rt1;
         e.tangent2[p] = row.rt2;
       } else {
-        e.normal[p] = normalRows_[ref.first + p].r;
+        e.normal[p] = normalRows_[slot_[ref.first + p]].r;
       }
     }
     out.push_back(e);

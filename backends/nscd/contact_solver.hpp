@@ -42,7 +42,18 @@
 // Convergence ("Quad"-type relative norm over one sweep k):
 //     eps_k = sqrt( sum_rows ||r^k - r^(k-1)||^2 / sum_rows ||r^k||^2 ),
 // stop when eps_k < tolerance (after min_iterations) or after max_iterations sweeps.
-// Rows are visited in contact order, which depends only on the configuration: bitwise determinism.
+// Sweep order: frictionless rows sorted by the height z of their contact point, lowest first (ties by
+// bodies a, b, then contact and point index), then the side-wall friction rows in contact order.
+// The order depends only on the configuration: bitwise determinism. Measured on a 536-sphere pile
+// near jamming (one cold static solve to eps < 1e-6): bottom-to-top needs 4260 / 1390 / 1310 sweeps
+// at omega = 1.5 / 1.8 / 1.85 against 4470 / 2030 / 1400 in contact order; top-to-bottom is no
+// better than contact order (a velocity-level sweep does not carry weight down a chain in one pass:
+// the top contact of a free-falling column sees zero relative velocity).
+// The stopping rule stays the impulse norm above: a rule on the largest velocity error per row
+// (|u_n + c| below 3e-4 g dt) stopped earlier (1270 versus 1900 sweeps per step) but left
+// max |sum F| / (d^2 P) at 1e-3 to 3e-3 instead of 2e-4 to 1.5e-3 (both at omega = 1.85, same pile
+// restarted at rest, t + 8 to t + 27): near jamming W is ill-conditioned,
+// so a small H^T dv does not bound the impulse (force) error.
 #include <vector>
 
 #include "backends/nscd/contact_cache.hpp"
@@ -93,6 +104,8 @@ class ContactSolver {
     double bias = 0.0;   // c of the contact law [d_L / t0]
     double r = 0.0;      // impulse
     int a = 0, b = 0;    // body indices (b = the static body for walls)
+    double z = 0.0;      // height of the contact point
+    int c = 0, p = 0;    // contact and point index (sort ties)
   };
   struct FrictionRow {   // a point on a side wall: b is static
     core::Vec3 n, t1, t2, axn, axt1, axt2, iaAxn, iaAxt1, iaAxt2;
@@ -108,6 +121,10 @@ class ContactSolver {
   std::vector<NormalRow> normalRows_;
   std::vector<FrictionRow> frictionRows_;
   std::vector<RowRef> rowRef_;
+  // Normal rows are stored in sweep order; the row of contact c, point p (frictionless) is
+  // normalRows_[slot_[rowRef_[c].first + p]].
+  std::vector<int> slot_;
+  std::vector<NormalRow> sorted_;  // scratch of prepare(), kept to avoid reallocations
   double residual_ = 0.0;
 };
 

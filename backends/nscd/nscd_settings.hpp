@@ -26,7 +26,15 @@ struct NscdSettings {
   /// any omega in (0, 2) on the frictionless (symmetric) problem, friction rows use omega = 1.
   /// Default 1.5: on a 536-sphere pile compacting under gravity at tolerance 1e-6 it needed 2.6x
   /// fewer sweeps than plain Gauss-Seidel over the first 10 t0 (223 versus 587 per step). With 1,
-  /// an isolated contact is solved exactly in one sweep; with 1.5 to within the tolerance.
+  /// an isolated contact is solved exactly in one sweep; otherwise to within the tolerance (its
+  /// error shrinks by |1 - omega| per sweep, which is why the default is not higher: at 1.85 the
+  /// resting-force conformance tests miss their 1e-8 bounds and a cached column needs 8 sweeps).
+  /// For a large pile near jamming, 1.85 is better (measured on that pile restarted at rest from
+  /// t = 50 with cap 2000: 1.5 sits at the cap, ~1990 sweeps per step, max |sum F| / (d^2 P) 4e-4
+  /// to 1e-1 over the next 10 t0; 1.85 takes ~1200 sweeps over the first 3 t0 and ~1900 later,
+  /// force ratio 2e-4 to 1.5e-3 with SPEC 6.1 met at some steps from t + 10.5; from the deposit,
+  /// first 8 t0: 152 versus 178 sweeps per step). One cold static solve of that pile to 1e-6:
+  /// 4260 sweeps at 1.5, 1310 at 1.85, 1450 at 1.9, 2300 at 1.95.
   double relaxation = 1.5;
   /// ["alert_distance"] a pair becomes a contact row when its gap in the predicted configuration
   /// is below alert_distance x (the smaller size of the pair, or the grain size for a wall)

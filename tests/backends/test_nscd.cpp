@@ -247,7 +247,9 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
       mix(st.position[i]);
       mix(st.velocity[i]);
     }
-  constexpr std::uint64_t kExpectedHash = 0x42aada79cb35fc08ull;
+  // Changed from 0x42aada79cb35fc08 when the solver started sweeping rows bottom to top (sorted by
+  // contact height) instead of in contact order: same law, different Gauss-Seidel iterates.
+  constexpr std::uint64_t kExpectedHash = 0x95d29e41f7103684ull;
   CHECK(hash == kExpectedHash);
   // The same run twice gives the same bits (no hidden state, no uninitialised memory).
   auto again = nscd::makeNscdBackend(s, {});
