@@ -24,9 +24,15 @@ struct BoxDef {
 
   /// Wraps a position into [0, lengthX) (and [0, width) when periodic in y).
   Vec3 wrap(Vec3 p) const {
-    p.x() -= lengthX * std::floor(p.x() / lengthX);
-    if (periodicY) p.y() -= width * std::floor(p.y() / width);
+    p.x() = wrapCoordinate(p.x(), lengthX);
+    if (periodicY) p.y() = wrapCoordinate(p.y(), width);
     return p;
+  }
+
+  /// x - L floor(x / L) in [0, L): a tiny negative x rounds to exactly L, which is folded to 0.
+  static double wrapCoordinate(double x, double period) {
+    const double w = x - period * std::floor(x / period);
+    return w >= period ? 0.0 : w;
   }
 
   /// Minimum-image convention for a separation vector: the shortest periodic copy of d.

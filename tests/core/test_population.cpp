@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "core/box.hpp"
 #include "core/population.hpp"
 #include "core/random.hpp"
 
@@ -93,4 +94,17 @@ TEST_CASE("population validation names the bad field") {
   PopulationDef def;
   def.smallFraction = 120;
   CHECK_THROWS_WITH(def.validate(), Catch::Contains("small fraction"));
+}
+
+TEST_CASE("wrapping a tiny negative coordinate stays inside the period") {
+  BoxDef box;
+  box.lengthX = 20.0;
+  box.periodicY = true;
+  for (double x : {-1e-16, -1.7e-15, -0.0, 20.0, 40.0, -20.0}) {
+    const Vec3 w = box.wrap(Vec3(x, x / 2, 1.0));
+    CHECK(w.x() >= 0.0);
+    CHECK(w.x() < box.lengthX);
+    CHECK(w.y() >= 0.0);
+    CHECK(w.y() < box.width);
+  }
 }
