@@ -137,7 +137,7 @@ TEST_CASE("run table: counts, stable names, backend fastest, shared deposits") {
   }
 }
 
-TEST_CASE("run table: groups are unioned without duplicates; mu_w variants share the deposit") {
+TEST_CASE("run table: groups are unioned without duplicates, mu_w variants share the deposit") {
   const json doc = json::parse(R"({
     "groups": [
       { "width": [5, 10], "small_fraction": [0, 25], "backend": "nscd" },
@@ -258,7 +258,7 @@ TEST_CASE("both backends of one (configuration, seed) compact the same deposit, 
   fs::remove_all(dir);
 }
 
-TEST_CASE("job-array slices run separately in one folder finish the study; parallel jobs run each once") {
+TEST_CASE("job-array slices run separately in one folder finish the study, parallel jobs run each once") {
   const fs::path dir = freshDir("slices");
   const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
   Recorder rec;

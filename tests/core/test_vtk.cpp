@@ -214,7 +214,7 @@ TEST_CASE("the grains file holds one vertex per sphere and eight world-space fac
   fs::remove_all(dir);
 }
 
-TEST_CASE("contacts are lines with their force and type; the pvd lists every frame") {
+TEST_CASE("contacts are lines with their force and type, the pvd lists every frame") {
   const fs::path dir = freshDir("contacts");
   const Packing p = mixedPacking(5, 2, true);
   VtkSeries series(dir, "run");
