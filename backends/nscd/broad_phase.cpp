@@ -68,10 +68,10 @@ void BroadPhase::findPairs(const std::vector<Vec3>& positions, const std::vector
   int nbx[3], nby[3], nbz[3];
   for (int i = 0; i < n; ++i) {
     const Vec3& p = positions[i];
-    const int ix = wrapIndex(static_cast<int>(std::floor(p.x() / hx)), nx_);
-    const int iyRaw = static_cast<int>(std::floor(p.y() / hy));
-    const int iy = box_.periodicY ? wrapIndex(iyRaw, ny_) : std::clamp(iyRaw, 0, ny_ - 1);
-    const int iz = std::clamp(static_cast<int>((p.z() - zMin) / hz), 0, nz - 1);
+    // The cell computed above, decoded (cell = (iz ny + iy) nx + ix).
+    const int ix = cellOf_[i] % nx_;
+    const int iy = (cellOf_[i] / nx_) % ny_;
+    const int iz = cellOf_[i] / (nx_ * ny_);
     // Neighbour cell indices along each axis, without duplicates when the grid has < 3 cells.
     auto neighbours = [&](int c, int m, bool periodic, int* outIdx) {
       int k = 0;

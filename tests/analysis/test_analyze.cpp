@@ -1,5 +1,7 @@
 // The aggregate analysis (result.json blocks of SPEC 8.3) and its CSV profiles.
 #include <catch2/catch.hpp>
+
+#include "tests/support/read_file.hpp"
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -13,12 +15,8 @@ using namespace confpack;
 using analysis::testing::simpleCubic;
 
 namespace {
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+
+using confpack::testing::slurp;
 }  // namespace
 
 TEST_CASE("analysis of a simple cubic lattice between walls", "[analysis][analyze]") {

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+
+#include "tests/support/read_file.hpp"
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -21,17 +23,12 @@ using nlohmann::json;
 
 namespace {
 
+using confpack::testing::slurp;
+
 struct Result {
   int code = -1;
   std::string out, err;
 };
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// A scratch directory per test case, removed at the end.
 struct Scratch {

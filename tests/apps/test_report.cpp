@@ -2,6 +2,8 @@
 // with known phi_bulk and C, and missing/failed runs shown as such.
 #include <catch2/catch.hpp>
 
+#include "tests/support/read_file.hpp"
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -17,12 +19,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using confpack::testing::slurp;
 
 // Synthetic physics: phi = phi_bulk - C / W with a replica offset delta (s - 2) for seeds 1, 2, 3,
 // so that the replica mean is exactly on the law and the replica std is exactly delta.

@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+
+#include "tests/support/read_file.hpp"
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -23,12 +25,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using confpack::testing::slurp;
 
 fs::path scratch(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("confpack_test_repro_" + name + "_" + std::to_string(::getpid()));
