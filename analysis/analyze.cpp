@@ -115,7 +115,8 @@ nlohmann::json toJson(const Analysis& a) {
 
   const Interpenetration& ip = a.interpenetration;
   j["interpenetration_percent"] = {
-      {"exact", ip.exactPercent},
+      // Like solid_fraction: a percentage of the bulk grain volume does not exist without a bulk.
+      {"exact", a.region.empty() ? json(nullptr) : json(ip.exactPercent)},
       {"lattice_min", orNull(ip.latticeMinPercent)},
       {"lattice_max", orNull(ip.latticeMaxPercent)},
       {"overlapping_pairs", ip.overlappingPairs},

@@ -1,7 +1,5 @@
 // The aggregate analysis (result.json blocks of SPEC 8.3) and its CSV profiles.
 #include <catch2/catch.hpp>
-
-#include "tests/support/read_file.hpp"
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -10,6 +8,7 @@
 #include "analysis/analyze.hpp"
 #include "core/deposition.hpp"
 #include "lattices.hpp"
+#include "tests/support/read_file.hpp"
 
 using namespace confpack;
 using analysis::testing::simpleCubic;
@@ -18,6 +17,15 @@ namespace {
 
 using confpack::testing::slurp;
 }  // namespace
+
+TEST_CASE("a pile too low for a bulk region reports its bulk quantities as null, not zero", "[analysis][analyze]") {
+  // Four layers: the free surface is at 4, below the 3 + 3 d_L margins of the bulk region.
+  const nlohmann::json j = analysis::analyzePacking(simpleCubic(6, 5, 4));
+  CHECK(j["free_surface"].get<double>() == Approx(4.0));
+  CHECK(j["solid_fraction"].is_null());
+  CHECK(j["interpenetration_percent"]["exact"].is_null());
+  CHECK(j["coordination"]["Z"].is_null());
+}
 
 TEST_CASE("analysis of a simple cubic lattice between walls", "[analysis][analyze]") {
   core::Packing p = simpleCubic(6, 5, 12);

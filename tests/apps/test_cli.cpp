@@ -4,8 +4,6 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
-
-#include "tests/support/read_file.hpp"
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +14,7 @@
 #include "backends/backend_factory.hpp"
 #include "core/packing_io.hpp"
 #include "core/run_config.hpp"
+#include "tests/support/read_file.hpp"
 
 using namespace confpack;
 namespace fs = std::filesystem;

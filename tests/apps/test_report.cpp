@@ -1,9 +1,6 @@
 // Study report: statistics over replicas, backend differences, the phi(W) fit on synthetic data
 // with known phi_bulk and C, and missing/failed runs shown as such.
 #include <catch2/catch.hpp>
-
-#include "tests/support/read_file.hpp"
-
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -12,6 +9,7 @@
 
 #include "apps/report.hpp"
 #include "apps/sweep.hpp"
+#include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;
@@ -33,17 +31,19 @@ json syntheticResult(const core::RunConfig& cfg) {
   const double offset = kDelta * (static_cast<double>(cfg.seed) - 2.0);
   const double phi = (cfg.box.periodicY ? phiBulk : phiBulk - c / cfg.box.width) + offset;
   const double z = (cfg.box.periodicY ? 6.0 : 6.0 - 1.2 / cfg.box.width) + offset;
-  return {{"n_grains", 100},
-          {"backend", cfg.backend},
-          {"seed", cfg.seed},
-          {"solid_fraction", phi},
-          {"coordination", {{"Z", z}, {"simple", z}, {"double", nullptr}, {"triple", nullptr}, {"rattler_fraction", 0.05}}},
-          {"interpenetration_percent", {{"exact", nscd ? 0.01 : 0.2}, {"lattice_min", nullptr}, {"lattice_max", nullptr}}},
-          {"equilibrium", {{"reached", true}, {"max_force_ratio", 1e-5}, {"max_moment_ratio", 1e-5}, {"max_kinetic_ratio", 1e-9}}},
-          {"anisotropy", 0.1},
-          {"nematic", {{"bulk", nullptr}, {"boundary", nullptr}}},
-          {"profile_fit", {{"phi_bulk", phiBulk}, {"lambda_L", 1.0 + 0.1 * cfg.population.smallFraction / 10.0}}},
-          {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
+  return {
+      {"n_grains", 100},
+      {"backend", cfg.backend},
+      {"seed", cfg.seed},
+      {"solid_fraction", phi},
+      {"coordination", {{"Z", z}, {"simple", z}, {"double", nullptr}, {"triple", nullptr}, {"rattler_fraction", 0.05}}},
+      {"interpenetration_percent", {{"exact", nscd ? 0.01 : 0.2}, {"lattice_min", nullptr}, {"lattice_max", nullptr}}},
+      {"equilibrium",
+       {{"reached", true}, {"max_force_ratio", 1e-5}, {"max_moment_ratio", 1e-5}, {"max_kinetic_ratio", 1e-9}}},
+      {"anisotropy", 0.1},
+      {"nematic", {{"bulk", nullptr}, {"boundary", nullptr}}},
+      {"profile_fit", {{"phi_bulk", phiBulk}, {"lambda_L", 1.0 + 0.1 * cfg.population.smallFraction / 10.0}}},
+      {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
 fs::path makeStudy(const std::string& name, bool withFailures) {

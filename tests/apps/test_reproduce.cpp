@@ -6,8 +6,6 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
-
-#include "tests/support/read_file.hpp"
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +16,7 @@
 
 #include "apps/reproduce.hpp"
 #include "apps/sweep.hpp"
+#include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;
@@ -52,8 +51,10 @@ TEST_CASE("reproduce: the paper scale is the SPEC 7 study") {
   for (const auto& r : runs) {
     CHECK(r.config.box.lengthX == 20.0);
     CHECK(r.config.box.height == 16.0);
-    if (!r.config.box.periodicY) widths.insert(r.config.box.width);
-    else CHECK(r.config.box.width == 20.0);
+    if (!r.config.box.periodicY)
+      widths.insert(r.config.box.width);
+    else
+      CHECK(r.config.box.width == 20.0);
     fractions.insert(r.config.population.smallFraction);
     frictions.insert(r.config.box.wallFriction);
     if (r.config.box.wallFriction > 0.0) {
