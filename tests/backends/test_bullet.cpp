@@ -17,28 +17,16 @@
 #include "backends/bullet/periodic_pairs.hpp"
 #include "core/backend.hpp"
 #include "core/random.hpp"
+#include "tests/support/systems.hpp"
 
 using namespace confpack;
 using core::Vec3;
 
 namespace {
 
-core::Grain sphere(double d, const Vec3& p) {
-  core::Grain g;
-  g.shape = core::ShapeKind::Sphere;
-  g.size = d;
-  g.position = p;
-  return g;
-}
+using confpack::testing::sphere;
 
-core::SystemDef boxSystem(double lengthX, double width, bool periodicY, double mu) {
-  core::SystemDef s;
-  s.box.lengthX = lengthX;
-  s.box.width = width;
-  s.box.periodicY = periodicY;
-  s.box.wallFriction = mu;
-  return s;
-}
+using confpack::testing::boxSystem;
 
 std::unique_ptr<core::ContactBackend> makeBullet(const core::SystemDef& s,
                                                  const nlohmann::json& options = nlohmann::json::object()) {

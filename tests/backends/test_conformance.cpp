@@ -14,6 +14,7 @@
 #include "backends/backend_factory.hpp"
 #include "core/backend.hpp"
 #include "core/random.hpp"
+#include "tests/support/systems.hpp"
 
 using namespace confpack;
 using core::Vec3;
@@ -83,31 +84,20 @@ std::unique_ptr<core::ContactBackend> makeOrNull(std::string_view name, const co
   }
 }
 
-#define CONFPACK_BACKEND_OR_SKIP(var, name, system, options)                  \
-  auto var = makeOrNull(name, system, options);                               \
-  if (!var) {                                                                 \
-    WARN("backend '" << name << "' is not built yet: test skipped");          \
-    return;                                                                   \
+#define CONFPACK_BACKEND_OR_SKIP(var, name, system, options)         \
+  auto var = makeOrNull(name, system, options);                      \
+  if (!var) {                                                        \
+    WARN("backend '" << name << "' is not built yet: test skipped"); \
+    return;                                                          \
   }
 
-core::Grain sphere(double d, const Vec3& p) {
-  core::Grain g;
-  g.shape = core::ShapeKind::Sphere;
-  g.size = d;
-  g.position = p;
-  return g;
+using confpack::testing::sphere;
+
+double sphereMass(double d) {
+  return std::numbers::pi / 6.0 * d * d * d;
 }
 
-double sphereMass(double d) { return std::numbers::pi / 6.0 * d * d * d; }
-
-core::SystemDef boxSystem(double lengthX, double width, bool periodicY, double mu) {
-  core::SystemDef s;
-  s.box.lengthX = lengthX;
-  s.box.width = width;
-  s.box.periodicY = periodicY;
-  s.box.wallFriction = mu;
-  return s;
-}
+using confpack::testing::boxSystem;
 
 /// Sum of the forces of the contacts of grain i with wall w (force on the wall).
 Vec3 wallForce(const std::vector<core::Contact>& contacts, core::WallId w) {
@@ -280,8 +270,7 @@ TEST_CASE("a settled frictionless pile: the floor carries the weight, the side w
   CHECK(sideContacts);
 }
 
-TEST_CASE("a sphere on a frictional side wall rolls below the Coulomb limit and slides above it",
-          "[conformance]") {
+TEST_CASE("a sphere on a frictional side wall rolls below the Coulomb limit and slides above it", "[conformance]") {
   const std::string name(GENERATE(from_range(backends::backendNames())));
   // Body force per unit mass (0, -Fn, -Ft): Fn presses the sphere into the wall y = 0, Ft pulls it
   // down along the wall; the floor is far below. A free sphere does not stick: like a ball on an
@@ -308,8 +297,10 @@ TEST_CASE("a sphere on a frictional side wall rolls below the Coulomb limit and 
   // Rolling without slipping: the contact point is at rest, v_z = -r w_x... (w along -x for a
   // sphere rolling down the wall y = 0: v_contact = v + w x (-r e_y)).
   const Vec3 vContact = b.velocity + b.angularVelocity.cross(Vec3(0.0, -0.5, 0.0));
-  if (rolls) CHECK(vContact.norm() < 1e-6 * expected * t);
-  else CHECK(vContact.norm() > 0.1 * expected * t);
+  if (rolls)
+    CHECK(vContact.norm() < 1e-6 * expected * t);
+  else
+    CHECK(vContact.norm() > 0.1 * expected * t);
   // The reported wall force: normal m Fn, tangential friction (2/7) m Ft or mu m Fn, upwards on the
   // sphere, i.e. downwards on the wall.
   const double m = sphereMass(1.0);

@@ -13,18 +13,14 @@
 #include "backends/nscd/nscd_backend.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "core/random.hpp"
+#include "tests/support/systems.hpp"
 
 using namespace confpack;
 using core::Vec3;
 
 namespace {
 
-core::Grain sphere(double d, const Vec3& p) {
-  core::Grain g;
-  g.size = d;
-  g.position = p;
-  return g;
-}
+using confpack::testing::sphere;
 
 core::SystemDef box(double lx, double w, bool periodicY = false) {
   core::SystemDef s;
