@@ -67,7 +67,10 @@ TEST_CASE("force threshold and merged contacts", "[analysis][coordination]") {
   CHECK(r.z == Approx((6.0 * r.bulkGrains - 12.0) / r.bulkGrains));
   CHECK(r.zNonRattler == Approx((6.0 * (r.bulkGrains - 1) - 6.0) / (r.bulkGrains - 1)));
   // Bad contact indices are refused with a message.
-  contacts.push_back(core::Contact{0, 999});
+  core::Contact bad;
+  bad.a = 0;
+  bad.b = 999;
+  contacts.push_back(bad);
   CHECK_THROWS_AS(analysis::forceCarryingContacts(p, contacts, false), std::invalid_argument);
 }
 
