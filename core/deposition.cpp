@@ -487,30 +487,6 @@ Vec3 wrapStrict(const BoxDef& box, Vec3 p) {
   return p;
 }
 
-// Exactly n grains of the population mix: the number share of small grains follows from their
-// volume share x_S, n_S / n = (x_S / v_S) / ((1 - x_S) / v_L + x_S / v_S) with v the mean grain
-// volumes. Same streams and order (large then small) as drawGrains().
-std::vector<Grain> drawGrainCount(const PopulationDef& def, std::size_t n, std::uint64_t seed) {
-  const double x = def.smallFraction / 100.0;
-  const double vL = def.meanGrainVolume(def.largeSize);
-  const double vS = def.meanGrainVolume(def.smallSize);
-  const double smallShare = (x / vS) / ((1.0 - x) / vL + x / vS);
-  const auto nSmall = static_cast<std::size_t>(std::llround(smallShare * static_cast<double>(n)));
-  Rng sizes(seed, StreamId::GrainSizes);
-  Rng orientations(seed, StreamId::GrainOrientation);
-  std::vector<Grain> out;
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    Grain g;
-    g.shape = def.shape;
-    g.params = def.pinacoid;
-    const double mean = i < n - nSmall ? def.largeSize : def.smallSize;
-    g.size = drawSize(sizes, mean, def.relativeStd, def.truncationSigmas);
-    if (def.shape == ShapeKind::Pinacoid) g.orientation = orientations.uniformQuaternion();
-    out.push_back(g);
-  }
-  return out;
-}
 
 }  // namespace
 

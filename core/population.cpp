@@ -63,6 +63,20 @@ double drawSize(Rng& rng, double mean, double relativeStd, double truncationSigm
   }
 }
 
+namespace {
+
+/// A grain of the population with its size drawn around `mean`. The orientation is left to the
+/// caller: the two drawing rules below consume the orientation stream differently.
+Grain drawGrain(const PopulationDef& def, double mean, Rng& sizes) {
+  Grain g;
+  g.shape = def.shape;
+  g.params = def.pinacoid;
+  g.size = drawSize(sizes, mean, def.relativeStd, def.truncationSigmas);
+  return g;
+}
+
+}  // namespace
+
 std::vector<Grain> drawGrains(const PopulationDef& def, double targetVolume, std::uint64_t seed) {
   def.validate();
   Rng sizes(seed, StreamId::GrainSizes);
@@ -71,10 +85,7 @@ std::vector<Grain> drawGrains(const PopulationDef& def, double targetVolume, std
   auto fill = [&](double mean, double share) {
     double volume = 0.0;
     for (;;) {
-      Grain g;
-      g.shape = def.shape;
-      g.params = def.pinacoid;
-      g.size = drawSize(sizes, mean, def.relativeStd, def.truncationSigmas);
+      Grain g = drawGrain(def, mean, sizes);
       const double v = g.volume();
       // Stop at the count whose volume is closest to the share.
       if (volume + 0.5 * v > share) break;
@@ -85,6 +96,27 @@ std::vector<Grain> drawGrains(const PopulationDef& def, double targetVolume, std
   };
   fill(def.largeSize, targetVolume * (100.0 - def.smallFraction) / 100.0);
   fill(def.smallSize, targetVolume * def.smallFraction / 100.0);
+  return out;
+}
+
+std::vector<Grain> drawGrainCount(const PopulationDef& def, std::size_t n, std::uint64_t seed) {
+  def.validate();
+  // Number share of small grains that makes x_S of the volume with mean grain volumes:
+  // n_S/n = (x/v_S) / ((1-x)/v_L + x/v_S).
+  const double x = def.smallFraction / 100.0;
+  const double vL = def.meanGrainVolume(def.largeSize);
+  const double vS = def.meanGrainVolume(def.smallSize);
+  const double smallShare = (x / vS) / ((1.0 - x) / vL + x / vS);
+  const auto nSmall = static_cast<std::size_t>(std::llround(smallShare * static_cast<double>(n)));
+  Rng sizes(seed, StreamId::GrainSizes);
+  Rng orientations(seed, StreamId::GrainOrientation);
+  std::vector<Grain> out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    Grain g = drawGrain(def, i < n - nSmall ? def.largeSize : def.smallSize, sizes);
+    if (def.shape == ShapeKind::Pinacoid) g.orientation = orientations.uniformQuaternion();
+    out.push_back(g);
+  }
   return out;
 }
 

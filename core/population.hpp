@@ -41,4 +41,8 @@ double drawSize(Rng& rng, double mean, double relativeStd, double truncationSigm
 /// then small ones (deposition shuffles them).
 std::vector<Grain> drawGrains(const PopulationDef& def, double targetVolume, std::uint64_t seed);
 
+/// Draws exactly n grains: the small population's number share is the one that gives x_S of the
+/// volume with mean grain volumes; large grains first, then small ones (same streams as drawGrains).
+std::vector<Grain> drawGrainCount(const PopulationDef& def, std::size_t n, std::uint64_t seed);
+
 }  // namespace confpack::core
