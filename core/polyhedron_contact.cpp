@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <stdexcept>
 
 namespace confpack::core {
@@ -28,20 +29,30 @@ constexpr double kRelativeLengthTol = 1e-9;
 // separating axis: the face axes already cover parallel edges.
 constexpr double kParallelEdgeSin = 1e-9;
 
+// Inline capacities of the per-call arrays below (SmallVector): a pinacoid has 8 vertices,
+// 8 faces of at most 4 vertices and 14 edges, so no call allocates; a larger shape spills to the
+// heap and still works.
+constexpr std::size_t kInlineVertices = 16;  // vertices, faces, polygon vertices
+constexpr std::size_t kInlineEdges = 32;
+
+template <class T>
+using VertexArray = SmallVector<T, kInlineVertices>;
+using Vec2 = Eigen::Vector2d;
+using Polygon2 = VertexArray<Vec2>;
+
 // A polyhedron in world coordinates with the topology the narrow phase needs.
 struct WorldPoly {
   const ConvexPolyhedron* shape = nullptr;
-  std::vector<Vec3> v;                        // world vertices
-  std::vector<Vec3> n;                        // world outward face normals
-  std::vector<double> off;                    // n.x = off on the face
-  std::vector<std::array<int, 2>> edgeFaces;  // the two faces adjacent to each edge
-  std::vector<Vec3> edgeArc;                  // n[face1] x n[face0]: the edge's Gauss-map arc normal
+  VertexArray<Vec3> v;                                          // world vertices
+  VertexArray<Vec3> n;                                          // world outward face normals
+  VertexArray<double> off;                                      // n.x = off on the face
+  SmallVector<std::array<int, 2>, kInlineEdges> edgeFaces;      // the two faces adjacent to each edge
+  SmallVector<Vec3, kInlineEdges> edgeArc;                      // n[face1] x n[face0]: the edge's Gauss-map arc normal
   Vec3 centre = Vec3::Zero();                 // an interior point (vertex mean)
   double radius = 0.0;                        // bounding radius of the shape
 
   explicit WorldPoly(const PlacedPolyhedron& p, bool withTopology = true) : shape(p.shape) {
     if (shape == nullptr) throw std::invalid_argument("PlacedPolyhedron.shape is null");
-    v.reserve(shape->vertices().size());
     for (const Vec3& x : shape->vertices()) {
       v.push_back(p.toWorld(x));
       centre += v.back();
@@ -49,8 +60,6 @@ struct WorldPoly {
     centre /= static_cast<double>(v.size());
     radius = shape->boundingRadius();
     const auto& bn = shape->faceNormals();
-    n.reserve(bn.size());
-    off.reserve(bn.size());
     for (std::size_t f = 0; f < bn.size(); ++f) {
       n.push_back(p.rotation * bn[f]);
       // The body offset is n_b.x_b; in world n_w.(R x_b + t) = n_b.x_b + n_w.t.
@@ -63,7 +72,8 @@ struct WorldPoly {
       thread_local std::vector<int> pairToEdge;
       pairToEdge.assign(static_cast<std::size_t>(nv) * nv, -1);
       for (std::size_t e = 0; e < edges.size(); ++e) pairToEdge[edges[e][0] * nv + edges[e][1]] = static_cast<int>(e);
-      edgeFaces.assign(edges.size(), {-1, -1});
+      edgeFaces.clear();
+      for (std::size_t e = 0; e < edges.size(); ++e) edgeFaces.push_back({-1, -1});
       for (std::size_t f = 0; f < shape->faces().size(); ++f) {
         const auto& loop = shape->faces()[f];
         for (std::size_t k = 0; k < loop.size(); ++k) {
@@ -72,7 +82,6 @@ struct WorldPoly {
           if (e >= 0) edgeFaces[e][edgeFaces[e][0] < 0 ? 0 : 1] = static_cast<int>(f);
         }
       }
-      edgeArc.reserve(edges.size());
       for (const auto& ef : edgeFaces) edgeArc.push_back(n[ef[1]].cross(n[ef[0]]));
     }
   }
@@ -296,7 +305,7 @@ DistanceResult exactDistance(const WorldPoly& A, const WorldPoly& B, const SatRe
 // Contact features and region.
 
 struct SupportSet {
-  std::vector<int> verts;  // indices within eps of the support plane
+  VertexArray<int> verts;  // indices within eps of the support plane
   Feature feature{};
 };
 
@@ -319,21 +328,19 @@ SupportSet supportSet(const WorldPoly& w, const Vec3& dir, double eps) {
   return s;
 }
 
-using Vec2 = Eigen::Vector2d;
-
 double cross2(const Vec2& a, const Vec2& b) {
   return a.x() * b.y() - a.y() * b.x();
 }
 
-double polygonArea(const std::vector<Vec2>& p) {
+double polygonArea(std::span<const Vec2> p) {
   double a = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
   return 0.5 * a;
 }
 
 // Sutherland-Hodgman: subject polygon clipped by a convex CCW clip polygon.
-std::vector<Vec2> clipPolygon(std::vector<Vec2> subject, const std::vector<Vec2>& clipper) {
-  std::vector<Vec2> out;
+Polygon2 clipPolygon(Polygon2 subject, std::span<const Vec2> clipper) {
+  Polygon2 out;
   for (std::size_t k = 0; k < clipper.size() && !subject.empty(); ++k) {
     const Vec2& a = clipper[k];
     const Vec2 e = clipper[(k + 1) % clipper.size()] - a;
@@ -345,13 +352,13 @@ std::vector<Vec2> clipPolygon(std::vector<Vec2> subject, const std::vector<Vec2>
       if (dp >= 0.0) out.push_back(p);
       if ((dp >= 0.0) != (dq >= 0.0)) out.push_back(p + dp / (dp - dq) * (q - p));
     }
-    subject.swap(out);
+    std::swap(subject, out);
   }
   return subject;
 }
 
 // Clips segment p-q to the convex CCW polygon (Cyrus-Beck). Returns false if nothing is left.
-bool clipSegment(Vec2& p, Vec2& q, const std::vector<Vec2>& poly) {
+bool clipSegment(Vec2& p, Vec2& q, std::span<const Vec2> poly) {
   double t0 = 0.0, t1 = 1.0;
   const Vec2 d = q - p;
   for (std::size_t k = 0; k < poly.size(); ++k) {
@@ -393,14 +400,16 @@ double hullArea4(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
 // SPEC says 3 points; 4 of maximal area keep a rectangle-on-rectangle support stable (3 put the
 // centre of mass on an edge of the support triangle), and always keeping the deepest point
 // means the solver never loses the point that penetrates most.
-std::vector<int> pickFour(const std::vector<Vec2>& pts, const std::vector<double>& gaps) {
+SmallVector<int, 4> pickFour(std::span<const Vec2> pts, std::span<const double> gaps) {
   const int n = static_cast<int>(pts.size());
-  std::vector<int> all(n);
-  for (int i = 0; i < n; ++i) all[i] = i;
-  if (n <= 4) return all;
+  if (n <= 4) {
+    SmallVector<int, 4> all;
+    for (int i = 0; i < n; ++i) all.push_back(i);
+    return all;
+  }
   const int deep = static_cast<int>(std::min_element(gaps.begin(), gaps.end()) - gaps.begin());
   double best = -1.0;
-  std::vector<int> pick{0, 1, 2, 3};
+  SmallVector<int, 4> pick{0, 1, 2, 3};
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j)
       for (int k = j + 1; k < n; ++k) {
@@ -453,11 +462,11 @@ double heightAt(const FeatureSurface& s, const Frame& fr, const Vec2& x) {
 
 struct Region {
   ContactType type = ContactType::Simple;
-  std::vector<Vec2> points;
+  Polygon2 points;
   // Set when the surface points are known exactly in 3D (crossing edges: the closest points of
   // the two segments); then they are used instead of the lateral points and heights.
   bool exactPair = false;
-  std::vector<std::pair<Vec3, Vec3>> pairs;  // (on A, on B) per point when exactPair
+  SmallVector<std::pair<Vec3, Vec3>, 4> pairs;  // (on A, on B) per point when exactPair
 };
 
 // The contact region of feature sets sa (of A, near max along n) and sb (of B, near min along n)
@@ -465,7 +474,7 @@ struct Region {
 Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& B, const SupportSet& sb,
                      const Frame& fr, FeatureSurface& surfA, FeatureSurface& surfB) {
   const double lenTol = kRelativeLengthTol * (A.radius + B.radius);
-  auto surfaceOf = [&](const WorldPoly& w, const SupportSet& s, FeatureSurface& out, std::vector<Vec2>& poly,
+  auto surfaceOf = [&](const WorldPoly& w, const SupportSet& s, FeatureSurface& out, Polygon2& poly,
                        bool ccwAlongN) {
     out.kind = s.feature.kind;
     if (s.feature.kind == FeatureKind::Vertex) {
@@ -485,13 +494,13 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       if (!ccwAlongN) std::reverse(poly.begin(), poly.end());
     }
   };
-  std::vector<Vec2> pa, pb;
+  Polygon2 pa, pb;
   surfaceOf(A, sa, surfA, pa, true);
   surfaceOf(B, sb, surfB, pb, false);
 
   Region r;
   const FeatureKind ka = sa.feature.kind, kb = sb.feature.kind;
-  auto finishSegmentOrPoint = [&](const std::vector<Vec2>& pts) {
+  auto finishSegmentOrPoint = [&](const Polygon2& pts) {
     // Reduce a degenerate region to its two most distant points (segment) or one point.
     if (pts.empty()) return;
     std::size_t bi = 0, bj = 0;
@@ -518,15 +527,15 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
   // their boundary segments and over vertices projecting inside a face.
   auto closestFeaturePair = [&]() {
     auto loopOf = [](const WorldPoly& w, const SupportSet& s) {
-      std::vector<Vec3> loop;
+      VertexArray<Vec3> loop;
       if (s.feature.kind == FeatureKind::Face)
         for (int i : w.shape->faces()[s.feature.index]) loop.push_back(w.v[i]);
       else
         for (int i : s.verts) loop.push_back(w.v[i]);
       return loop;
     };
-    const std::vector<Vec3> la = loopOf(A, sa), lb = loopOf(B, sb);
-    auto segCount = [](const std::vector<Vec3>& l) { return l.size() <= 2 ? std::size_t{1} : l.size(); };
+    const VertexArray<Vec3> la = loopOf(A, sa), lb = loopOf(B, sb);
+    auto segCount = [](const VertexArray<Vec3>& l) { return l.size() <= 2 ? std::size_t{1} : l.size(); };
     double best = kInf;
     std::pair<Vec3, Vec3> pair{la[0], lb[0]};
     for (std::size_t i = 0; i < segCount(la); ++i)
@@ -540,7 +549,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
           pair = {c1, c2};
         }
       }
-    auto facePoints = [&](const WorldPoly& w, const SupportSet& s, const std::vector<Vec3>& other, bool faceIsA) {
+    auto facePoints = [&](const WorldPoly& w, const SupportSet& s, const VertexArray<Vec3>& other, bool faceIsA) {
       if (s.feature.kind != FeatureKind::Face) return;
       const int f = s.feature.index;
       for (const Vec3& x : other) {
@@ -560,7 +569,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     r.exactPair = true;
     r.pairs = {pair};
   };
-  auto insideConvex = [&](const Vec2& x, const std::vector<Vec2>& poly) {
+  auto insideConvex = [&](const Vec2& x, const Polygon2& poly) {
     for (std::size_t k = 0; k < poly.size(); ++k) {
       const Vec2 e = poly[(k + 1) % poly.size()] - poly[k];
       if (cross2(e, x - poly[k]) < -lenTol * e.norm()) return false;
@@ -593,7 +602,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       const double lo = std::max(a0, std::min(b0, b1)), hi = std::min(a1, std::max(b0, b1));
       // The two lines may be offset laterally by rounding or tilt: put points midway across.
       if (hi >= lo)
-        finishSegmentOrPoint({pa[0] + lo * dir, pa[0] + hi * dir});
+        finishSegmentOrPoint(Polygon2{pa[0] + lo * dir, pa[0] + hi * dir});
       else
         r.points = {pa[0] + 0.5 * (lo + hi) * dir};
       // Surface points: the same abscissa along the common direction on each 3D edge (the
@@ -607,15 +616,15 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
       }
     }
   } else if (ka == FeatureKind::Edge || kb == FeatureKind::Edge) {
-    const std::vector<Vec2>& seg = ka == FeatureKind::Edge ? pa : pb;
-    const std::vector<Vec2>& face = ka == FeatureKind::Edge ? pb : pa;
+    const Polygon2& seg = ka == FeatureKind::Edge ? pa : pb;
+    const Polygon2& face = ka == FeatureKind::Edge ? pb : pa;
     Vec2 p = seg[0], q = seg[1];
     if (clipSegment(p, q, face))
-      finishSegmentOrPoint({p, q});
+      finishSegmentOrPoint(Polygon2{p, q});
     else
       closestFeaturePair();  // the edge's projection misses the face
   } else {
-    std::vector<Vec2> poly = clipPolygon(pa, pb);
+    const Polygon2 poly = clipPolygon(pa, pb);
     if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
       r.type = ContactType::Triple;
       r.points = poly;  // reduced to 4 in buildContact, once the gaps are known
@@ -657,8 +666,8 @@ PolyhedronContact buildContact(const WorldPoly& A, const WorldPoly& B, const Vec
     }
     return c;
   }
-  std::vector<Vec3> points;
-  std::vector<double> gaps;
+  VertexArray<Vec3> points;
+  VertexArray<double> gaps;
   for (const Vec2& x : region.points) {
     const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
     points.push_back(fr.world(x, 0.5 * (ha + hb)));
@@ -808,7 +817,8 @@ std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& 
   const Vec3 m = unitOrThrow(inwardNormal, "collidePolyhedronPlane");
   if (m.dot(a.position - planePoint) - a.shape->boundingRadius() > alert) return std::nullopt;
   const WorldPoly A(a);
-  std::vector<double> h(A.v.size());
+  VertexArray<double> h;
+  h.resize(A.v.size());
   double gap = kInf;
   for (std::size_t i = 0; i < A.v.size(); ++i) {
     h[i] = m.dot(A.v[i] - planePoint);
@@ -829,14 +839,14 @@ std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& 
   // contact always has >= 3 points even if the alert is smaller than its tilt).
   const double reachH = std::max(alert, gap + A.featureEps(angleTol));
   const Frame fr = frameFor(c.normal);
-  std::vector<Vec2> lat;
-  std::vector<int> idx;
+  Polygon2 lat;
+  VertexArray<int> idx;
   for (std::size_t i = 0; i < A.v.size(); ++i)
     if (h[i] <= reachH) {
       lat.push_back(fr.lateral(A.v[i]));
       idx.push_back(static_cast<int>(i));
     }
-  std::vector<double> latGaps;
+  VertexArray<double> latGaps;
   for (int i : idx) latGaps.push_back(h[i]);
   for (int k : pickFour(lat, latGaps)) {
     const int i = idx[k];

@@ -47,6 +47,7 @@
 
 #include "core/contact.hpp"
 #include "core/convex_polyhedron.hpp"
+#include "core/small_vector.hpp"
 
 namespace confpack::core {
 
@@ -78,14 +79,19 @@ struct Feature {
 /// with its own gap) while reporting types with classifyContact at the default.
 inline constexpr double kFeatureAngleTol = 1e-3;
 
+/// Most points a polyhedron contact carries (larger face-face polygons are reduced to 4).
+inline constexpr int kMaxPolyhedronContactPoints = 4;
+
 struct PolyhedronContact {
   double gap = 0.0;             ///< signed distance between the surfaces along normal (< 0: penetration depth) [d_L]
   Vec3 normal = Vec3::UnitZ();  ///< unit, from a towards b (for a wall: into the wall)
   ContactType type = ContactType::Simple;
   Feature featureA{};             ///< feature of a in contact (stable key for a contact cache)
   Feature featureB{};             ///< feature of b (for a wall or a sphere: kind Face/Vertex, index 0)
-  std::vector<Vec3> points;       ///< world points on the contact plane, midway between the surfaces
-  std::vector<double> pointGaps;  ///< gap along normal at each point [d_L]
+  /// World points on the contact plane, midway between the surfaces. Inline storage: a contact
+  /// costs no heap allocation (the nscd narrow phase builds one per pair and step).
+  SmallVector<Vec3, kMaxPolyhedronContactPoints> points;
+  SmallVector<double, kMaxPolyhedronContactPoints> pointGaps;  ///< gap along normal at each point [d_L]
 };
 
 /// Contact between two placed polyhedra, or nullopt if their distance exceeds alert [d_L].
