@@ -1,5 +1,7 @@
 // `confpack bench`: nscd against Bullet on the same deposits, in one process (issue 7).
 // Writes bench.json (shape in the README's performance section) and prints one line per case.
+// With --micro it runs the Google Benchmark micro-benchmarks of the nscd phases instead
+// (apps/microbench.hpp) and writes Google Benchmark's JSON report.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -9,6 +11,7 @@
 #include "apps/bench.hpp"
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "apps/microbench.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::app {
@@ -20,9 +23,31 @@ struct BenchState {
   std::vector<std::string> cases;
   std::filesystem::path out = "bench.json";
   bool quiet = false;
+  bool micro = false;
+  MicroBenchDef microDef;
+  bool outGiven = false;
 };
 
+void runMicroCommand(BenchState& st) {
+  // The whole-run default name would mislabel a micro-benchmark report.
+  if (!st.outGiven) st.out = "micro.json";
+  checkInput("bench", [&] {
+    st.microDef.seed = st.def.seed;
+    validateMicroBench(st.microDef);
+    if (std::filesystem::is_directory(st.out))
+      throw std::invalid_argument(fmt::format("--out {} is a directory; give a file name", st.out.string()));
+    const std::filesystem::path dir = st.out.has_parent_path() ? st.out.parent_path() : ".";
+    if (!std::filesystem::is_directory(dir))
+      throw std::invalid_argument(fmt::format("--out {}: directory {} does not exist", st.out.string(), dir.string()));
+  });
+  runWork("bench", [&] {
+    runMicroBench(st.microDef, st.out);
+    fmt::print("bench: wrote {}\n", st.out.string());
+  });
+}
+
 void runBenchCommand(BenchState& st) {
+  if (st.micro) return runMicroCommand(st);
   checkInput("bench", [&] {
     if (!st.cases.empty()) st.def.cases = st.cases;
     for (const std::string& c : st.def.cases)
@@ -46,23 +71,46 @@ void runBenchCommand(BenchState& st) {
 void registerBench(CLI::App& app) {
   auto st = std::make_shared<BenchState>();
   auto* sub = app.add_subcommand("bench", "Time nscd against Bullet on the same packings; writes bench.json");
-  sub->add_option("--case", st->cases, "Cases to run: msp-w10, mpp-w10, scaling (default: all)");
-  sub->add_option("--out", st->out, "Output file")->capture_default_str();
-  sub->add_option("--time-limit", st->def.timeLimit, "Simulated time limit of each compaction [t0]")
-      ->check(positiveNumber())
-      ->capture_default_str();
-  sub->add_option("--scale", st->def.scale, "Multiplies the box length and width (0.5 = a quarter of the grains)")
-      ->check(positiveNumber())
-      ->capture_default_str();
-  sub->add_option("--scaling-steps", st->def.scalingSteps, "Steps timed per scaling point")
-      ->check(positiveNumber())
-      ->capture_default_str();
-  sub->add_option("--scaling-sizes", st->def.scalingSizes, "Grain counts of the scaling series")
-      ->check(positiveNumber());
+  auto* cases = sub->add_option("--case", st->cases, "Cases to run: msp-w10, mpp-w10, scaling (default: all)");
+  sub->add_option("--out", st->out, "Output file (micro.json with --micro)")->capture_default_str();
+  auto* timeLimit = sub->add_option("--time-limit", st->def.timeLimit, "Simulated time limit of each compaction [t0]")
+                        ->check(positiveNumber())
+                        ->capture_default_str();
+  auto* scale =
+      sub->add_option("--scale", st->def.scale, "Multiplies the box length and width (0.5 = a quarter of the grains)")
+          ->check(positiveNumber())
+          ->capture_default_str();
+  auto* scalingSteps = sub->add_option("--scaling-steps", st->def.scalingSteps, "Steps timed per scaling point")
+                           ->check(positiveNumber())
+                           ->capture_default_str();
+  auto* scalingSizes = sub->add_option("--scaling-sizes", st->def.scalingSizes, "Grain counts of the scaling series")
+                           ->check(positiveNumber());
   sub->add_option("--seed", st->def.seed, "Seed of the deposits")->capture_default_str();
-  sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
+  auto* threads =
+      sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
-  sub->callback([st] { runBenchCommand(*st); });
+  auto* micro = sub->add_flag("--micro", st->micro,
+                              "Run the Google Benchmark micro-benchmarks of the nscd phases instead (broad phase, "
+                              "narrow phase per pair type, one Gauss-Seidel sweep)");
+  // The whole-run options mean nothing to the micro-benchmarks (which time one core): refuse them
+  // rather than ignore them.
+  for (CLI::Option* o : {cases, timeLimit, scale, scalingSteps, scalingSizes, threads}) micro->excludes(o);
+  sub->add_option("--micro-filter", st->microDef.filter, "Regex selecting micro-benchmarks by name")
+      ->needs(micro)
+      ->capture_default_str();
+  sub->add_option("--micro-repetitions", st->microDef.repetitions,
+                  "Repetitions of each micro-benchmark (reported: mean, median, stddev, cv)")
+      ->needs(micro)
+      ->check(positiveNumber())
+      ->capture_default_str();
+  sub->add_option("--micro-min-time", st->microDef.minTime, "Minimum timed duration of one repetition [s]")
+      ->needs(micro)
+      ->check(positiveNumber())
+      ->capture_default_str();
+  sub->callback([st, sub] {
+    st->outGiven = sub->count("--out") > 0;
+    runBenchCommand(*st);
+  });
 }
 
 }  // namespace confpack::app

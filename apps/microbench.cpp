@@ -1,0 +1,455 @@
+#include "apps/microbench.hpp"
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <regex>
+#include <stdexcept>
+
+#include "backends/backend_factory.hpp"
+#include "backends/nscd/broad_phase.hpp"
+#include "backends/nscd/contact_solver.hpp"
+#include "backends/nscd/narrow_phase.hpp"
+#include "backends/nscd/nscd_settings.hpp"
+#include "core/deposition.hpp"
+#include "core/polyhedron_contact.hpp"
+#include "core/population.hpp"
+#include "core/random.hpp"
+
+namespace confpack::app {
+
+namespace {
+
+using core::Grain;
+using core::Quat;
+using core::ShapeKind;
+using core::Vec3;
+
+// ---------------------------------------------------------------------------------------------
+// Fixtures. Each is built on first use and kept for the rest of the process: Google Benchmark
+// calls a benchmark function several times (to size the iteration count, then once per
+// repetition), and a deposit of 30,000 grains takes about a second.
+
+/// Grain counts of the broad-phase and Gauss-Seidel series (SPEC 3: 1,900 to 30,400 spheres).
+constexpr int kBroadPhaseSizes[] = {2000, 8000, 30000};
+constexpr int kSweepSizes[] = {2000, 8000, 30000};
+/// Pairs per narrow-phase fixture: enough different poses that the branch predictor cannot learn
+/// them, few enough to stay in L2 (a sphere-sphere pass is ~10 us).
+constexpr int kPairsPerType = 512;
+/// Gaps of the narrow-phase poses, as a fraction of the smaller grain size: from a slight overlap
+/// (what an unconverged step leaves) to just inside the alert distance (NscdSettings default
+/// 0.03), so that every pair yields a contact, as the pairs that matter in a dense pile do.
+constexpr double kGapMin = -0.005, kGapMax = 0.025;
+/// Time step of the settling run and of the timed sweeps [t0] (SPEC 4: 3e-4 to 1e-3).
+constexpr double kDt = 1e-3;
+/// Steps of nscd that settle the touching placeholder pile before the sweep is timed, and the
+/// sweep cap during them: enough for the impulses to spread through the network, cheap enough
+/// (about 1 s at 30,000 grains).
+constexpr int kSettleSteps = 10;
+constexpr int kSettleSweeps = 50;
+/// Expected solid fraction used to size the deposit boxes (the deposition default) [-].
+constexpr double kSolidFraction = 0.6;
+constexpr double kPileHeight = 16.0;  // [d_L]
+
+/// Biperiodic box of height 16 that holds n unit spheres at the expected solid fraction.
+core::BoxDef boxFor(int n) {
+  core::PopulationDef pop;
+  const double side = std::sqrt(n * pop.meanGrainVolume(pop.largeSize) / (kSolidFraction * kPileHeight));
+  core::BoxDef box;
+  box.lengthX = side;
+  box.width = side;
+  box.periodicY = true;
+  box.height = kPileHeight;
+  return box;
+}
+
+/// The deposit `confpack deposit` makes for this box (monodisperse spheres), with exactly n grains.
+core::Deposit sphereDeposit(const core::BoxDef& box, int n, std::uint64_t seed) {
+  core::PopulationDef pop;
+  core::DepositionDef def;
+  def.grainCount = static_cast<std::size_t>(n);
+  return core::deposit(box, pop, def, seed);
+}
+
+struct BroadPhaseFixture {
+  std::vector<Vec3> positions;
+  std::vector<double> reach;
+  std::unique_ptr<nscd::BroadPhase> broad;
+  std::vector<nscd::CandidatePair> pairs;
+};
+
+BroadPhaseFixture makeBroadPhaseFixture(int n, std::uint64_t seed) {
+  const core::BoxDef box = boxFor(n);
+  const core::Deposit dep = sphereDeposit(box, n, seed);
+  const nscd::NarrowPhase narrow(box, dep.grains, nscd::NscdSettings{}.alertDistance);
+  BroadPhaseFixture f;
+  for (std::size_t i = 0; i < dep.grains.size(); ++i) {
+    f.positions.push_back(dep.grains[i].position);
+    f.reach.push_back(narrow.reach(static_cast<int>(i)));
+  }
+  f.broad = std::make_unique<nscd::BroadPhase>(box, narrow.maxReach());
+  return f;
+}
+
+enum class PairKind { SphereSphere, SphereWall, PinacoidWall, PinacoidSphere, PinacoidPinacoid };
+
+struct PairKindInfo {
+  PairKind kind;
+  const char* name;
+};
+constexpr PairKindInfo kPairKinds[] = {{PairKind::SphereSphere, "sphere-sphere"},
+                                       {PairKind::SphereWall, "sphere-wall"},
+                                       {PairKind::PinacoidWall, "pinacoid-wall"},
+                                       {PairKind::PinacoidSphere, "pinacoid-sphere"},
+                                       {PairKind::PinacoidPinacoid, "pinacoid-pinacoid"}};
+
+struct NarrowPhaseFixture {
+  core::BoxDef box;
+  std::vector<Vec3> positions;
+  std::vector<Quat> orientations;
+  std::unique_ptr<nscd::NarrowPhase> narrow;
+  std::vector<nscd::CandidatePair> pairs;  ///< grain-grain kinds
+  std::vector<int> wallGrains;             ///< wall kinds: grains that touch the floor
+  std::vector<nscd::ContactGeometry> out;
+};
+
+/// Signed gap between grains a (at pa) and b (at pb) along their exact closest features [d_L].
+double exactGap(const Grain& a, const Vec3& pa, const Grain& b, const Vec3& pb) {
+  constexpr double kNoAlert = 1e9;  // always report, whatever the distance
+  const bool sphereA = a.shape == ShapeKind::Sphere, sphereB = b.shape == ShapeKind::Sphere;
+  if (sphereA && sphereB) return (pb - pa).norm() - 0.5 * (a.size + b.size);
+  if (sphereA) return exactGap(b, pb, a, pa);
+  const core::ConvexPolyhedron polyA = a.polyhedron();
+  const core::PlacedPolyhedron placedA{&polyA, pa, a.orientation.toRotationMatrix()};
+  std::optional<core::PolyhedronContact> pc;
+  if (sphereB) {
+    pc = core::collidePolyhedronSphere(placedA, pb, 0.5 * b.size, kNoAlert);
+  } else {
+    const core::ConvexPolyhedron polyB = b.polyhedron();
+    pc =
+        core::collidePolyhedra(placedA, core::PlacedPolyhedron{&polyB, pb, b.orientation.toRotationMatrix()}, kNoAlert);
+  }
+  if (!pc) throw std::runtime_error("narrow-phase fixture: no gap for a pose");
+  return pc->gap;
+}
+
+/// Unit vector uniform on the sphere (normalised 3-D Gaussian).
+Vec3 randomDirection(core::Rng& rng) {
+  Vec3 v;
+  do v = Vec3(rng.normal(), rng.normal(), rng.normal());
+  while (v.squaredNorm() < 1e-12);
+  return v.normalized();
+}
+
+/// Grains of one shape with the population's size spread and, for pinacoids, uniform orientations.
+std::vector<Grain> drawShapes(ShapeKind shape, int n, std::uint64_t seed) {
+  core::PopulationDef pop;
+  pop.shape = shape;
+  return core::drawGrainCount(pop, static_cast<std::size_t>(n), seed);
+}
+
+// Touching poses. Grain-grain: b is placed from a along a random direction at the distance where
+// their exact gap equals a drawn target (bisection: for convex shapes the signed gap along a ray
+// from a's centre crosses any level once). Grain-wall: the grain sits above the floor of a
+// biperiodic box (so collideWalls tests exactly one wall, and every call is one touching pair).
+NarrowPhaseFixture makeNarrowPhaseFixture(PairKind kind, std::uint64_t seed) {
+  core::Rng rng(seed, core::StreamId::Test, 1);  // synthetic poses, not part of any packing
+  NarrowPhaseFixture f;
+  f.box.lengthX = 1000.0;  // far larger than the poses: no periodic image is involved
+  f.box.width = 1000.0;
+  f.box.periodicY = true;
+  std::vector<Grain> grains;
+  const bool wall = kind == PairKind::SphereWall || kind == PairKind::PinacoidWall;
+  if (wall) {
+    grains = drawShapes(kind == PairKind::SphereWall ? ShapeKind::Sphere : ShapeKind::Pinacoid, kPairsPerType, seed);
+    for (int i = 0; i < kPairsPerType; ++i) {
+      Grain& g = grains[i];
+      // Height of the centre above the lowest point of the grain.
+      double below = 0.5 * g.size;
+      if (g.shape == ShapeKind::Pinacoid) {
+        g.position = Vec3::Zero();
+        below = 0.0;
+        for (const Vec3& v : g.worldVertices()) below = std::max(below, -v.z());
+      }
+      const double gap = rng.uniform(kGapMin, kGapMax) * g.size;
+      g.position = Vec3(rng.uniform(0.0, f.box.lengthX), rng.uniform(0.0, f.box.width), below + gap);
+      f.wallGrains.push_back(i);
+    }
+  } else {
+    const ShapeKind shapeA = kind == PairKind::SphereSphere ? ShapeKind::Sphere : ShapeKind::Pinacoid;
+    const ShapeKind shapeB = kind == PairKind::PinacoidPinacoid ? ShapeKind::Pinacoid : ShapeKind::Sphere;
+    const std::vector<Grain> as = drawShapes(shapeA, kPairsPerType, seed);
+    const std::vector<Grain> bs = drawShapes(shapeB, kPairsPerType, seed + 1);
+    for (int k = 0; k < kPairsPerType; ++k) {
+      Grain a = as[k], b = bs[k];
+      b.orientation = rng.uniformQuaternion();
+      a.position = Vec3(rng.uniform(0.0, f.box.lengthX), rng.uniform(0.0, f.box.width), rng.uniform(1.0, 20.0));
+      const Vec3 dir = randomDirection(rng);
+      const double target = rng.uniform(kGapMin, kGapMax) * std::min(a.size, b.size);
+      double lo = 0.0, hi = a.boundingRadius() + b.boundingRadius() + std::abs(target) + 0.1;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (exactGap(a, a.position, b, a.position + mid * dir) < target ? lo : hi) = mid;
+      }
+      b.position = a.position + hi * dir;
+      // Mixed pairs come in both index orders, as they do out of the broad phase (a < b).
+      if (kind == PairKind::PinacoidSphere && k % 2 == 1) std::swap(a, b);
+      const int ia = static_cast<int>(grains.size());
+      grains.push_back(a);
+      grains.push_back(b);
+      f.pairs.push_back(nscd::CandidatePair{ia, ia + 1, 0, 0});
+    }
+  }
+  for (const Grain& g : grains) {
+    f.positions.push_back(g.position);
+    f.orientations.push_back(g.orientation);
+  }
+  f.narrow = std::make_unique<nscd::NarrowPhase>(f.box, grains, nscd::NscdSettings{}.alertDistance);
+  f.out.reserve(grains.size());
+  // The poses must be what they claim: every pair in contact (a fixture bug would otherwise time
+  // the cheap rejection path).
+  for (const nscd::CandidatePair& p : f.pairs) f.narrow->collidePair(p, f.positions, f.orientations, f.out);
+  for (int i : f.wallGrains) f.narrow->collideWalls(i, f.positions, f.orientations, f.out);
+  if (static_cast<int>(f.out.size()) != kPairsPerType)
+    throw std::runtime_error(
+        fmt::format("narrow-phase fixture: {} of {} poses in contact", f.out.size(), kPairsPerType));
+  return f;
+}
+
+struct SweepFixture {
+  std::vector<nscd::BodyVelocity> velocities;
+  nscd::ContactSolver solver;
+  nscd::NscdSettings settings;
+  double rowsPerGrain = 0.0;
+};
+
+// A realistic contact network fast: spheres the size of the placeholders, at the placeholder
+// centres, touch their three supports (that is how the deposition seats them), so the pile starts
+// as a connected network (Z about 6) with no fall to wait for. The nscd backend then runs a few
+// steps of gravity on it, and the step's phases are rebuilt from its state (q_m, inverse masses,
+// free velocities) to prepare the rows of one step. Every timed iteration is one more sweep on
+// the same rows: the impulses converge across iterations, which changes the values the sweep
+// computes but not its cost.
+SweepFixture makeSweepFixture(int n, std::uint64_t seed) {
+  const core::BoxDef box = boxFor(n);
+  const core::Deposit dep = sphereDeposit(box, n, seed);
+  core::SystemDef system;
+  system.box = box;
+  system.grains = dep.grains;
+  for (std::size_t i = 0; i < dep.grains.size(); ++i) {
+    system.grains[i].size = dep.placeholderDiameter;
+    system.grains[i].position = dep.placeholders[i];
+  }
+  const nlohmann::json options = {{"max_iterations", kSettleSweeps}, {"min_iterations", 1}};
+  const std::unique_ptr<core::ContactBackend> backend = backends::makeBackend("nscd", system, options);
+  for (int s = 0; s < kSettleSteps; ++s) backend->step(kDt);
+
+  SweepFixture f;
+  f.settings.maxIterations = 1;
+  f.settings.minIterations = 1;
+  const std::vector<core::BodyState>& states = backend->states();
+  std::vector<Vec3> positionMid;
+  std::vector<Quat> orientations;
+  std::vector<nscd::BodyInverseMass> bodies(states.size() + 1);  // last: the static walls
+  f.velocities.resize(states.size() + 1);
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    const Grain& g = system.grains[i];
+    // q_m = q + dt (1 - theta) v; v_free = v + dt g (spheres: no gyroscopic term).
+    positionMid.push_back(states[i].position + kDt * (1.0 - f.settings.theta) * states[i].velocity);
+    orientations.push_back(states[i].orientation);
+    const core::Mat3 rot = states[i].orientation.toRotationMatrix();
+    bodies[i].invMass = 1.0 / (system.density * g.volume());
+    bodies[i].invInertia = rot * g.bodyInertia(system.density).inverse() * rot.transpose();
+    f.velocities[i].v = states[i].velocity + kDt * system.gravity;
+    f.velocities[i].w = states[i].angularVelocity;
+  }
+  nscd::NarrowPhase narrow(box, system.grains, f.settings.alertDistance);
+  std::vector<double> reach;
+  for (std::size_t i = 0; i < states.size(); ++i) reach.push_back(narrow.reach(static_cast<int>(i)));
+  nscd::BroadPhase broad(box, narrow.maxReach());
+  std::vector<nscd::CandidatePair> pairs;
+  broad.findPairs(positionMid, reach, pairs);
+  std::vector<nscd::ContactGeometry> contacts;
+  for (const nscd::CandidatePair& p : pairs) narrow.collidePair(p, positionMid, orientations, contacts);
+  for (int i = 0; i < static_cast<int>(states.size()); ++i) narrow.collideWalls(i, positionMid, orientations, contacts);
+  f.solver.prepare(contacts, positionMid, bodies, box, kDt, f.settings);
+  f.rowsPerGrain = static_cast<double>(f.solver.rowCount()) / n;
+  if (f.solver.rowCount() == 0) throw std::runtime_error("sweep fixture: the settled pile has no contact rows");
+  return f;
+}
+
+/// The fixture of `key`, built by `make` on first use. On failure the benchmark is skipped with
+/// the message (runMicroBench then fails the whole run) and nullptr is returned.
+template <class Fixture, class Key>
+Fixture* cachedFixture(benchmark::State& state, const Key& key, const std::function<Fixture()>& make) {
+  static std::map<Key, std::unique_ptr<Fixture>> cache;
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    try {
+      it = cache.emplace(key, std::make_unique<Fixture>(make())).first;
+    } catch (const std::exception& e) {
+      state.SkipWithError(e.what());
+      return nullptr;
+    }
+  }
+  return it->second.get();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Benchmarks.
+
+void broadPhaseBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
+  BroadPhaseFixture* f =
+      cachedFixture<BroadPhaseFixture, int>(state, n, [&] { return makeBroadPhaseFixture(n, seed); });
+  if (!f) return;
+  for (auto _ : state) {
+    f->broad->findPairs(f->positions, f->reach, f->pairs);
+    benchmark::DoNotOptimize(f->pairs.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(f->positions.size()));
+  state.counters["pairs_per_grain"] = static_cast<double>(f->pairs.size()) / static_cast<double>(f->positions.size());
+}
+
+void narrowPhaseBenchmark(benchmark::State& state, PairKind kind, std::uint64_t seed) {
+  NarrowPhaseFixture* f =
+      cachedFixture<NarrowPhaseFixture, PairKind>(state, kind, [&] { return makeNarrowPhaseFixture(kind, seed); });
+  if (!f) return;
+  double points = 0.0;
+  for (auto _ : state) {
+    f->out.clear();
+    for (const nscd::CandidatePair& p : f->pairs) f->narrow->collidePair(p, f->positions, f->orientations, f->out);
+    for (int i : f->wallGrains) f->narrow->collideWalls(i, f->positions, f->orientations, f->out);
+    benchmark::DoNotOptimize(f->out.data());
+    benchmark::ClobberMemory();
+  }
+  for (const nscd::ContactGeometry& c : f->out) points += c.pointCount;
+  state.SetItemsProcessed(state.iterations() * kPairsPerType);
+  state.counters["points_per_pair"] = points / kPairsPerType;
+}
+
+void sweepBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
+  SweepFixture* f = cachedFixture<SweepFixture, int>(state, n, [&] { return makeSweepFixture(n, seed); });
+  if (!f) return;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(f->solver.solve(f->velocities, f->settings));
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * f->solver.rowCount());
+  state.counters["rows_per_grain"] = f->rowsPerGrain;
+}
+
+struct Entry {
+  std::string name;
+  std::function<void(benchmark::State&, std::uint64_t)> run;
+};
+
+const std::vector<Entry>& entries() {
+  static const std::vector<Entry> list = [] {
+    std::vector<Entry> e;
+    for (int n : kBroadPhaseSizes)
+      e.push_back({fmt::format("BroadPhase/spheres/{}", n),
+                   [n](benchmark::State& s, std::uint64_t seed) { broadPhaseBenchmark(s, n, seed); }});
+    for (const PairKindInfo& k : kPairKinds)
+      e.push_back({fmt::format("NarrowPhase/{}", k.name),
+                   [kind = k.kind](benchmark::State& s, std::uint64_t seed) { narrowPhaseBenchmark(s, kind, seed); }});
+    for (int n : kSweepSizes)
+      e.push_back({fmt::format("GaussSeidelSweep/spheres/{}", n),
+                   [n](benchmark::State& s, std::uint64_t seed) { sweepBenchmark(s, n, seed); }});
+    return e;
+  }();
+  return list;
+}
+
+/// Google Benchmark's reading of a filter: "all" is everything, a leading '-' negates.
+bool filterSelects(const std::string& filter, const std::string& name) {
+  std::string spec = filter == "all" ? "." : filter;
+  const bool negative = !spec.empty() && spec[0] == '-';
+  if (negative) spec.erase(0, 1);
+  const bool match = std::regex_search(name, std::regex(spec, std::regex::extended));
+  return match != negative;
+}
+
+}  // namespace
+
+const std::vector<std::string>& microBenchNames() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const Entry& e : entries()) out.push_back(e.name);
+    return out;
+  }();
+  return names;
+}
+
+void validateMicroBench(const MicroBenchDef& def) {
+  if (def.repetitions < 1)
+    throw std::invalid_argument(fmt::format("--micro-repetitions: must be at least 1 (got {})", def.repetitions));
+  if (!(def.minTime > 0.0) || !std::isfinite(def.minTime))
+    throw std::invalid_argument(fmt::format("--micro-min-time: must be a positive number (got {})", def.minTime));
+  try {
+    if (std::none_of(microBenchNames().begin(), microBenchNames().end(),
+                     [&](const std::string& n) { return filterSelects(def.filter, n); }))
+      throw std::invalid_argument(fmt::format("--micro-filter '{}' selects no benchmark (names: {})", def.filter,
+                                              fmt::join(microBenchNames(), ", ")));
+  } catch (const std::regex_error& e) {
+    throw std::invalid_argument(fmt::format("--micro-filter '{}' is not a valid regex ({})", def.filter, e.what()));
+  }
+}
+
+void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
+  validateMicroBench(def);
+  for (const Entry& e : entries())
+    benchmark::RegisterBenchmark(e.name.c_str(), [run = e.run, seed = def.seed](benchmark::State& s) {
+      run(s, seed);
+    })->Unit(benchmark::kMicrosecond);
+  benchmark::AddCustomContext("confpack_version", CONFPACK_VERSION);
+  benchmark::AddCustomContext("confpack_seed", std::to_string(def.seed));
+
+  // Google Benchmark writes its report itself: into a temporary file next to `out`, renamed once
+  // the run has succeeded (the same file system, so the rename is atomic).
+  const std::filesystem::path dir = out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
+  const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}", out.filename().string(), ::getpid());
+  std::vector<std::string> args = {"confpack-bench-micro",
+                                   "--benchmark_filter=" + def.filter,
+                                   fmt::format("--benchmark_repetitions={}", def.repetitions),
+                                   fmt::format("--benchmark_min_time={}", def.minTime),
+                                   "--benchmark_out=" + tmp.string(),
+                                   "--benchmark_out_format=json",
+                                   "--benchmark_report_aggregates_only=true"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  int argc = static_cast<int>(args.size());
+  try {
+    benchmark::Initialize(&argc, argv.data());
+    const std::size_t ran = benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    if (ran == 0) throw std::runtime_error(fmt::format("--micro-filter '{}' ran no benchmark", def.filter));
+    std::ifstream in(tmp);
+    const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+    if (report.is_discarded() || !report.contains("benchmarks"))
+      throw std::runtime_error(fmt::format("{}: Google Benchmark wrote no readable report", tmp.string()));
+    for (const nlohmann::json& b : report["benchmarks"])
+      if (b.value("error_occurred", false))
+        throw std::runtime_error(
+            fmt::format("{}: {}", b.value("name", std::string("?")), b.value("error_message", std::string("failed"))));
+    std::filesystem::rename(tmp, out);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw;
+  }
+}
+
+}  // namespace confpack::app

@@ -1,0 +1,42 @@
+#pragma once
+// `confpack bench --micro`: Google Benchmark micro-benchmarks of the hot phases of the nscd
+// backend (issue 7), run in-process. Rates are items_per_second, with one item being:
+//   BroadPhase/spheres/N        a grain (BroadPhase::findPairs over the N grains of a geometric
+//                               deposit, biperiodic box of height 16 sized for N)
+//   NarrowPhase/<a>-<b>         a touching pair (NarrowPhase::collidePair, or collideWalls in a
+//                               box whose only wall is the floor), gaps within the alert distance
+//   GaussSeidelSweep/spheres/N  a contact row (one sweep of ContactSolver::solve over the rows
+//                               of a pile that the nscd backend has settled briefly): "contact
+//                               updates per second", the issue's target being 3e7 per core.
+// The fixtures (deposits, poses, contact networks) are built once per process, outside the
+// timed loops, and only for the benchmarks that the filter selects.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace confpack::app {
+
+struct MicroBenchDef {
+  std::string filter = ".";  ///< regex over benchmark names (Google Benchmark's --benchmark_filter; a
+                             ///< leading '-' negates it)
+  int repetitions = 5;       ///< repetitions of each benchmark [-], >= 1; with more than one only the
+                             ///< aggregates (mean, median, stddev, cv) are reported
+  double minTime = 0.5;      ///< minimum timed duration of one repetition [s], > 0
+  std::uint64_t seed = 1;    ///< seed of the deposits and of the random poses
+};
+
+/// Names of every micro-benchmark, in run order.
+const std::vector<std::string>& microBenchNames();
+
+/// Throws std::invalid_argument if a field is out of range, the filter is not a valid (POSIX
+/// extended) regex, or it selects no benchmark.
+void validateMicroBench(const MicroBenchDef& def);
+
+/// Runs the selected benchmarks, prints Google Benchmark's console table on stdout and writes its
+/// JSON report to `out` atomically (a temporary file next to it, then a rename). Throws
+/// std::runtime_error, leaving nothing at `out`, if a fixture cannot be built or a run fails.
+/// Google Benchmark keeps global state: call at most once per process.
+void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out);
+
+}  // namespace confpack::app

@@ -1,0 +1,122 @@
+// `confpack bench --micro`: the Google Benchmark micro-benchmarks of the nscd phases, run through
+// the real binary (CONFPACK_BINARY) as a user runs them.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/support/read_file.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct Run {
+  int code = -1;
+  std::string out, err;
+};
+
+/// A scratch directory per test case, removed at the end.
+struct Scratch {
+  fs::path dir;
+  explicit Scratch(const std::string& name)
+      : dir(fs::temp_directory_path() / ("confpack_test_micro_" + name + "_" + std::to_string(::getpid()))) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  ~Scratch() { fs::remove_all(dir); }
+  /// Runs `confpack <args>` in the scratch directory; stdout and stderr are captured outside it,
+  /// so that the directory shows only what confpack wrote.
+  Run run(const std::string& args) const {
+    const fs::path outFile = dir.string() + ".stdout", errFile = dir.string() + ".stderr";
+    const std::string cmd = "cd '" + dir.string() + "' && '" + std::string(CONFPACK_BINARY) + "' " + args + " > '" +
+                            outFile.string() + "' 2> '" + errFile.string() + "'";
+    const int status = std::system(cmd.c_str());
+    Run r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = confpack::testing::slurp(outFile);
+    r.err = confpack::testing::slurp(errFile);
+    fs::remove(outFile);
+    fs::remove(errFile);
+    return r;
+  }
+  bool empty() const { return fs::is_empty(dir); }
+};
+
+int lineCount(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("bench --micro writes Google Benchmark's JSON with a positive sphere-sphere rate") {
+  Scratch s("run");
+  const Run r = s.run(
+      "bench --micro --micro-filter 'NarrowPhase/sphere-sphere' --micro-repetitions 1 "
+      "--micro-min-time 0.01 --out m.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  // The console table goes to stdout.
+  CHECK(r.out.find("NarrowPhase/sphere-sphere") != std::string::npos);
+  const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
+  REQUIRE(report.contains("benchmarks"));
+  int found = 0;
+  for (const json& b : report["benchmarks"]) {
+    // The filter selects this benchmark alone.
+    CHECK(b["run_name"] == "NarrowPhase/sphere-sphere");
+    if (b["run_name"] != "NarrowPhase/sphere-sphere") continue;
+    ++found;
+    CHECK(b["items_per_second"].get<double>() > 0.0);
+    CHECK(b["iterations"].get<long>() >= 1);
+    // Every pose of the fixture is a contact with one point.
+    CHECK(b["points_per_pair"].get<double>() == Approx(1.0));
+  }
+  CHECK(found == 1);
+  // Atomic write: only the report is left in the directory, no temporary file.
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(s.dir)) ++entries;
+  CHECK(entries == 1);
+}
+
+TEST_CASE("bench --micro with repetitions reports the aggregates only, median included") {
+  Scratch s("reps");
+  const Run r = s.run(
+      "bench --micro --micro-filter 'NarrowPhase/sphere-wall' --micro-repetitions 2 "
+      "--micro-min-time 0.005 --out m.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
+  bool median = false;
+  for (const json& b : report["benchmarks"]) {
+    CHECK(b["run_type"] == "aggregate");
+    if (b["aggregate_name"] == "median") {
+      median = true;
+      CHECK(b["items_per_second"].get<double>() > 0.0);
+    }
+  }
+  CHECK(median);
+}
+
+TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing written") {
+  Scratch s("bad");
+  for (const char* args :
+       {"bench --micro --case msp-w10 --out m.json", "bench --micro --scale 0.5 --out m.json",
+        "bench --micro --threads 2 --out m.json", "bench --micro --micro-repetitions 0 --out m.json",
+        "bench --micro --micro-repetitions two --out m.json", "bench --micro --micro-min-time -1 --out m.json",
+        "bench --micro --micro-filter 'NoSuchBenchmark' --out m.json", "bench --micro --micro-filter '(' --out m.json",
+        "bench --micro-filter 'NarrowPhase' --out m.json", "bench --micro --out no/such/dir/m.json"}) {
+    INFO(args);
+    const Run r = s.run(args);
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.out.empty());
+    CHECK(s.empty());
+  }
+}
