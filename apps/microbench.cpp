@@ -234,6 +234,15 @@ struct SweepFixture {
   double rowsPerGrain = 0.0;
 };
 
+/// The nscd defaults with the Gauss-Seidel solver (SPEC 5.1) selected, whatever the default solver
+/// is: the settings only name a solver since the projected conjugate-gradient one was added, so
+/// the key is set only when the settings have it.
+nlohmann::json nlgsOptions() {
+  nlohmann::json j = nscd::NscdSettings{};
+  if (j.contains("solver")) j["solver"] = "nlgs";
+  return j;
+}
+
 // A realistic contact network fast: spheres the size of the placeholders, at the placeholder
 // centres, touch their three supports (that is how the deposition seats them), so the pile starts
 // as a connected network (Z about 6) with no fall to wait for. The nscd backend then runs a few
@@ -251,13 +260,17 @@ SweepFixture makeSweepFixture(int n, std::uint64_t seed) {
     system.grains[i].size = dep.placeholderDiameter;
     system.grains[i].position = dep.placeholders[i];
   }
-  const nlohmann::json options = {{"max_iterations", kSettleSweeps}, {"min_iterations", 1}};
+  nlohmann::json options = nlgsOptions();
+  options["max_iterations"] = kSettleSweeps;
+  options["min_iterations"] = 1;
   const std::unique_ptr<core::ContactBackend> backend = backends::makeBackend("nscd", system, options);
   for (int s = 0; s < kSettleSteps; ++s) backend->step(kDt);
 
   SweepFixture f;
-  f.settings.maxIterations = 1;
-  f.settings.minIterations = 1;
+  nlohmann::json sweepOptions = nlgsOptions();
+  sweepOptions["max_iterations"] = 1;
+  sweepOptions["min_iterations"] = 1;
+  f.settings = nscd::settingsFromJson(sweepOptions);
   const std::vector<core::BodyState>& states = backend->states();
   std::vector<Vec3> positionMid;
   std::vector<Quat> orientations;
@@ -342,6 +355,14 @@ void narrowPhaseBenchmark(benchmark::State& state, PairKind kind, std::uint64_t 
 void sweepBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
   SweepFixture* f = cachedFixture<SweepFixture, int>(state, n, [&] { return makeSweepFixture(n, seed); });
   if (!f) return;
+  // The timed call must be one Gauss-Seidel sweep, not some other solver's iteration.
+  if (f->solver.solve(f->velocities, f->settings) != 1) {
+    state.SkipWithError("the contact solver did not stop after one sweep");
+    return;
+  }
+  // Every iteration sweeps the same rows again, so the pile drifts towards rest and the impulses
+  // converge; that does not change the cost of a sweep (measured at 2,000 grains: 112 M rows/s over
+  // 1,200 iterations and over 25,000).
   for (auto _ : state) {
     benchmark::DoNotOptimize(f->solver.solve(f->velocities, f->settings));
     benchmark::ClobberMemory();

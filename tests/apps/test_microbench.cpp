@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -119,4 +120,30 @@ TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing wri
     CHECK(r.out.empty());
     CHECK(s.empty());
   }
+}
+
+TEST_CASE("bench --micro times the broad phase on a deposit and one sweep over a real contact network") {
+  Scratch s("sweep");
+  const Run r = s.run(
+      "bench --micro --micro-filter 'spheres/2000$' --micro-repetitions 1 --micro-min-time 0.01 "
+      "--out m.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
+  std::map<std::string, json> byName;
+  for (const json& b : report["benchmarks"]) byName[b["run_name"].get<std::string>()] = b;
+  REQUIRE(byName.size() == 2);
+  REQUIRE(byName.count("BroadPhase/spheres/2000") == 1);
+  REQUIRE(byName.count("GaussSeidelSweep/spheres/2000") == 1);
+  const json& broad = byName["BroadPhase/spheres/2000"];
+  CHECK(broad["items_per_second"].get<double>() > 0.0);
+  // A geometric deposit: grains replaced their placeholders, so most pairs are still apart, but the
+  // broad phase does find some.
+  CHECK(broad["pairs_per_grain"].get<double>() > 0.0);
+  CHECK(broad["pairs_per_grain"].get<double>() < 6.0);
+  const json& sweep = byName["GaussSeidelSweep/spheres/2000"];
+  CHECK(sweep["items_per_second"].get<double>() > 0.0);
+  // A connected pile: Z about 6 grain-grain contacts (3 rows per grain) plus the floor rows.
+  CHECK(sweep["rows_per_grain"].get<double>() > 2.5);
+  CHECK(sweep["rows_per_grain"].get<double>() < 4.5);
 }
