@@ -20,22 +20,37 @@ struct CandidatePair {
 
 class BroadPhase {
  public:
+  /// Fewer grains than this per thread and the search runs on fewer threads: a parallel region
+  /// costs more than it shares below it. Only the speed depends on it, never the output.
+  static constexpr int kMinGrainsPerThread = 256;
+
   /// `maxReach` is the largest interaction radius any grain will have [d_L]; it sets the cell size
   /// 2 maxReach. Throws std::invalid_argument if a periodic length is shorter than two cells,
-  /// where the minimum image would no longer be the only image in reach.
-  BroadPhase(const core::BoxDef& box, double maxReach);
+  /// where the minimum image would no longer be the only image in reach. `threads` > 1 searches
+  /// contiguous ranges of first grains on that many OpenMP threads; the output of findPairs is
+  /// the same, bit for bit, for any thread count.
+  BroadPhase(const core::BoxDef& box, double maxReach, int threads = 1);
 
   /// Fills `out` (cleared first) with every pair i < j such that |minimumImage(x_j - x_i)| <
-  /// reach_i + reach_j. Positions need not be wrapped. No allocation once the buffers have grown.
+  /// reach_i + reach_j, sorted by (a, b). Positions need not be wrapped. No allocation once the
+  /// buffers have grown.
   void findPairs(const std::vector<core::Vec3>& positions, const std::vector<double>& reach,
                  std::vector<CandidatePair>& out);
 
  private:
+  // Appends the pairs whose first grain is in [begin, end) to out, sorted by (a, b).
+  void searchRange(int begin, int end, const std::vector<core::Vec3>& positions, const std::vector<double>& reach,
+                   std::vector<CandidatePair>& out) const;
+
   core::BoxDef box_;
   double cell_ = 1.0;
-  int nx_ = 1, ny_ = 1;
+  int nx_ = 1, ny_ = 1, nz_ = 1;
+  int threads_ = 1;
   // Per-step buffers (kept to avoid allocation).
   std::vector<int> cellOf_, cellStart_, cellItems_, cursor_;
+  std::vector<core::Vec3> cellPositions_;  // positions[cellItems_[s]]
+  std::vector<double> cellReach_;          // reach[cellItems_[s]]
+  std::vector<std::vector<CandidatePair>> threadPairs_;  // pairs of threads 1.. (thread 0 writes `out`)
 };
 
 }  // namespace confpack::nscd

@@ -4,6 +4,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace confpack::nscd {
 
 using core::Vec3;
@@ -143,6 +147,55 @@ void NarrowPhase::collideWalls(int i, const std::vector<Vec3>& positions,
     out.push_back(c);
   if (box_.width - p.y() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::SideHigh, box_, alert, c))
     out.push_back(c);
+}
+
+void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std::vector<Vec3>& positions,
+                             const std::vector<core::Quat>& orientations, std::vector<ContactGeometry>& out,
+                             int threads) {
+  out.clear();
+  const std::size_t nPairs = pairs.size(), nGrains = shape_.size();
+  const int wanted = static_cast<int>(std::min<std::size_t>(std::max(1, threads), 1 + nPairs / kMinPairsPerThread));
+#ifdef _OPENMP
+  if (wanted > 1) {
+    if (static_cast<int>(threadContacts_.size()) < wanted) threadContacts_.resize(wanted);
+    for (ThreadContacts& tc : threadContacts_) {  // a smaller team leaves some unused
+      tc.pairs.clear();
+      tc.walls.clear();
+    }
+    auto chunk = [](std::size_t n, int t, int team) { return n * static_cast<std::size_t>(t) / team; };
+#pragma omp parallel num_threads(wanted)
+    {
+      const int t = omp_get_thread_num(), team = omp_get_num_threads();
+      ThreadContacts& mine = threadContacts_[t];
+      std::vector<ContactGeometry>& pairOut = t == 0 ? out : mine.pairs;
+      for (std::size_t k = chunk(nPairs, t, team); k < chunk(nPairs, t + 1, team); ++k)
+        collidePair(pairs[k], positions, orientations, pairOut);
+      for (std::size_t i = chunk(nGrains, t, team); i < chunk(nGrains, t + 1, team); ++i)
+        collideWalls(static_cast<int>(i), positions, orientations, mine.walls);
+#pragma omp barrier
+#pragma omp single
+      {
+        // Layout: pairs of thread 0 (already in place), 1, ..., then walls of thread 0, 1, ...
+        std::size_t at = out.size();
+        threadContacts_[0].pairStart = 0;
+        for (std::size_t u = 1; u < threadContacts_.size(); ++u) {
+          threadContacts_[u].pairStart = at;
+          at += threadContacts_[u].pairs.size();
+        }
+        for (ThreadContacts& tc : threadContacts_) {
+          tc.wallStart = at;
+          at += tc.walls.size();
+        }
+        out.resize(at);
+      }
+      if (t != 0) std::copy(mine.pairs.begin(), mine.pairs.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.pairStart));
+      std::copy(mine.walls.begin(), mine.walls.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.wallStart));
+    }
+    return;
+  }
+#endif
+  for (const CandidatePair& p : pairs) collidePair(p, positions, orientations, out);
+  for (std::size_t i = 0; i < nGrains; ++i) collideWalls(static_cast<int>(i), positions, orientations, out);
 }
 
 }  // namespace confpack::nscd

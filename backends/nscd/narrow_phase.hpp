@@ -51,6 +51,10 @@ void fromPolyhedronContact(const core::PolyhedronContact& pc, bool flip, Contact
 /// Shape data of every grain, and the dispatch over pairs of shapes.
 class NarrowPhase {
  public:
+  /// Fewer candidate pairs than this per thread and collideAll runs on fewer threads (the
+  /// parallel region and the join copy cost more than they share). Speed only, never output.
+  static constexpr std::size_t kMinPairsPerThread = 2000;
+
   /// Throws std::invalid_argument if a grain has a size that is not a positive number.
   NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction);
 
@@ -65,7 +69,22 @@ class NarrowPhase {
   void collideWalls(int i, const std::vector<core::Vec3>& positions, const std::vector<core::Quat>& orientations,
                     std::vector<ContactGeometry>& out) const;
 
+  /// Replaces `out` with every contact of a step: those of the candidate pairs in pair order,
+  /// then those of every grain with the walls in grain order (the solver's row order and the
+  /// cache depend on it). `threads` > 1 splits both loops into contiguous ranges on that many
+  /// OpenMP threads and joins the ranges in order: `out` is the same, bit for bit, for any
+  /// thread count. No allocation once the buffers have grown.
+  void collideAll(const std::vector<CandidatePair>& pairs, const std::vector<core::Vec3>& positions,
+                  const std::vector<core::Quat>& orientations, std::vector<ContactGeometry>& out, int threads = 1);
+
  private:
+  // Contacts found by one thread (thread 0 writes its pair contacts straight into `out`).
+  struct ThreadContacts {
+    std::vector<ContactGeometry> pairs, walls;
+    std::size_t pairStart = 0, wallStart = 0;  // where they go in `out`
+  };
+  std::vector<ThreadContacts> threadContacts_;
+
   core::BoxDef box_;
   double alertFraction_ = 0.0;
   std::vector<core::ShapeKind> shape_;
