@@ -453,6 +453,9 @@ void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
   argv.push_back(nullptr);
   int argc = static_cast<int>(args.size());
   try {
+    // Google Benchmark ends the process (exit 1, its own message) when it cannot open its output:
+    // find out first, and fail like every other command.
+    if (!std::ofstream(tmp)) throw std::runtime_error(fmt::format("{}: cannot create the report file", tmp.string()));
     benchmark::Initialize(&argc, argv.data());
     const std::size_t ran = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
