@@ -102,17 +102,16 @@ BroadPhaseFixture makeBroadPhaseFixture(int n, std::uint64_t seed) {
   return f;
 }
 
-enum class PairKind { SphereSphere, SphereWall, PinacoidWall, PinacoidSphere, PinacoidPinacoid };
+enum class PairKind { SphereSphere, SphereWall, PinacoidWall, PinacoidSphere, PinacoidPinacoid, PinacoidFaceFace };
 
 struct PairKindInfo {
   PairKind kind;
   const char* name;
 };
-constexpr PairKindInfo kPairKinds[] = {{PairKind::SphereSphere, "sphere-sphere"},
-                                       {PairKind::SphereWall, "sphere-wall"},
-                                       {PairKind::PinacoidWall, "pinacoid-wall"},
-                                       {PairKind::PinacoidSphere, "pinacoid-sphere"},
-                                       {PairKind::PinacoidPinacoid, "pinacoid-pinacoid"}};
+constexpr PairKindInfo kPairKinds[] = {
+    {PairKind::SphereSphere, "sphere-sphere"},         {PairKind::SphereWall, "sphere-wall"},
+    {PairKind::PinacoidWall, "pinacoid-wall"},         {PairKind::PinacoidSphere, "pinacoid-sphere"},
+    {PairKind::PinacoidPinacoid, "pinacoid-pinacoid"}, {PairKind::PinacoidFaceFace, "pinacoid-pinacoid-face"}};
 
 struct NarrowPhaseFixture {
   core::BoxDef box;
@@ -188,21 +187,55 @@ NarrowPhaseFixture makeNarrowPhaseFixture(PairKind kind, std::uint64_t seed) {
     }
   } else {
     const ShapeKind shapeA = kind == PairKind::SphereSphere ? ShapeKind::Sphere : ShapeKind::Pinacoid;
-    const ShapeKind shapeB = kind == PairKind::PinacoidPinacoid ? ShapeKind::Pinacoid : ShapeKind::Sphere;
+    const ShapeKind shapeB = kind == PairKind::PinacoidPinacoid || kind == PairKind::PinacoidFaceFace
+                                 ? ShapeKind::Pinacoid
+                                 : ShapeKind::Sphere;
     const std::vector<Grain> as = drawShapes(shapeA, kPairsPerType, seed);
     const std::vector<Grain> bs = drawShapes(shapeB, kPairsPerType, seed + 1);
+    int redraws = 0;
     for (int k = 0; k < kPairsPerType; ++k) {
       Grain a = as[k], b = bs[k];
-      b.orientation = rng.uniformQuaternion();
       a.position = Vec3(rng.uniform(0.0, f.box.lengthX), rng.uniform(0.0, f.box.width), rng.uniform(1.0, 20.0));
-      const Vec3 dir = randomDirection(rng);
       const double target = rng.uniform(kGapMin, kGapMax) * std::min(a.size, b.size);
+      // b moves along base + s dir; s in [lo, hi] brackets the target gap.
+      Vec3 base = a.position, dir;
       double lo = 0.0, hi = a.boundingRadius() + b.boundingRadius() + std::abs(target) + 0.1;
+      if (kind == PairKind::PinacoidFaceFace) {
+        // A face of b held against a face of a (the triple contacts of a dense pinacoid pile, which
+        // take the clipping path): b turned so that its face normal is minus a's, spun at random
+        // about it, face centroids offset by up to a tenth of the size in the contact plane.
+        const core::ConvexPolyhedron polyA = a.polyhedron(), polyB = b.polyhedron();
+        const int fa = static_cast<int>(rng.below(polyA.faces().size()));
+        const int fb = static_cast<int>(rng.below(polyB.faces().size()));
+        auto centroid = [](const core::ConvexPolyhedron& p, int face) {
+          Vec3 c = Vec3::Zero();
+          for (int v : p.faces()[face]) c += p.vertices()[v];
+          return Vec3(c / static_cast<double>(p.faces()[face].size()));
+        };
+        dir = a.orientation * polyA.faceNormals()[fa];
+        const Quat align = Quat::FromTwoVectors(polyB.faceNormals()[fb], -dir);
+        b.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0.0, 2.0 * M_PI), dir)) * align;
+        const Vec3 lateral = randomDirection(rng).cross(dir).normalized() * rng.uniform(0.0, 0.1) * a.size;
+        base = a.position + a.orientation * centroid(polyA, fa) - b.orientation * centroid(polyB, fb) + lateral;
+        lo = -0.3 * std::min(a.size, b.size);
+        hi = 0.3 * std::min(a.size, b.size);
+      } else {
+        b.orientation = rng.uniformQuaternion();
+        dir = randomDirection(rng);
+      }
+      if (!(exactGap(a, a.position, b, base + lo * dir) < target &&
+            exactGap(a, a.position, b, base + hi * dir) > target)) {
+        // The gap does not cross the target in [lo, hi] (a face pose where other features meet
+        // first): redraw, within a budget, so that a broken pose generator fails instead of looping.
+        if (++redraws > 10 * kPairsPerType) throw std::runtime_error("narrow-phase fixture: no bracketing pose found");
+        --k;
+        continue;
+      }
       for (int it = 0; it < 60; ++it) {
         const double mid = 0.5 * (lo + hi);
-        (exactGap(a, a.position, b, a.position + mid * dir) < target ? lo : hi) = mid;
+        (exactGap(a, a.position, b, base + mid * dir) < target ? lo : hi) = mid;
       }
-      b.position = a.position + hi * dir;
+      b.position = base + hi * dir;
       // Mixed pairs come in both index orders, as they do out of the broad phase (a < b).
       if (kind == PairKind::PinacoidSphere && k % 2 == 1) std::swap(a, b);
       const int ia = static_cast<int>(grains.size());

@@ -3,7 +3,7 @@
 // backend (issue 7), run in-process. Rates are items_per_second, with one item being:
 //   BroadPhase/spheres/N        a grain (BroadPhase::findPairs over the N grains of a geometric
 //                               deposit, biperiodic box of height 16 sized for N)
-//   NarrowPhase/<a>-<b>         a touching pair (NarrowPhase::collidePair, or collideWalls in a
+//   NarrowPhase/<a>-<b>[-face]  a touching pair (NarrowPhase::collidePair, or collideWalls in a
 //                               box whose only wall is the floor), gaps within the alert distance
 //   GaussSeidelSweep/spheres/N  a contact row (one sweep of ContactSolver::solve over the rows
 //                               of a pile that the nscd backend has settled briefly): "contact
