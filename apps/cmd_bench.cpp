@@ -70,7 +70,10 @@ void runBenchCommand(BenchState& st) {
 
 void registerBench(CLI::App& app) {
   auto st = std::make_shared<BenchState>();
-  auto* sub = app.add_subcommand("bench", "Time nscd against Bullet on the same packings; writes bench.json");
+  auto* sub = app.add_subcommand(
+      "bench",
+      "Time nscd against Bullet on the same packings (bench.json), or with --micro the nscd phases alone "
+      "(Google Benchmark, micro.json)");
   auto* cases = sub->add_option("--case", st->cases, "Cases to run: msp-w10, mpp-w10, scaling (default: all)");
   sub->add_option("--out", st->out, "Output file (micro.json with --micro)")->capture_default_str();
   auto* timeLimit = sub->add_option("--time-limit", st->def.timeLimit, "Simulated time limit of each compaction [t0]")
@@ -85,7 +88,8 @@ void registerBench(CLI::App& app) {
                            ->capture_default_str();
   auto* scalingSizes = sub->add_option("--scaling-sizes", st->def.scalingSizes, "Grain counts of the scaling series")
                            ->check(positiveNumber());
-  sub->add_option("--seed", st->def.seed, "Seed of the deposits")->capture_default_str();
+  sub->add_option("--seed", st->def.seed, "Seed of the deposits (and of the micro-benchmark poses)")
+      ->capture_default_str();
   auto* threads =
       sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");

@@ -11,8 +11,8 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <optional>
 #include <regex>
 #include <stdexcept>
@@ -55,7 +55,8 @@ constexpr double kGapMin = -0.005, kGapMax = 0.025;
 constexpr double kDt = 1e-3;
 /// Steps of nscd that settle the touching placeholder pile before the sweep is timed, and the
 /// sweep cap during them: enough for the impulses to spread through the network, cheap enough
-/// (about 1 s at 30,000 grains).
+/// (the whole fixture, deposit included, measured at 0.9 s for 8,000 grains and 4.8 s for 30,000
+/// on a loaded 2-core machine).
 constexpr int kSettleSteps = 10;
 constexpr int kSettleSweeps = 50;
 /// Expected solid fraction used to size the deposit boxes (the deposition default) [-].
@@ -214,7 +215,7 @@ NarrowPhaseFixture makeNarrowPhaseFixture(PairKind kind, std::uint64_t seed) {
         };
         dir = a.orientation * polyA.faceNormals()[fa];
         const Quat align = Quat::FromTwoVectors(polyB.faceNormals()[fb], -dir);
-        b.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0.0, 2.0 * M_PI), dir)) * align;
+        b.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0.0, 2.0 * std::numbers::pi), dir)) * align;
         const Vec3 lateral = randomDirection(rng).cross(dir).normalized() * rng.uniform(0.0, 0.1) * a.size;
         base = a.position + a.orientation * centroid(polyA, fa) - b.orientation * centroid(polyB, fb) + lateral;
         lo = -0.3 * std::min(a.size, b.size);
