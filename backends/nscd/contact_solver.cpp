@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <utility>
 
 namespace confpack::nscd {
 
@@ -18,6 +20,28 @@ double gapBias(double gap, double dt, const NscdSettings& s) {
 }
 
 }  // namespace
+
+// Tangential update of a side-wall friction point at its current normal impulse: one local
+// Gauss-Seidel step projected on the Coulomb disc ||r_t|| <= mu r_n. Returns the change (d1, d2).
+std::pair<double, double> ContactSolver::updateTangent(FrictionRow& row, BodyVelocity& va) {
+  const double ut1 = -(row.t1.dot(va.v) + row.axt1.dot(va.w));
+  const double ut2 = -(row.t2.dot(va.v) + row.axt2.dot(va.w));
+  double rt1 = row.rt1 - ut1 * row.invWt;
+  double rt2 = row.rt2 - ut2 * row.invWt;
+  const double limit = row.mu * row.rn;
+  const double norm = std::hypot(rt1, rt2);
+  if (norm > limit) {
+    const double s = norm > 0.0 ? limit / norm : 0.0;
+    rt1 *= s;
+    rt2 *= s;
+  }
+  const double d1 = rt1 - row.rt1, d2 = rt2 - row.rt2;
+  row.rt1 = rt1;
+  row.rt2 = rt2;
+  va.v -= row.invMa * (d1 * row.t1 + d2 * row.t2);
+  va.w -= d1 * row.iaAxt1 + d2 * row.iaAxt2;
+  return {d1, d2};
+}
 
 void ContactSolver::prepare(const std::vector<ContactGeometry>& contacts, const std::vector<Vec3>& positions,
                             const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
@@ -154,6 +178,10 @@ void ContactSolver::warmStart(const ContactCache& cache, const std::vector<Conta
 int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
   residual_ = 0.0;
   if (normalRows_.empty() && frictionRows_.empty()) return 0;
+  return settings.solver == SolverKind::Mprgp ? solveMprgp(vel, settings) : solveNlgs(vel, settings);
+}
+
+int ContactSolver::solveNlgs(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
   int sweep = 0;
   while (sweep < settings.maxIterations) {
     ++sweep;
@@ -185,24 +213,9 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
       va.v -= (row.invMa * dn) * row.n;
       va.w -= dn * row.iaAxn;
       // Tangential part with the updated normal impulse, projected on the Coulomb disc.
-      const double ut1 = -(row.t1.dot(va.v) + row.axt1.dot(va.w));
-      const double ut2 = -(row.t2.dot(va.v) + row.axt2.dot(va.w));
-      double rt1 = row.rt1 - ut1 * row.invWt;
-      double rt2 = row.rt2 - ut2 * row.invWt;
-      const double limit = row.mu * rn;
-      const double norm = std::hypot(rt1, rt2);
-      if (norm > limit) {
-        const double s = norm > 0.0 ? limit / norm : 0.0;
-        rt1 *= s;
-        rt2 *= s;
-      }
-      const double d1 = rt1 - row.rt1, d2 = rt2 - row.rt2;
-      row.rt1 = rt1;
-      row.rt2 = rt2;
-      va.v -= row.invMa * (d1 * row.t1 + d2 * row.t2);
-      va.w -= d1 * row.iaAxt1 + d2 * row.iaAxt2;
+      const auto [d1, d2] = updateTangent(row, va);
       sumDelta2 += dn * dn + d1 * d1 + d2 * d2;
-      sumR2 += rn * rn + rt1 * rt1 + rt2 * rt2;
+      sumR2 += rn * rn + row.rt1 * row.rt1 + row.rt2 * row.rt2;
     };
     // Forward sweeps only, bottom to top (rows sorted in prepare()). Measured on a 536-sphere pile:
     // a symmetric (alternating) sweep is slower (258 versus 166 sweeps per step over the first

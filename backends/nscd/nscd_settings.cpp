@@ -29,8 +29,11 @@ void NscdSettings::validate() const {
   if (threads < 1) bad("threads", fmt::format("must be >= 1 (got {})", threads));
 }
 
+std::string toString(SolverKind k) { return k == SolverKind::Mprgp ? "mprgp" : "nlgs"; }
+
 void to_json(nlohmann::json& j, const NscdSettings& s) {
   j = {{"theta", s.theta},
+       {"solver", toString(s.solver)},
        {"tolerance", s.tolerance},
        {"max_iterations", s.maxIterations},
        {"min_iterations", s.minIterations},
@@ -41,10 +44,26 @@ void to_json(nlohmann::json& j, const NscdSettings& s) {
        {"threads", s.threads}};
 }
 
+NscdSettings defaultsFor(SolverKind kind) {
+  NscdSettings s;
+  s.solver = kind;
+  if (kind == SolverKind::Nlgs) {
+    s.tolerance = 1e-6;
+    s.maxIterations = 2000;
+  }
+  return s;
+}
+
 NscdSettings settingsFromJson(const nlohmann::json& j) {
   NscdSettings s;
   if (j.is_null()) return s;
   if (!j.is_object()) throw std::invalid_argument("nscd options must be a JSON object");
+  // The solver first: it sets the defaults of the keys that depend on it.
+  if (const auto it = j.find("solver"); it != j.end()) {
+    if (*it == "nlgs") s = defaultsFor(SolverKind::Nlgs);
+    else if (*it == "mprgp") s = defaultsFor(SolverKind::Mprgp);
+    else throw std::invalid_argument(fmt::format("nscd option 'solver' must be \"nlgs\" or \"mprgp\" (got {})", it->dump()));
+  }
   for (const auto& [key, value] : j.items()) {
     auto number = [&](double& field) {
       if (!value.is_number()) throw std::invalid_argument(fmt::format("nscd option '{}' must be a number", key));
@@ -56,6 +75,7 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
       field = value.get<int>();
     };
     if (key == "theta") number(s.theta);
+    else if (key == "solver") continue;  // read above
     else if (key == "tolerance") number(s.tolerance);
     else if (key == "max_iterations") integer(s.maxIterations);
     else if (key == "min_iterations") integer(s.minIterations);
@@ -66,7 +86,7 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     else if (key == "threads") integer(s.threads);
     else
       throw std::invalid_argument(fmt::format(
-          "unknown nscd option '{}' (known: theta, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
+          "unknown nscd option '{}' (known: theta, solver, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
           "gap_correction, max_correction_velocity, threads)",
           key));
   }

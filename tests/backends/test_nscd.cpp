@@ -11,6 +11,7 @@
 
 #include "backends/nscd/broad_phase.hpp"
 #include "backends/nscd/nscd_backend.hpp"
+#include "core/deposition.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "core/random.hpp"
 #include "tests/support/systems.hpp"
@@ -166,10 +167,11 @@ TEST_CASE("nscd: a small sphere dropped on a large one comes to rest on it and l
   CHECK(floorForce == Approx(m0 + m1).epsilon(1e-9));
 }
 
-TEST_CASE("nscd warm start: a resting column needs almost no sweeps once its impulses are cached", "[nscd]") {
+TEST_CASE("nscd warm start: a resting column needs almost no iterations once its impulses are cached", "[nscd]") {
+  const std::string solver = GENERATE("nlgs", "mprgp");
   core::SystemDef s = box(20.0, 10.0);
   for (int k = 0; k < 10; ++k) s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5 + k)));
-  auto b = nscd::makeNscdBackend(s, {{"tolerance", 1e-8}, {"max_iterations", 100000}});
+  auto b = nscd::makeNscdBackend(s, {{"solver", solver}, {"tolerance", 1e-8}, {"max_iterations", 100000}});
   b->step(1e-3);
   const int cold = b->profile().iterations;
   // The first answer is only as converged as the stopping rule allows; a few warm steps finish it.
@@ -177,8 +179,11 @@ TEST_CASE("nscd warm start: a resting column needs almost no sweeps once its imp
   const int warm = b->profile().iterations;
   b->step(2e-3);  // a different dt: cached impulses are rescaled to the new step
   const int rescaled = b->profile().iterations;
-  INFO("sweeps cold " << cold << ", warm " << warm << ", rescaled " << rescaled);
-  CHECK(cold > 50);  // a chain of 10 is slow for Gauss-Seidel from zero
+  INFO(solver << ": iterations cold " << cold << ", warm " << warm << ", rescaled " << rescaled);
+  // From zero, a chain of 10 is slow for Gauss-Seidel; conjugate gradients need about one
+  // iteration per distinct eigenvalue of the 10 x 10 Delassus matrix (plus the steps that free
+  // the bounds).
+  CHECK(cold > (solver == "nlgs" ? 50 : 10));
   CHECK(warm <= 3);
   CHECK(rescaled <= 3);
   CHECK(b->profile().residual < 1e-8);
@@ -229,7 +234,11 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
     s.grains.push_back(sphere(rng.uniform(0.8, 1.0), Vec3(0.6 + 1.25 * (k % 4) + rng.uniform(-0.05, 0.05),
                                                            0.75 + 1.5 * ((k / 4) % 2) + rng.uniform(-0.1, 0.1),
                                                            0.6 + 1.1 * (k / 8) + rng.uniform(0.0, 0.05))));
-  auto b = nscd::makeNscdBackend(s, {});
+  // Both solvers: Gauss-Seidel (rows, friction in the same visit) and MPRGP (blocked sums, body
+  // rows, block Gauss-Seidel with the wall friction).
+  const std::string solver = GENERATE("nlgs", "mprgp");
+  const nlohmann::json options = {{"solver", solver}};
+  auto b = nscd::makeNscdBackend(s, options);
   for (int k = 0; k < 400; ++k) b->step(2e-3);
   // FNV-1a over the bytes of every position and velocity component.
   std::uint64_t hash = 1469598103934665603ull;
@@ -245,10 +254,44 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
     }
   // Changed from 0x42aada79cb35fc08 when the solver started sweeping rows bottom to top (sorted by
   // contact height) instead of in contact order: same law, different Gauss-Seidel iterates.
-  constexpr std::uint64_t kExpectedHash = 0x95d29e41f7103684ull;
-  CHECK(hash == kExpectedHash);
+  // The MPRGP hash was set when that solver was added.
+  const std::uint64_t expected = solver == "nlgs" ? 0x95d29e41f7103684ull : 0x26dbf7a2eaef0688ull;
+  INFO(solver);
+  CHECK(hash == expected);
   // The same run twice gives the same bits (no hidden state, no uninitialised memory).
-  auto again = nscd::makeNscdBackend(s, {});
+  auto again = nscd::makeNscdBackend(s, options);
   for (int k = 0; k < 400; ++k) again->step(2e-3);
   for (std::size_t i = 0; i < s.grains.size(); ++i) CHECK(again->states()[i].position == b->states()[i].position);
+}
+
+TEST_CASE("nscd mprgp: two threads give the bits of one on a pile large enough for its parallel passes", "[nscd]") {
+  // 1,500 spheres of a geometric deposit, each given its placeholder's diameter so that they touch
+  // at once (seated on three supports each): more than the 4,096 unknowns from which the solver's
+  // passes run in parallel (contact_solver_mprgp.cpp).
+  core::SystemDef s;
+  s.box.lengthX = 14.0;
+  s.box.width = 14.0;
+  s.box.periodicY = true;
+  core::DepositionDef def;
+  def.grainCount = 1500;
+  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, 5);
+  s.grains = dep.grains;
+  for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter;
+  auto one = nscd::makeNscdBackend(s, {{"threads", 1}, {"max_iterations", 30}});
+  auto two = nscd::makeNscdBackend(s, {{"threads", 2}, {"max_iterations", 30}});
+  for (int k = 0; k < 4; ++k) {
+    one->step(2e-3);
+    two->step(2e-3);
+  }
+  INFO("rows " << one->profile().contactPoints << ", iterations " << one->profile().iterations);
+  REQUIRE(one->profile().contactPoints > 4096);
+  REQUIRE(one->profile().iterations > 10);
+  std::size_t different = 0;
+  for (std::size_t i = 0; i < s.grains.size(); ++i)
+    different += one->states()[i].position != two->states()[i].position ||
+                 one->states()[i].velocity != two->states()[i].velocity;
+  CHECK(different == 0);
+  REQUIRE(one->contacts().size() == two->contacts().size());
+  for (std::size_t c = 0; c < one->contacts().size(); ++c)
+    CHECK(one->contacts()[c].normalForce() == two->contacts()[c].normalForce());
 }

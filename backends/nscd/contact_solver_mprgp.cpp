@@ -1,0 +1,306 @@
+// MPRGP solver of the nscd contact problem (see contact_solver.hpp for the problem and the choice).
+//
+// Unknowns: the normal impulses of every contact point, k < nN the frictionless rows
+// (normalRows_[k]), k >= nN the normal part of the side-wall friction rows (frictionRows_[k - nN],
+// whose body b is the static world). In the scaled variables y = r / s with s = W_kk^-1/2 (Jacobi
+// scaling keeps the bounds y >= 0 and gives A = S W S a unit diagonal) the step's problem is
+//     minimise f(y) = 1/2 y.A y - y.b   subject to y >= 0,
+//     gradient g = A y - b = S (u + c),  u = H^T v the relative normal velocities, c the gap term,
+// whose optimality conditions are exactly the velocity Signorini law of contact_solver.hpp.
+// A p is applied without forming W: impulses to body velocities (M^-1 H S p), then back to the rows
+// (S H^T), two passes over the contact data.
+//
+// Parallel and deterministic: the per-body sums of M^-1 H S p run over each body's own rows (a
+// fixed list built once per step), the per-row products are independent, and every dot product is
+// summed in fixed blocks of rows, then over blocks in order. The arithmetic therefore does not
+// depend on the number of threads: one thread and two give bitwise identical runs.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "backends/nscd/contact_solver.hpp"
+
+namespace confpack::nscd {
+
+using core::Vec3;
+
+namespace {
+
+/// Rows per block of a reduction; fixed, so sums do not depend on the thread count.
+constexpr std::ptrdiff_t kBlock = 1024;
+/// Below this many unknowns a parallel region costs more than it saves (measured, see header).
+constexpr std::size_t kParallelMin = 4096;
+
+/// sum_k term(k) over [0, m), summed per block of kBlock and then over blocks in order. `term` may
+/// also write entry k of other arrays (each k is visited once).
+template <class Term>
+double blockedSum(std::size_t m, int threads, std::vector<double>& partial, const Term& term) {
+  const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
+  partial.assign(static_cast<std::size_t>(blocks), 0.0);
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && m >= kParallelMin)
+  for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+    const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
+    double s = 0.0;
+    for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) s += term(k);
+    partial[static_cast<std::size_t>(blk)] = s;
+  }
+  double total = 0.0;
+  for (double s : partial) total += s;
+  return total;
+}
+
+}  // namespace
+
+void ContactSolver::buildMprgpRows(std::size_t bodyCount) {
+  // Gather rows: the scaled Jacobian of every unknown. Friction rows' normal parts act on the
+  // static world (last body) as b, with zero lever arm there.
+  const int world = static_cast<int>(bodyCount) - 1;
+  const std::size_t nN = normalRows_.size(), m = nN + frictionRows_.size();
+  gatherRows_.resize(m);
+  for (std::size_t k = 0; k < nN; ++k) {
+    const NormalRow& row = normalRows_[k];
+    const double s = scale_[k];
+    gatherRows_[k] = {s * row.n, s * row.axn, s * row.bxn, s * row.bias, row.a, row.b};
+  }
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
+    const FrictionRow& row = frictionRows_[f];
+    const double s = scale_[nN + f];
+    gatherRows_[nN + f] = {s * row.n, s * row.axn, Vec3::Zero(), s * row.bias, row.a, world};
+  }
+  // Scatter entries, grouped by body (counting sort, row order within a body); the world gets
+  // none: its velocity never changes. Entry: unknown k and the velocity change per unit y_k.
+  bodyEntryStart_.assign(bodyCount + 1, 0);
+  for (const GatherRow& row : gatherRows_) {
+    ++bodyEntryStart_[row.a + 1];
+    if (row.b != world) ++bodyEntryStart_[row.b + 1];
+  }
+  for (std::size_t b = 0; b < bodyCount; ++b) bodyEntryStart_[b + 1] += bodyEntryStart_[b];
+  bodyEntries_.resize(bodyEntryStart_[bodyCount]);
+  bodyCursor_.assign(bodyEntryStart_.begin(), bodyEntryStart_.end() - 1);
+  for (std::size_t k = 0; k < nN; ++k) {
+    const NormalRow& row = normalRows_[k];
+    const double s = scale_[k];
+    bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(k)};
+    if (row.b != world) bodyEntries_[bodyCursor_[row.b]++] = {(s * row.invMb) * row.n, s * row.ibBxn, static_cast<int>(k)};
+  }
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
+    const FrictionRow& row = frictionRows_[f];
+    const double s = scale_[nN + f];
+    bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(nN + f)};
+  }
+}
+
+void ContactSolver::applyImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& out, int threads) const {
+  const std::ptrdiff_t bodies = static_cast<std::ptrdiff_t>(out.size()) - 1;
+  out.back() = BodyVelocity{};
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && y.size() >= kParallelMin)
+  for (std::ptrdiff_t i = 0; i < bodies; ++i) {
+    BodyVelocity dv;
+    for (int e = bodyEntryStart_[i]; e < bodyEntryStart_[i + 1]; ++e) {
+      const BodyEntry& entry = bodyEntries_[e];
+      dv.v += y[entry.k] * entry.linear;
+      dv.w += y[entry.k] * entry.angular;
+    }
+    out[i] = dv;
+  }
+}
+
+double ContactSolver::contactVelocities(const std::vector<BodyVelocity>& vel, bool withBias, std::vector<double>& out,
+                                        int threads, const std::vector<double>* dotWith) {
+  return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
+    const GatherRow& row = gatherRows_[k];
+    const BodyVelocity& va = vel[row.a];
+    const BodyVelocity& vb = vel[row.b];
+    const double u = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+    out[k] = withBias ? u + row.bias : u;
+    return dotWith != nullptr ? out[k] * (*dotWith)[k] : 0.0;
+  });
+}
+
+// Upper bound of ||S W S|| by Gershgorin. By Cauchy-Schwarz in the metric M_b^-1 of a shared
+// body b, |(S W S)_kj| <= sum_b s_k sqrt(w_kb) s_j sqrt(w_jb), with w_kb the share of body b in
+// W_kk (1/m_b + (l x n).I_b^-1 (l x n)). Row k's absolute sum is then at most
+// s_k sum_{b of k} sqrt(w_kb) S_b with S_b = sum_{rows j on b} s_j sqrt(w_jb): two passes, no W.
+double ContactSolver::scaledOperatorBound(std::size_t bodyCount) {
+  bodySum_.assign(bodyCount, 0.0);
+  const std::size_t nN = normalRows_.size();
+  auto wa = [](const NormalRow& r) { return std::sqrt(r.invMa + r.axn.dot(r.iaAxn)); };
+  auto wb = [](const NormalRow& r) { return std::sqrt(r.invMb + r.bxn.dot(r.ibBxn)); };
+  auto wf = [](const FrictionRow& r) { return std::sqrt(r.invMa + r.axn.dot(r.iaAxn)); };
+  for (std::size_t k = 0; k < nN; ++k) {
+    bodySum_[normalRows_[k].a] += scale_[k] * wa(normalRows_[k]);
+    bodySum_[normalRows_[k].b] += scale_[k] * wb(normalRows_[k]);
+  }
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f)
+    bodySum_[frictionRows_[f].a] += scale_[nN + f] * wf(frictionRows_[f]);
+  double bound = 0.0;
+  for (std::size_t k = 0; k < nN; ++k) {
+    const NormalRow& r = normalRows_[k];
+    bound = std::max(bound, scale_[k] * (wa(r) * bodySum_[r.a] + wb(r) * bodySum_[r.b]));
+  }
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f)
+    bound = std::max(bound, scale_[nN + f] * wf(frictionRows_[f]) * bodySum_[frictionRows_[f].a]);
+  return bound;
+}
+
+double ContactSolver::frictionTangentPass(std::vector<BodyVelocity>& vel) {
+  double sumDelta2 = 0.0, sumR2 = 0.0;
+  const std::size_t nN = normalRows_.size();
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
+    FrictionRow& row = frictionRows_[f];
+    row.rn = scale_[nN + f] * y_[nN + f];
+    const auto [d1, d2] = updateTangent(row, vel[row.a]);
+    sumDelta2 += d1 * d1 + d2 * d2;
+    sumR2 += row.rn * row.rn + row.rt1 * row.rt1 + row.rt2 * row.rt2;
+  }
+  return sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : 0.0;
+}
+
+// Dostal & Schoeberl (2005), "Minimizing quadratic functions subject to bound constraints with
+// the rate of convergence and finite termination", Comput. Optim. Appl. 30; Dostal (2009),
+// "Optimal Quadratic Programming Algorithms", Springer, algorithm MPRGP. With the free set
+// F = {y_k > 0}, the free gradient phi (g on F, 0 elsewhere), the chopped gradient beta
+// (min(g, 0) off F) and the reduced free gradient phi~ = min(y / alpha_bar, phi) on F, each
+// iteration is one of:
+//   proportional (||beta||^2 <= Gamma^2 phi~.phi): a conjugate gradient step along p if it stays
+//     feasible, otherwise an expansion step (to the first bound, then a projected gradient step of
+//     fixed length alpha_bar in (0, 2/||A||]) that may change the free set by many indices at once;
+//   else a proportioning step along -beta, which releases bound unknowns pulling off their bound.
+// Each iteration applies A once. f decreases monotonically; the method converges at the rate of
+// conjugate gradients on the free set (sqrt of the condition number) instead of Gauss-Seidel's.
+int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
+  const std::size_t nN = normalRows_.size(), m = nN + frictionRows_.size();
+  const int threads = settings.threads;
+  for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_}) v->resize(m);
+  dv_.resize(vel.size());
+  for (std::size_t k = 0; k < nN; ++k) {
+    scale_[k] = std::sqrt(normalRows_[k].invW);
+    y_[k] = normalRows_[k].r / scale_[k];
+  }
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
+    scale_[nN + f] = std::sqrt(frictionRows_[f].invWnn);
+    y_[nN + f] = frictionRows_[f].rn / scale_[nN + f];
+  }
+  buildMprgpRows(vel.size());
+  y0_ = y_;  // `vel` holds the velocities of y0_; iterations move y only (see syncVelocities)
+  const double bound = scaledOperatorBound(vel.size());
+  const double alphaBar = bound > 0.0 ? 1.95 / bound : 1.0;  // safe: bound >= ||A||
+  const double invAlphaBar = 1.0 / alphaBar;
+  constexpr double kGamma = 1.0;                               // Dostal's recommended Gamma
+
+  // vel <- velocities of y (vel + M^-1 H S (y - y0)), then y0 = y.
+  auto syncVelocities = [&] {
+    for (std::size_t k = 0; k < m; ++k) step_[k] = y_[k] - y0_[k];
+    applyImpulses(step_, dv_, threads);
+    for (std::size_t b = 0; b < vel.size(); ++b) {
+      vel[b].v += dv_[b].v;
+      vel[b].w += dv_[b].w;
+    }
+    y0_ = y_;
+  };
+  auto freeGradientToP = [&] {
+    for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
+  };
+  // The norms that steer the next iteration, in one blocked pass: ||g^P||^2, ||beta||^2,
+  // phi~.phi, g.p, and the largest feasible step along -p.
+  std::vector<Measures>& partial = measures_;
+  auto measure = [&] {
+    const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
+    partial.assign(static_cast<std::size_t>(blocks), Measures{});
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && m >= kParallelMin)
+    for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+      Measures r;
+      const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
+      for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) {
+        const double g = g_[k], y = y_[k], p = p_[k];
+        if (y > 0.0) {
+          r.projected2 += g * g;
+          r.reducedFree += std::min(y * invAlphaBar, g) * g;
+        } else if (g < 0.0) {
+          r.projected2 += g * g;
+          r.chopped2 += g * g;
+        }
+        r.gDotP += g * p;
+        if (p > 0.0) r.feasible = std::min(r.feasible, y / p);
+      }
+      partial[static_cast<std::size_t>(blk)] = r;
+    }
+    Measures total;
+    for (const Measures& r : partial) {
+      total.projected2 += r.projected2;
+      total.chopped2 += r.chopped2;
+      total.reducedFree += r.reducedFree;
+      total.gDotP += r.gDotP;
+      total.feasible = std::min(total.feasible, r.feasible);
+    }
+    return total;
+  };
+
+  // The scale of the residual: ||b|| = ||S (H^T v_free + c)||, the gradient at r = 0.
+  contactVelocities(vel, true, g_, threads);
+  applyImpulses(y_, dv_, threads);
+  contactVelocities(dv_, false, ap_, threads);
+  const double bNorm = std::sqrt(
+      blockedSum(m, threads, partial_, [&](std::size_t k) { return (g_[k] - ap_[k]) * (g_[k] - ap_[k]); }));
+
+  int iterations = 0;
+  double tangentChange = 0.0;
+  const int outerCap = frictionRows_.empty() ? 1 : settings.maxIterations;
+  for (int outer = 0; outer < outerCap; ++outer) {
+    contactVelocities(vel, true, g_, threads);
+    freeGradientToP();
+    while (true) {
+      const Measures now = measure();
+      residual_ = bNorm > 0.0 ? std::sqrt(now.projected2) / bNorm : 0.0;
+      if (residual_ < settings.tolerance || iterations >= settings.maxIterations) break;
+      ++iterations;
+      if (now.chopped2 <= kGamma * kGamma * now.reducedFree) {
+        applyImpulses(p_, dv_, threads);
+        const double pAp = contactVelocities(dv_, false, ap_, threads, &p_);
+        const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
+        if (alphaCg <= now.feasible) {  // conjugate gradient step
+          const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
+            y_[k] -= alphaCg * p_[k];
+            g_[k] -= alphaCg * ap_[k];
+            return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
+          });
+          const double gamma = phiAp / pAp;
+          for (std::size_t k = 0; k < m; ++k) p_[k] = (y_[k] > 0.0 ? g_[k] : 0.0) - gamma * p_[k];
+        } else {  // expansion: to the first bound, then a projected gradient step of length alpha_bar
+          for (std::size_t k = 0; k < m; ++k) {
+            y_[k] = std::max(0.0, y_[k] - now.feasible * p_[k]);
+            g_[k] -= now.feasible * ap_[k];
+            y_[k] = std::max(0.0, y_[k] - alphaBar * (y_[k] > 0.0 ? g_[k] : 0.0));
+          }
+          syncVelocities();
+          contactVelocities(vel, true, g_, threads);  // afresh: no drift from the recursive updates
+          freeGradientToP();
+        }
+      } else {  // proportioning: release bound unknowns whose gradient pulls them off the bound
+        for (std::size_t k = 0; k < m; ++k) step_[k] = (y_[k] > 0.0 || g_[k] >= 0.0) ? 0.0 : g_[k];
+        applyImpulses(step_, dv_, threads);
+        const double dAd = contactVelocities(dv_, false, ap_, threads, &step_);
+        if (!(dAd > 0.0)) break;  // a chopped direction of zero curvature: nothing to gain
+        const double alpha = now.chopped2 / dAd;  // g.beta = ||beta||^2
+        for (std::size_t k = 0; k < m; ++k) {
+          y_[k] = std::max(0.0, y_[k] - alpha * step_[k]);
+          g_[k] -= alpha * ap_[k];
+        }
+        freeGradientToP();
+      }
+    }
+    syncVelocities();
+    if (frictionRows_.empty()) break;
+    // Block Gauss-Seidel with the tangential impulses of the wall points (their discs use the new
+    // normal impulses), until a pass changes them by less than the tolerance.
+    tangentChange = frictionTangentPass(vel);
+    ++iterations;
+    if (tangentChange < settings.tolerance || iterations >= settings.maxIterations) break;
+  }
+  residual_ = std::max(residual_, tangentChange);
+  for (std::size_t k = 0; k < nN; ++k) normalRows_[k].r = scale_[k] * y_[k];
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f) frictionRows_[f].rn = scale_[nN + f] * y_[nN + f];
+  return iterations;
+}
+
+}  // namespace confpack::nscd
