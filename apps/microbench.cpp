@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -261,30 +262,51 @@ NarrowPhaseFixture makeNarrowPhaseFixture(PairKind kind, std::uint64_t seed) {
   return f;
 }
 
-struct SweepFixture {
-  std::vector<nscd::BodyVelocity> velocities;
+/// One step's contact problem on a settled pile: what ContactSolver::prepare needs, kept so that a
+/// benchmark can prepare the rows afresh.
+struct SolverFixture {
+  core::BoxDef box;
+  std::vector<nscd::ContactGeometry> contacts;
+  std::vector<Vec3> positionMid;                   ///< q_m [d_L]
+  std::vector<nscd::BodyInverseMass> bodies;       ///< one per grain, then the static walls
+  std::vector<nscd::BodyVelocity> freeVelocities;  ///< v_free of the step
+  std::vector<nscd::BodyVelocity> velocities;      ///< what the solver works on
   nscd::ContactSolver solver;
-  nscd::NscdSettings settings;
   double rowsPerGrain = 0.0;
+
+  /// Rows prepared from the contacts with zero impulses, velocities back to v_free (a cold start).
+  void reset(const nscd::NscdSettings& settings) {
+    velocities = freeVelocities;
+    solver.prepare(contacts, positionMid, bodies, box, kDt, settings);
+  }
 };
 
-/// The nscd defaults with the Gauss-Seidel solver (SPEC 5.1) selected, whatever the default solver
-/// is: the settings only name a solver since the projected conjugate-gradient one was added, so
-/// the key is set only when the settings have it.
-nlohmann::json nlgsOptions() {
-  nlohmann::json j = nscd::NscdSettings{};
-  if (j.contains("solver")) j["solver"] = "nlgs";
-  return j;
+/// One Gauss-Seidel sweep (SPEC 5.1), whatever the default solver is.
+nscd::NscdSettings oneSweepSettings() {
+  nscd::NscdSettings s = nscd::defaultsFor(nscd::SolverKind::Nlgs);
+  s.maxIterations = 1;
+  s.minIterations = 1;
+  return s;
+}
+
+/// MPRGP iterations per timed solve: a jammed pile needs a few hundred per step at the default
+/// tolerance (nscd_settings.hpp), so the per-solve setup (Jacobi scaling, body rows, the operator
+/// bound) weighs what it weighs in a run only if a solve is long enough; 50 keeps a repetition short.
+constexpr int kMprgpIterations = 50;
+
+nscd::NscdSettings mprgpSettings() {
+  nscd::NscdSettings s = nscd::defaultsFor(nscd::SolverKind::Mprgp);
+  s.maxIterations = kMprgpIterations;
+  s.tolerance = std::numeric_limits<double>::min();  // never converged: always kMprgpIterations
+  return s;
 }
 
 // A realistic contact network fast: spheres the size of the placeholders, at the placeholder
 // centres, touch their three supports (that is how the deposition seats them), so the pile starts
-// as a connected network (Z about 6) with no fall to wait for. The nscd backend then runs a few
-// steps of gravity on it, and the step's phases are rebuilt from its state (q_m, inverse masses,
-// free velocities) to prepare the rows of one step. Every timed iteration is one more sweep on
-// the same rows: the impulses converge across iterations, which changes the values the sweep
-// computes but not its cost.
-SweepFixture makeSweepFixture(int n, std::uint64_t seed) {
+// as a connected network (Z about 6) with no fall to wait for. The nscd backend (Gauss-Seidel,
+// capped sweeps: the cheapest settling) then runs a few steps of gravity on it, and one step's
+// phases are rebuilt from its state: q_m, inverse masses, free velocities, pairs and contacts.
+SolverFixture makeSolverFixture(int n, std::uint64_t seed) {
   const core::BoxDef box = boxFor(n);
   const core::Deposit dep = sphereDeposit(box, n, seed);
   core::SystemDef system;
@@ -294,45 +316,40 @@ SweepFixture makeSweepFixture(int n, std::uint64_t seed) {
     system.grains[i].size = dep.placeholderDiameter;
     system.grains[i].position = dep.placeholders[i];
   }
-  nlohmann::json options = nlgsOptions();
-  options["max_iterations"] = kSettleSweeps;
-  options["min_iterations"] = 1;
+  const nlohmann::json options = {{"solver", "nlgs"}, {"max_iterations", kSettleSweeps}, {"min_iterations", 1}};
   const std::unique_ptr<core::ContactBackend> backend = backends::makeBackend("nscd", system, options);
   for (int s = 0; s < kSettleSteps; ++s) backend->step(kDt);
 
-  SweepFixture f;
-  nlohmann::json sweepOptions = nlgsOptions();
-  sweepOptions["max_iterations"] = 1;
-  sweepOptions["min_iterations"] = 1;
-  f.settings = nscd::settingsFromJson(sweepOptions);
+  SolverFixture f;
+  f.box = box;
+  const nscd::NscdSettings settings;
   const std::vector<core::BodyState>& states = backend->states();
-  std::vector<Vec3> positionMid;
   std::vector<Quat> orientations;
-  std::vector<nscd::BodyInverseMass> bodies(states.size() + 1);  // last: the static walls
-  f.velocities.resize(states.size() + 1);
+  f.bodies.resize(states.size() + 1);  // last: the static walls
+  f.freeVelocities.resize(states.size() + 1);
   for (std::size_t i = 0; i < states.size(); ++i) {
     const Grain& g = system.grains[i];
     // q_m = q + dt (1 - theta) v; v_free = v + dt g (spheres: no gyroscopic term).
-    positionMid.push_back(states[i].position + kDt * (1.0 - f.settings.theta) * states[i].velocity);
+    f.positionMid.push_back(states[i].position + kDt * (1.0 - settings.theta) * states[i].velocity);
     orientations.push_back(states[i].orientation);
     const core::Mat3 rot = states[i].orientation.toRotationMatrix();
-    bodies[i].invMass = 1.0 / (system.density * g.volume());
-    bodies[i].invInertia = rot * g.bodyInertia(system.density).inverse() * rot.transpose();
-    f.velocities[i].v = states[i].velocity + kDt * system.gravity;
-    f.velocities[i].w = states[i].angularVelocity;
+    f.bodies[i].invMass = 1.0 / (system.density * g.volume());
+    f.bodies[i].invInertia = rot * g.bodyInertia(system.density).inverse() * rot.transpose();
+    f.freeVelocities[i].v = states[i].velocity + kDt * system.gravity;
+    f.freeVelocities[i].w = states[i].angularVelocity;
   }
-  nscd::NarrowPhase narrow(box, system.grains, f.settings.alertDistance);
+  nscd::NarrowPhase narrow(box, system.grains, settings.alertDistance);
   std::vector<double> reach;
   for (std::size_t i = 0; i < states.size(); ++i) reach.push_back(narrow.reach(static_cast<int>(i)));
   nscd::BroadPhase broad(box, narrow.maxReach());
   std::vector<nscd::CandidatePair> pairs;
-  broad.findPairs(positionMid, reach, pairs);
-  std::vector<nscd::ContactGeometry> contacts;
-  for (const nscd::CandidatePair& p : pairs) narrow.collidePair(p, positionMid, orientations, contacts);
-  for (int i = 0; i < static_cast<int>(states.size()); ++i) narrow.collideWalls(i, positionMid, orientations, contacts);
-  f.solver.prepare(contacts, positionMid, bodies, box, kDt, f.settings);
+  broad.findPairs(f.positionMid, reach, pairs);
+  for (const nscd::CandidatePair& p : pairs) narrow.collidePair(p, f.positionMid, orientations, f.contacts);
+  for (int i = 0; i < static_cast<int>(states.size()); ++i)
+    narrow.collideWalls(i, f.positionMid, orientations, f.contacts);
+  f.reset(settings);
   f.rowsPerGrain = static_cast<double>(f.solver.rowCount()) / n;
-  if (f.solver.rowCount() == 0) throw std::runtime_error("sweep fixture: the settled pile has no contact rows");
+  if (f.solver.rowCount() == 0) throw std::runtime_error("solver fixture: the settled pile has no contact rows");
   return f;
 }
 
@@ -387,10 +404,12 @@ void narrowPhaseBenchmark(benchmark::State& state, PairKind kind, std::uint64_t 
 }
 
 void sweepBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
-  SweepFixture* f = cachedFixture<SweepFixture, int>(state, n, [&] { return makeSweepFixture(n, seed); });
+  SolverFixture* f = cachedFixture<SolverFixture, int>(state, n, [&] { return makeSolverFixture(n, seed); });
   if (!f) return;
+  const nscd::NscdSettings settings = oneSweepSettings();
+  f->reset(settings);
   // The timed call must be one Gauss-Seidel sweep, not some other solver's iteration.
-  if (f->solver.solve(f->velocities, f->settings) != 1) {
+  if (f->solver.solve(f->velocities, settings) != 1) {
     state.SkipWithError("the contact solver did not stop after one sweep");
     return;
   }
@@ -398,10 +417,31 @@ void sweepBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
   // converge; that does not change the cost of a sweep (measured at 2,000 grains: 112 M rows/s over
   // 1,200 iterations and over 25,000).
   for (auto _ : state) {
-    benchmark::DoNotOptimize(f->solver.solve(f->velocities, f->settings));
+    benchmark::DoNotOptimize(f->solver.solve(f->velocities, settings));
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * f->solver.rowCount());
+  state.counters["rows_per_grain"] = f->rowsPerGrain;
+}
+
+// Each timed iteration is one cold MPRGP solve of kMprgpIterations iterations (rows prepared
+// afresh outside the timing, so every solve does the same work). Items are rows times iterations,
+// comparable with Gauss-Seidel's rows per sweep although an MPRGP iteration costs about two sweeps.
+void mprgpBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
+  SolverFixture* f = cachedFixture<SolverFixture, int>(state, n, [&] { return makeSolverFixture(n, seed); });
+  if (!f) return;
+  const nscd::NscdSettings settings = mprgpSettings();
+  std::int64_t iterations = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    f->reset(settings);
+    state.ResumeTiming();
+    iterations += f->solver.solve(f->velocities, settings);
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(iterations * f->solver.rowCount());
+  state.counters["iterations_per_solve"] =
+      state.iterations() > 0 ? static_cast<double>(iterations) / static_cast<double>(state.iterations()) : 0.0;
   state.counters["rows_per_grain"] = f->rowsPerGrain;
 }
 
@@ -422,6 +462,9 @@ const std::vector<Entry>& entries() {
     for (int n : kSweepSizes)
       e.push_back({fmt::format("GaussSeidelSweep/spheres/{}", n),
                    [n](benchmark::State& s, std::uint64_t seed) { sweepBenchmark(s, n, seed); }});
+    for (int n : kSweepSizes)
+      e.push_back({fmt::format("MprgpIteration/spheres/{}", n),
+                   [n](benchmark::State& s, std::uint64_t seed) { mprgpBenchmark(s, n, seed); }});
     return e;
   }();
   return list;

@@ -122,7 +122,7 @@ TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing wri
   }
 }
 
-TEST_CASE("bench --micro times the broad phase on a deposit and one sweep over a real contact network") {
+TEST_CASE("bench --micro times the broad phase on a deposit and both solvers over a real contact network") {
   Scratch s("sweep");
   const Run r = s.run(
       "bench --micro --micro-filter 'spheres/2000$' --micro-repetitions 1 --micro-min-time 0.01 "
@@ -132,7 +132,7 @@ TEST_CASE("bench --micro times the broad phase on a deposit and one sweep over a
   const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
   std::map<std::string, json> byName;
   for (const json& b : report["benchmarks"]) byName[b["run_name"].get<std::string>()] = b;
-  REQUIRE(byName.size() == 2);
+  REQUIRE(byName.size() == 3);
   REQUIRE(byName.count("BroadPhase/spheres/2000") == 1);
   REQUIRE(byName.count("GaussSeidelSweep/spheres/2000") == 1);
   const json& broad = byName["BroadPhase/spheres/2000"];
@@ -146,4 +146,10 @@ TEST_CASE("bench --micro times the broad phase on a deposit and one sweep over a
   // A connected pile: Z about 6 grain-grain contacts (3 rows per grain) plus the floor rows.
   CHECK(sweep["rows_per_grain"].get<double>() > 2.5);
   CHECK(sweep["rows_per_grain"].get<double>() < 4.5);
+  // MPRGP on the same rows: every timed solve runs its fixed 50 iterations.
+  REQUIRE(byName.count("MprgpIteration/spheres/2000") == 1);
+  const json& mprgp = byName["MprgpIteration/spheres/2000"];
+  CHECK(mprgp["items_per_second"].get<double>() > 0.0);
+  CHECK(mprgp["iterations_per_solve"].get<double>() == Approx(50.0));
+  CHECK(mprgp["rows_per_grain"].get<double>() == Approx(sweep["rows_per_grain"].get<double>()));
 }
