@@ -70,6 +70,7 @@ NarrowPhase::NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>
       throw std::invalid_argument("nscd: every grain size must be a positive number");
     poly_.push_back(g.shape == core::ShapeKind::Pinacoid ? g.polyhedron() : core::ConvexPolyhedron{});
     shape_.push_back(g.shape);
+    hasPolyhedra_ = hasPolyhedra_ || g.shape != core::ShapeKind::Sphere;
     radius_.push_back(g.boundingRadius());
     size_.push_back(g.size);
   }
@@ -154,7 +155,8 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
                              int threads) {
   out.clear();
   const std::size_t nPairs = pairs.size(), nGrains = shape_.size();
-  const int wanted = static_cast<int>(std::min<std::size_t>(std::max(1, threads), 1 + nPairs / kMinPairsPerThread));
+  const std::size_t useful = std::max<std::size_t>(1, nPairs / kMinPairsPerThread);
+  const int wanted = hasPolyhedra_ ? static_cast<int>(std::min<std::size_t>(std::max(1, threads), useful)) : 1;
 #ifdef _OPENMP
   if (wanted > 1) {
     if (static_cast<int>(threadContacts_.size()) < wanted) threadContacts_.resize(wanted);

@@ -84,9 +84,10 @@ class NscdBackend final : public core::ContactBackend {
     }
     positionMid_ = position_;
     orientationMid_ = orientation_;
-    // Per-body loops cost ~50 ns a body: below a few thousand bodies a parallel region costs
-    // more than it shares.
-    constexpr int kMinBodiesPerThread = 1000;
+    // Per-body loops cost ~50-100 ns a body, about 8% of a step: each thread must get enough
+    // bodies to outweigh a parallel region, which on a loaded machine can cost milliseconds
+    // (a thread that is not running stalls the join; measured in the commit message).
+    constexpr int kMinBodiesPerThread = 4000;
     bodyThreads_ = std::max(1, std::min(settings_.threads, n_ / kMinBodiesPerThread));
     states_.resize(n_);
     writeStates();

@@ -9,6 +9,7 @@
 #include "backends/nscd/broad_phase.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_backend.hpp"
+#include "backends/nscd/nscd_settings.hpp"
 #include "core/deposition.hpp"
 #include "core/random.hpp"
 
@@ -191,12 +192,23 @@ TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread 
 }
 
 TEST_CASE("nscd: a sphere pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
-  // 2500 spheres: every parallel phase engages (predict/correct from 2000 bodies on 2 threads).
-  // Spheres grown to the placeholder size (1.1 d): a touching, loaded pile from the start.
-  requireSameRun(pile(core::ShapeKind::Sphere, 12.0, 8.0, 2500, 1.1), 10, 2e-3);
+  // 8000 spheres: the broad phase and predict/correct run on 2 threads (from 2 x 4000 bodies;
+  // sphere-only systems collide on one). Grown to the placeholder size (1.1 d): a touching,
+  // loaded pile from the start.
+  requireSameRun(pile(core::ShapeKind::Sphere, 20.0, 10.0, 8000, 1.1), 6, 2e-3);
 }
 
 TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
-  // 800 pinacoids: the narrow phase runs on 2 threads (> 2 x 2000 candidate pairs).
-  requireSameRun(pile(core::ShapeKind::Pinacoid, 10.0, 6.0, 800, 1.3), 30, 2e-3);
+  const core::SystemDef s = pile(core::ShapeKind::Pinacoid, 12.0, 6.0, 1200, 1.3);
+  // The narrow phase runs on 2 threads: more than 2 x kMinPairsPerThread candidate pairs.
+  std::vector<Vec3> positions;
+  for (const core::Grain& g : s.grains) positions.push_back(g.position);
+  const nscd::NarrowPhase narrow(s.box, s.grains, nscd::NscdSettings{}.alertDistance);
+  std::vector<double> reach;
+  for (std::size_t i = 0; i < s.grains.size(); ++i) reach.push_back(narrow.reach(static_cast<int>(i)));
+  std::vector<nscd::CandidatePair> pairs;
+  nscd::BroadPhase(s.box, narrow.maxReach()).findPairs(positions, reach, pairs);
+  INFO("candidate pairs " << pairs.size());
+  REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
+  requireSameRun(s, 30, 2e-3);
 }
