@@ -122,17 +122,17 @@ TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing wri
   }
 }
 
-TEST_CASE("bench --micro times the broad phase on a deposit and both solvers over a real contact network") {
+TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both solvers over a real contact network") {
   Scratch s("sweep");
   const Run r = s.run(
-      "bench --micro --micro-filter 'spheres/2000$' --micro-repetitions 1 --micro-min-time 0.01 "
+      "bench --micro --micro-filter '/2000$' --micro-repetitions 1 --micro-min-time 0.01 "
       "--out m.json");
   INFO(r.err);
   REQUIRE(r.code == 0);
   const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
   std::map<std::string, json> byName;
   for (const json& b : report["benchmarks"]) byName[b["run_name"].get<std::string>()] = b;
-  REQUIRE(byName.size() == 3);
+  REQUIRE(byName.size() == 4);
   REQUIRE(byName.count("BroadPhase/spheres/2000") == 1);
   REQUIRE(byName.count("GaussSeidelSweep/spheres/2000") == 1);
   const json& broad = byName["BroadPhase/spheres/2000"];
@@ -141,6 +141,12 @@ TEST_CASE("bench --micro times the broad phase on a deposit and both solvers ove
   // broad phase does find some.
   CHECK(broad["pairs_per_grain"].get<double>() > 0.0);
   CHECK(broad["pairs_per_grain"].get<double>() < 6.0);
+  // The settled pile of the solver benchmarks is dense: its broad phase finds many more pairs.
+  REQUIRE(byName.count("BroadPhase/pile/2000") == 1);
+  const json& pile = byName["BroadPhase/pile/2000"];
+  CHECK(pile["items_per_second"].get<double>() > 0.0);
+  CHECK(pile["pairs_per_grain"].get<double>() > 2.5);
+  CHECK(pile["pairs_per_grain"].get<double>() > 5.0 * broad["pairs_per_grain"].get<double>());
   const json& sweep = byName["GaussSeidelSweep/spheres/2000"];
   CHECK(sweep["items_per_second"].get<double>() > 0.0);
   // A connected pile: Z about 6 grain-grain contacts (3 rows per grain) plus the floor rows.
