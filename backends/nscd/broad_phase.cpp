@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -15,7 +16,7 @@ namespace confpack::nscd {
 using core::Vec3;
 
 BroadPhase::BroadPhase(const core::BoxDef& box, double maxReach, int threads)
-    : box_(box), threads_(std::max(1, threads)) {
+    : box_(box), threads_(std::max(1, threads)), choice_(threads) {
   if (!(maxReach > 0.0)) throw std::invalid_argument("nscd broad phase: grain reach must be positive");
   cell_ = 2.0 * maxReach;
   // The minimum-image convention is exact only if no grain can touch two images of another one.
@@ -100,12 +101,14 @@ void BroadPhase::findPairs(const std::vector<Vec3>& positions, const std::vector
   // The search is ~all of the broad phase's time. Each thread takes a contiguous range of first
   // grains and its output is sorted by (a, b), so the ranges concatenated in order are exactly
   // the single-thread output. Thread 0 writes `out` directly; the others their own buffer.
-  const int wanted = std::min(threads_, std::max(1, n / kMinGrainsPerThread));
+  const int useful = std::min(threads_, std::max(1, n / kMinGrainsPerThread));
 #ifdef _OPENMP
-  if (wanted > 1) {
+  if (useful > 1) {
+    const auto start = std::chrono::steady_clock::now();
+    const int wanted = choice_.next() > 1 ? useful : 1;
     if (static_cast<int>(threadPairs_.size()) < wanted) threadPairs_.resize(wanted);
     for (auto& buffer : threadPairs_) buffer.clear();  // a smaller team leaves some unused
-#pragma omp parallel num_threads(wanted)
+#pragma omp parallel num_threads(wanted) if (wanted > 1)
     {
       const int t = omp_get_thread_num(), team = omp_get_num_threads();
       searchRange(chunkBegin(n, t, team), chunkBegin(n, t + 1, team), positions, reach,
@@ -113,6 +116,7 @@ void BroadPhase::findPairs(const std::vector<Vec3>& positions, const std::vector
     }
     for (std::size_t t = 1; t < threadPairs_.size(); ++t)
       out.insert(out.end(), threadPairs_[t].begin(), threadPairs_[t].end());
+    choice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     return;
   }
 #endif

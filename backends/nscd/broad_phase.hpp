@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "backends/nscd/thread_choice.hpp"
 #include "core/box.hpp"
 
 namespace confpack::nscd {
@@ -27,8 +28,9 @@ class BroadPhase {
   /// `maxReach` is the largest interaction radius any grain will have [d_L]; it sets the cell size
   /// 2 maxReach. Throws std::invalid_argument if a periodic length is shorter than two cells,
   /// where the minimum image would no longer be the only image in reach. `threads` > 1 searches
-  /// contiguous ranges of first grains on that many OpenMP threads; the output of findPairs is
-  /// the same, bit for bit, for any thread count.
+  /// contiguous ranges of first grains on up to that many OpenMP threads (a ThreadChoice times
+  /// the team against one thread and keeps the faster); the output of findPairs is the same,
+  /// bit for bit, for any thread count.
   BroadPhase(const core::BoxDef& box, double maxReach, int threads = 1);
 
   /// Fills `out` (cleared first) with every pair i < j such that |minimumImage(x_j - x_i)| <
@@ -46,6 +48,7 @@ class BroadPhase {
   double cell_ = 1.0;
   int nx_ = 1, ny_ = 1, nz_ = 1;
   int threads_ = 1;
+  ThreadChoice choice_;
   // Per-step buffers (kept to avoid allocation).
   std::vector<int> cellOf_, cellStart_, cellItems_, cursor_;
   std::vector<core::Vec3> cellPositions_;  // positions[cellItems_[s]]

@@ -1,6 +1,7 @@
 #include "backends/nscd/narrow_phase.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -158,7 +159,13 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
   const std::size_t useful = std::max<std::size_t>(1, nPairs / kMinPairsPerThread);
   const int wanted = hasPolyhedra_ ? static_cast<int>(std::min<std::size_t>(std::max(1, threads), useful)) : 1;
 #ifdef _OPENMP
-  if (wanted > 1) {
+  if (choice_.maxThreads() != std::max(1, threads)) choice_ = ThreadChoice(threads);
+  const bool timed = wanted > 1;
+  const auto start = std::chrono::steady_clock::now();
+  auto record = [&] {
+    if (timed) choice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  };
+  if (wanted > 1 && choice_.next() > 1) {
     if (static_cast<int>(threadContacts_.size()) < wanted) threadContacts_.resize(wanted);
     for (ThreadContacts& tc : threadContacts_) {  // a smaller team leaves some unused
       tc.pairs.clear();
@@ -193,11 +200,15 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
       if (t != 0) std::copy(mine.pairs.begin(), mine.pairs.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.pairStart));
       std::copy(mine.walls.begin(), mine.walls.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.wallStart));
     }
+    record();
     return;
   }
 #endif
   for (const CandidatePair& p : pairs) collidePair(p, positions, orientations, out);
   for (std::size_t i = 0; i < nGrains; ++i) collideWalls(static_cast<int>(i), positions, orientations, out);
+#ifdef _OPENMP
+  record();
+#endif
 }
 
 }  // namespace confpack::nscd

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "backends/nscd/broad_phase.hpp"
+#include "backends/nscd/thread_choice.hpp"
 #include "core/box.hpp"
 #include "core/contact.hpp"
 #include "core/grain.hpp"
@@ -76,8 +77,9 @@ class NarrowPhase {
   /// Replaces `out` with every contact of a step: those of the candidate pairs in pair order,
   /// then those of every grain with the walls in grain order (the solver's row order and the
   /// cache depend on it). `threads` > 1 splits both loops into contiguous ranges on that many
-  /// OpenMP threads and joins the ranges in order: `out` is the same, bit for bit, for any
-  /// thread count. No allocation once the buffers have grown.
+  /// OpenMP threads and joins the ranges in order (a ThreadChoice times the team against one
+  /// thread and keeps the faster): `out` is the same, bit for bit, for any thread count. No
+  /// allocation once the buffers have grown.
   void collideAll(const std::vector<CandidatePair>& pairs, const std::vector<core::Vec3>& positions,
                   const std::vector<core::Quat>& orientations, std::vector<ContactGeometry>& out, int threads = 1);
 
@@ -88,6 +90,7 @@ class NarrowPhase {
     std::size_t pairStart = 0, wallStart = 0;  // where they go in `out`
   };
   std::vector<ThreadContacts> threadContacts_;
+  ThreadChoice choice_;  // team against one thread, timed (for the last `threads` asked)
   bool hasPolyhedra_ = false;
 
   core::BoxDef box_;

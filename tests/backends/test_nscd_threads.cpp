@@ -10,6 +10,7 @@
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_backend.hpp"
 #include "backends/nscd/nscd_settings.hpp"
+#include "backends/nscd/thread_choice.hpp"
 #include "core/deposition.hpp"
 #include "core/random.hpp"
 
@@ -211,4 +212,27 @@ TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thre
   INFO("candidate pairs " << pairs.size());
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
   requireSameRun(s, 30, 2e-3);
+}
+
+TEST_CASE("nscd ThreadChoice keeps the faster of the team and one thread, and measures again every epoch",
+          "[nscd][threads]") {
+  using nscd::ThreadChoice;
+  CHECK(ThreadChoice(1).next() == 1);
+  for (const bool teamFaster : {true, false}) {
+    ThreadChoice choice(2);
+    const double teamTime = teamFaster ? 1e-3 : 8e-3, oneTime = 2e-3;
+    for (int epoch = 0; epoch < 2; ++epoch) {
+      int teamCalls = 0, oneCalls = 0;
+      for (int call = 0; call < ThreadChoice::kEpoch; ++call) {
+        const int team = choice.next();
+        REQUIRE((team == 1 || team == 2));
+        if (call < ThreadChoice::kTrial) CHECK(team == 2);  // each epoch starts by timing both
+        if (call >= ThreadChoice::kTrial && call < 2 * ThreadChoice::kTrial) CHECK(team == 1);
+        (team == 2 ? teamCalls : oneCalls)++;
+        choice.record(team == 2 ? teamTime : oneTime);
+      }
+      // After the trials, every call of the epoch goes to the faster one.
+      CHECK((teamFaster ? teamCalls : oneCalls) == ThreadChoice::kEpoch - ThreadChoice::kTrial);
+    }
+  }
 }
