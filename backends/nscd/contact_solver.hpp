@@ -178,6 +178,19 @@ class ContactSolver {
   };
   std::vector<GatherRow> gatherRows_;
   std::vector<BodyEntry> bodyEntries_;
+  // The same without angular parts, used when no row has a lever arm across its normal (spheres).
+  struct LinearRow {
+    core::Vec3 n;
+    double bias = 0.0;
+    int a = 0, b = 0;
+  };
+  struct LinearEntry {
+    core::Vec3 linear;
+    int k = 0;
+  };
+  bool linearOnly_ = false;
+  std::vector<LinearRow> linearRows_;
+  std::vector<LinearEntry> linearEntries_;
   std::vector<int> bodyEntryStart_, bodyCursor_;
   // Per-iteration norms of MPRGP: ||g^P||^2, ||beta||^2, phi~.phi, g.p, largest feasible step.
   struct Measures {
