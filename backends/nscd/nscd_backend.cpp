@@ -124,12 +124,24 @@ class NscdBackend final : public core::ContactBackend {
   }
 
  private:
+  // Runs body(i) for every body, on bodyThreads_ OpenMP threads when there are enough bodies.
+  // The single-thread path is a plain loop: an OpenMP region even with if(false) outlines the
+  // loop body, which was measured ~10% slower on the pinacoid pile.
+  template <class Body>
+  void forEachBody(const Body& body) {
+    if (bodyThreads_ > 1) {
+#pragma omp parallel for num_threads(bodyThreads_) schedule(static)
+      for (int i = 0; i < n_; ++i) body(i);
+      return;
+    }
+    for (int i = 0; i < n_; ++i) body(i);
+  }
+
   // q_m, the world inverse inertia there, and the free velocities. Bodies are independent: any
   // split over threads gives the same bits.
   void predict(double dt) {
     const double h = dt * (1.0 - settings_.theta);
-#pragma omp parallel for num_threads(bodyThreads_) schedule(static) if (bodyThreads_ > 1)
-    for (int i = 0; i < n_; ++i) {
+    forEachBody([&](int i) {
       BodyVelocity& v = velocity_[i];
       const Mat3 r0 = orientation_[i].toRotationMatrix();
       const Vec3 angularMomentum = r0 * (inertiaBody_[i] * (r0.transpose() * v.w));
@@ -140,7 +152,7 @@ class NscdBackend final : public core::ContactBackend {
       inverse_[i].invInertia = rm * invInertiaBody_[i] * rm.transpose();
       v.w = inverse_[i].invInertia * angularMomentum;
       v.v += dt * gravity_;
-    }
+    });
   }
 
   // Pair contacts in pair order, then wall contacts in grain order, whatever the thread count.
@@ -149,12 +161,11 @@ class NscdBackend final : public core::ContactBackend {
   // q_{i+1} = q_m + dt theta v_{i+1}, wrapped into the box.
   void correct(double dt) {
     const double h = dt * settings_.theta;
-#pragma omp parallel for num_threads(bodyThreads_) schedule(static) if (bodyThreads_ > 1)
-    for (int i = 0; i < n_; ++i) {
+    forEachBody([&](int i) {
       const BodyVelocity& v = velocity_[i];
       position_[i] = box_.wrap(positionMid_[i] + h * v.v);
       orientation_[i] = rotate(orientationMid_[i], v.w, h);
-    }
+    });
   }
 
   void storeImpulses(double dt) {
