@@ -51,6 +51,7 @@ class BroadPhase {
   ThreadChoice choice_;
   // Per-step buffers (kept to avoid allocation).
   std::vector<int> cellOf_, cellStart_, cellItems_, cursor_;
+  std::vector<int> nbx_, nby_, nbz_, countX_, countY_, countZ_;  // neighbour cells per axis
   std::vector<core::Vec3> cellPositions_;  // positions[cellItems_[s]]
   std::vector<double> cellReach_;          // reach[cellItems_[s]]
   std::vector<std::vector<CandidatePair>> threadPairs_;  // pairs of threads 1.. (thread 0 writes `out`)
