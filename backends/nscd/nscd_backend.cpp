@@ -1,6 +1,5 @@
 #include "backends/nscd/nscd_backend.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -84,11 +83,6 @@ class NscdBackend final : public core::ContactBackend {
     }
     positionMid_ = position_;
     orientationMid_ = orientation_;
-    // Per-body loops cost ~50-100 ns a body, about 8% of a step: each thread must get enough
-    // bodies to outweigh a parallel region, which on a loaded machine can cost milliseconds
-    // (a thread that is not running stalls the join; measured in the commit message).
-    constexpr int kMinBodiesPerThread = 4000;
-    bodyThreads_ = std::max(1, std::min(settings_.threads, n_ / kMinBodiesPerThread));
     states_.resize(n_);
     writeStates();
   }
@@ -124,24 +118,13 @@ class NscdBackend final : public core::ContactBackend {
   }
 
  private:
-  // Runs body(i) for every body, on bodyThreads_ OpenMP threads when there are enough bodies.
-  // The single-thread path is a plain loop: an OpenMP region even with if(false) outlines the
-  // loop body, which was measured ~10% slower on the pinacoid pile.
-  template <class Body>
-  void forEachBody(const Body& body) {
-    if (bodyThreads_ > 1) {
-#pragma omp parallel for num_threads(bodyThreads_) schedule(static)
-      for (int i = 0; i < n_; ++i) body(i);
-      return;
-    }
-    for (int i = 0; i < n_; ++i) body(i);
-  }
-
-  // q_m, the world inverse inertia there, and the free velocities. Bodies are independent: any
-  // split over threads gives the same bits.
+  // q_m, the world inverse inertia there, and the free velocities. One thread: the loop is ~8%
+  // of a step, and any OpenMP construct in this class (even a region never entered) was
+  // measured to make the compiled single-thread loop ~10-20% slower; a gain on 2 threads could
+  // not be shown on the shared machine.
   void predict(double dt) {
     const double h = dt * (1.0 - settings_.theta);
-    forEachBody([&](int i) {
+    for (int i = 0; i < n_; ++i) {
       BodyVelocity& v = velocity_[i];
       const Mat3 r0 = orientation_[i].toRotationMatrix();
       const Vec3 angularMomentum = r0 * (inertiaBody_[i] * (r0.transpose() * v.w));
@@ -152,7 +135,7 @@ class NscdBackend final : public core::ContactBackend {
       inverse_[i].invInertia = rm * invInertiaBody_[i] * rm.transpose();
       v.w = inverse_[i].invInertia * angularMomentum;
       v.v += dt * gravity_;
-    });
+    }
   }
 
   // Pair contacts in pair order, then wall contacts in grain order, whatever the thread count.
@@ -161,11 +144,11 @@ class NscdBackend final : public core::ContactBackend {
   // q_{i+1} = q_m + dt theta v_{i+1}, wrapped into the box.
   void correct(double dt) {
     const double h = dt * settings_.theta;
-    forEachBody([&](int i) {
+    for (int i = 0; i < n_; ++i) {
       const BodyVelocity& v = velocity_[i];
       position_[i] = box_.wrap(positionMid_[i] + h * v.v);
       orientation_[i] = rotate(orientationMid_[i], v.w, h);
-    });
+    }
   }
 
   void storeImpulses(double dt) {
@@ -216,7 +199,6 @@ class NscdBackend final : public core::ContactBackend {
   Vec3 gravity_;
   NscdSettings settings_;
   int n_ = 0;
-  int bodyThreads_ = 1;  // OpenMP threads of predict() and correct()
   // Cold data: mass properties in the body frame.
   std::vector<double> invMass_;
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
