@@ -9,12 +9,15 @@
 
 namespace confpack::nscd {
 
-/// Team-size chooser for one phase: in every epoch of kEpoch calls, the first kTrial calls run
-/// with `maxThreads`, the next kTrial with 1, and the rest with whichever was faster in total.
+/// Team-size chooser for one phase: in every epoch, the first kTrial calls run with
+/// `maxThreads`, the next kTrial with 1, and the rest with whichever was faster in total. An
+/// epoch lasts kEpoch calls; each epoch the team loses doubles the next one (up to kMaxEpoch),
+/// so that on a machine where the team keeps losing its trials cost almost nothing.
 class ThreadChoice {
  public:
-  static constexpr int kTrial = 8;    ///< calls timed per candidate per epoch
-  static constexpr int kEpoch = 256;  ///< calls per epoch (the trials cost <= 2 kTrial / kEpoch)
+  static constexpr int kTrial = 8;        ///< calls timed per candidate per epoch
+  static constexpr int kEpoch = 256;      ///< calls per epoch (the trials cost <= 2 kTrial / kEpoch)
+  static constexpr int kMaxEpoch = 8192;  ///< longest epoch, after repeated losses of the team
 
   explicit ThreadChoice(int maxThreads = 1) : max_(std::max(1, maxThreads)) {}
 
@@ -32,17 +35,23 @@ class ThreadChoice {
       teamTime_ += seconds;
     else if (call_ < 2 * kTrial)
       oneTime_ += seconds;
-    if (++call_ == 2 * kTrial) teamWins_ = teamTime_ < oneTime_;
-    if (call_ == kEpoch) {
+    if (++call_ == 2 * kTrial) {
+      teamWins_ = teamTime_ < oneTime_;
+      epoch_ = teamWins_ ? kEpoch : std::min(2 * epoch_, kMaxEpoch);
+    }
+    if (call_ == epoch_) {
       call_ = 0;
       teamTime_ = oneTime_ = 0.0;
     }
   }
   int maxThreads() const { return max_; }
+  /// Length of the current epoch [calls].
+  int epochLength() const { return epoch_; }
 
  private:
   int max_ = 1;
   int call_ = 0;  // position in the current epoch
+  int epoch_ = kEpoch;
   double teamTime_ = 0.0, oneTime_ = 0.0;
   bool teamWins_ = true;
 };
