@@ -195,7 +195,7 @@ TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread 
 TEST_CASE("nscd: a sphere pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
   // 2500 spheres: the broad phase runs on 2 threads (sphere-only systems collide on one).
   // Grown to the placeholder size (1.1 d): a touching, loaded pile from the start.
-  requireSameRun(pile(core::ShapeKind::Sphere, 12.0, 8.0, 2500, 1.1), 10, 2e-3);
+  requireSameRun(pile(core::ShapeKind::Sphere, 12.0, 8.0, 2500, 1.1), 4, 2e-3);
 }
 
 TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
