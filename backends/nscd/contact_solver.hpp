@@ -78,6 +78,7 @@
 #include "backends/nscd/contact_cache.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
+#include "backends/nscd/thread_choice.hpp"
 
 namespace confpack::nscd {
 
@@ -189,6 +190,7 @@ class ContactSolver {
     int k = 0;
   };
   bool linearOnly_ = false;
+  ThreadChoice threadChoice_;  // MPRGP's team against one thread, timed
   std::vector<LinearRow> linearRows_;
   std::vector<LinearEntry> linearEntries_;
   std::vector<int> bodyEntryStart_, bodyCursor_;

@@ -15,6 +15,7 @@
 // summed in fixed blocks of rows, then over blocks in order. The arithmetic therefore does not
 // depend on the number of threads: one thread and two give bitwise identical runs.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -204,7 +205,12 @@ double ContactSolver::frictionTangentPass(std::vector<BodyVelocity>& vel) {
 // conjugate gradients on the free set (sqrt of the condition number) instead of Gauss-Seidel's.
 int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
   const std::size_t nN = normalRows_.size(), m = nN + frictionRows_.size();
-  const int threads = settings.threads;
+  // The team is timed against one thread and kept only while it is faster (ThreadChoice): on this
+  // shared 2-core machine at load ~6, two threads made an 8,000-sphere solve 25-40x slower (every
+  // pass ends at a barrier, and a descheduled thread stalls it); results are the same bits either way.
+  if (threadChoice_.maxThreads() != settings.threads) threadChoice_ = ThreadChoice(settings.threads);
+  const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
+  const auto start = std::chrono::steady_clock::now();
   for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_}) v->resize(m);
   dv_.resize(vel.size());
   for (std::size_t k = 0; k < nN; ++k) {
@@ -341,6 +347,9 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   residual_ = std::max(residual_, tangentChange);
   for (std::size_t k = 0; k < nN; ++k) normalRows_[k].r = scale_[k] * y_[k];
   for (std::size_t f = 0; f < frictionRows_.size(); ++f) frictionRows_[f].rn = scale_[nN + f] * y_[nN + f];
+  if (m >= kParallelMin)  // time per iteration: the iteration count changes from step to step
+    threadChoice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
+                         std::max(1, iterations));
   return iterations;
 }
 

@@ -64,8 +64,10 @@ struct NscdSettings {
   /// may ask for [sqrt(g d_L)], > 0. Protects against an initial configuration with large
   /// overlaps exploding; irrelevant once the overlaps are small.
   double maxCorrectionVelocity = 0.05;
-  /// ["threads"] worker threads [-], >= 1. The solver is single-threaded (sequential
-  /// Gauss-Seidel is what makes a run bitwise reproducible); the value is accepted and recorded.
+  /// ["threads"] most OpenMP threads of a phase [-], >= 1 (`--threads` sets it unless the backend
+  /// options name their own). The broad and narrow phases and the MPRGP passes use up to this
+  /// many; each phase times its team against one thread and keeps the faster (thread_choice.hpp).
+  /// Results are the same bits for any value. Gauss-Seidel (nlgs) stays sequential.
   int threads = 1;
 
   /// Throws std::invalid_argument naming the field if a value is out of range.
