@@ -118,13 +118,15 @@ nlohmann::json compareCase(const BenchDef& def, core::ShapeKind shape,
   BackendRun bullet = runBackend(cfg, "bullet", dep);
   if (log) log(fmt::format("  bullet: {:.1f} s, {} steps, reached {}", bullet.json["wall_s"].get<double>(),
                            bullet.json["steps"].get<long>(), bullet.outcome.reached));
-  // When did Bullet first get to nscd's final interpenetration or lower?
+  // From when on did Bullet stay at nscd's final interpenetration or lower? Not the first check
+  // that is: the geometric deposit overlaps nothing, so every run starts at zero before the pile
+  // loads. The answer is the first check after the last one above nscd's level (null if Bullet
+  // ends above it).
   nlohmann::json bulletAtNscdOverlap = nullptr;
-  for (const CheckPoint& p : bullet.outcome.history)
-    if (p.interpenetrationPercent <= nscd.finalInterpenetration) {
-      bulletAtNscdOverlap = p.wallSeconds;
-      break;
-    }
+  const auto& history = bullet.outcome.history;
+  for (auto it = history.rbegin(); it != history.rend() && it->interpenetrationPercent <= nscd.finalInterpenetration;
+       ++it)
+    bulletAtNscdOverlap = it->wallSeconds;
   bullet.json["time_to_nscd_interpenetration_s"] = bulletAtNscdOverlap;
   c["nscd"] = nscd.json;
   c["bullet"] = bullet.json;
