@@ -52,6 +52,19 @@ core::SystemDef pile(core::ShapeKind shape, double lengthX, double width, std::s
   return s;
 }
 
+/// The broad phase's candidate pairs of the grains of `s` at their initial positions.
+std::vector<nscd::CandidatePair> candidatePairs(const core::SystemDef& s, const nscd::NarrowPhase& narrow) {
+  std::vector<Vec3> positions;
+  std::vector<double> reach;
+  for (std::size_t i = 0; i < s.grains.size(); ++i) {
+    positions.push_back(s.grains[i].position);
+    reach.push_back(narrow.reach(static_cast<int>(i)));
+  }
+  std::vector<nscd::CandidatePair> pairs;
+  nscd::BroadPhase(s.box, narrow.maxReach()).findPairs(positions, reach, pairs);
+  return pairs;
+}
+
 /// Steps the same system with threads = 1 and threads = 2 and requires identical bits in every
 /// pose, velocity, contact and force at the end.
 void requireSameRun(const core::SystemDef& s, int steps, double dt) {
@@ -152,10 +165,7 @@ TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread 
   }
   // A large alert distance so that many pairs, of every kind, become contacts.
   nscd::NarrowPhase narrow(s.box, s.grains, 0.5);
-  std::vector<double> reach;
-  for (std::size_t i = 0; i < s.grains.size(); ++i) reach.push_back(narrow.reach(static_cast<int>(i)));
-  std::vector<nscd::CandidatePair> pairs;
-  nscd::BroadPhase(s.box, narrow.maxReach()).findPairs(positions, reach, pairs);
+  const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
   INFO("candidate pairs " << pairs.size());
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
 
@@ -201,13 +211,8 @@ TEST_CASE("nscd: a sphere pile stepped on 2 threads is bitwise the single-thread
 TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
   const core::SystemDef s = pile(core::ShapeKind::Pinacoid, 12.0, 6.0, 1200, 1.3);
   // The narrow phase runs on 2 threads: more than 2 x kMinPairsPerThread candidate pairs.
-  std::vector<Vec3> positions;
-  for (const core::Grain& g : s.grains) positions.push_back(g.position);
   const nscd::NarrowPhase narrow(s.box, s.grains, nscd::NscdSettings{}.alertDistance);
-  std::vector<double> reach;
-  for (std::size_t i = 0; i < s.grains.size(); ++i) reach.push_back(narrow.reach(static_cast<int>(i)));
-  std::vector<nscd::CandidatePair> pairs;
-  nscd::BroadPhase(s.box, narrow.maxReach()).findPairs(positions, reach, pairs);
+  const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
   INFO("candidate pairs " << pairs.size());
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
   requireSameRun(s, 30, 2e-3);
