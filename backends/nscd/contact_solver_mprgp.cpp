@@ -276,7 +276,8 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
     return total;
   };
 
-  // The scale of the residual: ||b|| = ||S (H^T v_free + c)||, the gradient at r = 0.
+  // The scale of the residual: ||b|| = ||S (H^T v_free + c)||, the gradient at r = 0. g_ keeps
+  // the gradient at the warm start for the first iterations.
   contactVelocities(vel, true, g_, threads);
   applyImpulses(y_, dv_, threads);
   contactVelocities(dv_, false, ap_, threads);
@@ -291,7 +292,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   // early blocks cost little.
   double innerTolerance = frictionRows_.empty() ? settings.tolerance : std::max(settings.tolerance, 1e-4);
   for (int outer = 0; outer < outerCap; ++outer) {
-    contactVelocities(vel, true, g_, threads);
+    if (outer > 0) contactVelocities(vel, true, g_, threads);  // the tangential pass moved vel
     freeGradientToP();
     while (true) {
       const Measures now = measure();
