@@ -110,7 +110,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                              eq.maxKineticRatio, overlap});
       if (progress)
         progress(static_cast<double>(steps) / maxSteps,
-                 fmt::format("{} t={:.1f} step {} sweeps/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
+                 fmt::format("{} t={:.1f} step {} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
                              backend->name(), steps * out.dt, steps, static_cast<double>(totalIterations) / steps,
                              eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio));
       if (eq.reached) break;
