@@ -395,18 +395,11 @@ double hullArea4(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
       {quad(a, b, c, d), quad(a, b, d, c), quad(a, c, b, d), tri(a, b, c), tri(a, b, d), tri(a, c, d), tri(b, c, d)});
 }
 
-// Indices of at most 4 of the points (a contact polygon's vertices) keeping the deepest one
-// (smallest gap) and, with it, the 3 others of largest supported area (convex hull area).
-// SPEC says 3 points; 4 of maximal area keep a rectangle-on-rectangle support stable (3 put the
-// centre of mass on an edge of the support triangle), and always keeping the deepest point
-// means the solver never loses the point that penetrates most.
+// Indices of 4 of n > 4 points (a contact polygon's vertices) keeping the deepest one (smallest
+// gap) and, with it, the 3 others of largest supported area (convex hull area). Only for
+// polygons larger than kMaxPolyhedronContactPoints (never for pinacoids, see keptPoints).
 SmallVector<int, 4> pickFour(std::span<const Vec2> pts, std::span<const double> gaps) {
   const int n = static_cast<int>(pts.size());
-  if (n <= 4) {
-    SmallVector<int, 4> all;
-    for (int i = 0; i < n; ++i) all.push_back(i);
-    return all;
-  }
   const int deep = static_cast<int>(std::min_element(gaps.begin(), gaps.end()) - gaps.begin());
   double best = -1.0;
   SmallVector<int, 4> pick{0, 1, 2, 3};
@@ -422,6 +415,18 @@ SmallVector<int, 4> pickFour(std::span<const Vec2> pts, std::span<const double> 
       }
   std::sort(pick.begin(), pick.end());  // keep the polygon order of the input
   return pick;
+}
+
+// Indices of the contact points kept from a region's candidates: all of them up to
+// kMaxPolyhedronContactPoints (header, point 4: a dropped vertex can sink unseen), else 4.
+SmallVector<int, kMaxPolyhedronContactPoints> keptPoints(std::span<const Vec2> pts, std::span<const double> gaps) {
+  SmallVector<int, kMaxPolyhedronContactPoints> kept;
+  if (pts.size() <= static_cast<std::size_t>(kMaxPolyhedronContactPoints)) {
+    for (std::size_t i = 0; i < pts.size(); ++i) kept.push_back(static_cast<int>(i));
+    return kept;
+  }
+  for (int i : pickFour(pts, gaps)) kept.push_back(i);
+  return kept;
 }
 
 // Height (coordinate along n) of a body's contact feature above the lateral point x.
@@ -627,7 +632,7 @@ Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& 
     const Polygon2 poly = clipPolygon(pa, pb);
     if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
       r.type = ContactType::Triple;
-      r.points = poly;  // reduced to 4 in buildContact, once the gaps are known
+      r.points = poly;  // kept whole up to 8 vertices in buildContact (keptPoints)
     } else if (!poly.empty()) {
       finishSegmentOrPoint(poly);
     } else {
@@ -673,7 +678,7 @@ PolyhedronContact buildContact(const WorldPoly& A, const WorldPoly& B, const Vec
     points.push_back(fr.world(x, 0.5 * (ha + hb)));
     gaps.push_back(hb - ha);
   }
-  for (int i : pickFour(region.points, gaps)) {
+  for (int i : keptPoints(region.points, gaps)) {
     c.points.push_back(points[i]);
     c.pointGaps.push_back(gaps[i]);
   }
@@ -848,7 +853,7 @@ std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& 
     }
   VertexArray<double> latGaps;
   for (int i : idx) latGaps.push_back(h[i]);
-  for (int k : pickFour(lat, latGaps)) {
+  for (int k : keptPoints(lat, latGaps)) {
     const int i = idx[k];
     c.points.push_back(A.v[i] - 0.5 * h[i] * m);
     c.pointGaps.push_back(h[i]);

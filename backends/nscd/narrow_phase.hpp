@@ -15,8 +15,8 @@
 
 namespace confpack::nscd {
 
-/// Largest number of points of one contact (a face-face clip of two pinacoids is reduced to 4).
-inline constexpr int kMaxContactPoints = 4;
+/// Largest number of points of one contact: every vertex of a face-face clip of two pinacoids.
+inline constexpr int kMaxContactPoints = core::kMaxPolyhedronContactPoints;
 
 /// One contact plane between grain a and grain b (or a wall, b < 0) with its points.
 struct ContactGeometry {

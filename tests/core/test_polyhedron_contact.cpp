@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 
@@ -168,7 +169,7 @@ TEST_CASE("contact: a ridge lying on a face is Double with the clipped edge ends
   }
 }
 
-TEST_CASE("contact: trapezoid on trapezoid is Triple with 4 supporting points") {
+TEST_CASE("contact: trapezoid on trapezoid is Triple with every vertex of the hexagonal overlap as a point") {
   const ConvexPolyhedron p = makePinacoid(1.0, kParams);
   const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
   // b unrotated: its bottom trapezoid y < 0 has normal -n1, so translating b by n1 (2 off + g)
@@ -184,7 +185,7 @@ TEST_CASE("contact: trapezoid on trapezoid is Triple with 4 supporting points") 
     CHECK((c->normal - kN1).norm() < 1e-12);
     CHECK(c->featureA == Feature{FeatureKind::Face, 0});
     CHECK(c->featureB == Feature{FeatureKind::Face, 3});  // bottom trapezoid y < 0
-    REQUIRE(c->points.size() == 4);
+    REQUIRE(c->points.size() == 6);
     for (std::size_t i = 0; i < c->points.size(); ++i) {
       CHECK(c->pointGaps[i] == Approx(g).margin(1e-12));
       // On the mid plane, inside both faces (within half the gap of each surface).
@@ -192,24 +193,26 @@ TEST_CASE("contact: trapezoid on trapezoid is Triple with 4 supporting points") 
       CHECK(onSurfaceOrInside(a, c->points[i] - 0.5 * c->pointGaps[i] * kN1, 1e-12));
       CHECK(onSurfaceOrInside(b, c->points[i] + 0.5 * c->pointGaps[i] * kN1, 1e-12));
     }
-    // The 4 points span more area than the 4 hexagon corners (+-l, 0), (+-l, 1) (area 2 l h)
-    // and their polygon contains the projection of b's centre of mass: a stable support.
+    // The 6 points are the hexagon: its area is slant x (3 l + 1/2) / 2 (two trapezoids of
+    // widths 2 l and 1/2 + l over half the slant height each), and it contains the projection
+    // of b's centre of mass: a stable support.
     const Vec3 u = Vec3::UnitX(), v = kN1.cross(u);
     std::vector<Eigen::Vector2d> q;
     for (const Vec3& x : c->points) q.emplace_back(u.dot(x), v.dot(x));
+    const int n = static_cast<int>(q.size());
     // order by angle around the mean
     Eigen::Vector2d m = Eigen::Vector2d::Zero();
-    for (auto& x : q) m += x / 4.0;
+    for (auto& x : q) m += x / n;
     std::sort(q.begin(), q.end(), [&](auto& s, auto& t) {
       return std::atan2(s.y() - m.y(), s.x() - m.x()) < std::atan2(t.y() - m.y(), t.x() - m.x());
     });
     double area = 0;
-    for (int i = 0; i < 4; ++i) area += 0.5 * (q[i].x() * q[(i + 1) % 4].y() - q[i].y() * q[(i + 1) % 4].x());
+    for (int i = 0; i < n; ++i) area += 0.5 * (q[i].x() * q[(i + 1) % n].y() - q[i].y() * q[(i + 1) % n].x());
     const double slant = std::sqrt(0.5);
-    CHECK(area >= 2 * kL * slant - 1e-12);
+    CHECK(area == Approx(slant * (3 * kL + 0.5) / 2).epsilon(1e-12));
     const Eigen::Vector2d com(u.dot(b.position), v.dot(b.position));
-    for (int i = 0; i < 4; ++i) {
-      const Eigen::Vector2d e = q[(i + 1) % 4] - q[i], w = com - q[i];
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d e = q[(i + 1) % n] - q[i], w = com - q[i];
       CHECK(e.x() * w.y() - e.y() * w.x() > 0.05);  // strictly inside, with margin
     }
     CHECK(classifyContact(a, b) == ContactType::Triple);
@@ -518,7 +521,7 @@ TEST_CASE("contact: random near-contact pairs give consistent points, gaps and t
       CHECK(np == 2);
       ++doubles;
     }
-    if (c->type == ContactType::Triple) CHECK((np == 3 || np == 4));
+    if (c->type == ContactType::Triple) CHECK((np >= 3 && np <= 8));  // every polygon vertex
     CHECK(std::abs(c->normal.norm() - 1.0) < 1e-14);
     for (std::size_t i = 0; i < np; ++i) {
       CHECK(c->pointGaps[i] >= c->gap - 1e-9);
@@ -535,11 +538,11 @@ TEST_CASE("contact: random near-contact pairs give consistent points, gaps and t
   if (angleTol > 0.0) CHECK(doubles > 10);  // random poses are never exactly edge-on-face
 }
 
-TEST_CASE("contact: reducing a contact polygon to 4 points keeps the deepest point") {
+TEST_CASE("contact: a tilted face-face contact keeps every vertex of its polygon, each with its own gap") {
   // Trapezoid on flipped trapezoid (hexagonal overlap, see above) with b tilted by 3e-4 rad
   // about the slant direction of the face: the gap then grows linearly with x, so the deepest
-  // points are the hexagon vertices (+-(1/2 + l)/2, s = 1/2), which are not among the 4 corners
-  // (+-l, 0), (+-l, 1) of the largest-area quadrilateral. The deepest must still be kept.
+  // points are the hexagon vertices (+-(1/2 + l)/2, s = 1/2). A reduction to fewer points would
+  // let the dropped vertices sink into a unseen; all 6 must be there, the deepest at c->gap.
   const ConvexPolyhedron p = makePinacoid(1.0, kParams);
   const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
   const Vec3 slant = Vec3(0, -1, 1).normalized();
@@ -548,26 +551,62 @@ TEST_CASE("contact: reducing a contact polygon to 4 points keeps the deepest poi
     const auto c = collidePolyhedra(a, b, 0.01);
     REQUIRE(c);
     CHECK(c->type == ContactType::Triple);
-    REQUIRE(c->points.size() == 4);
+    REQUIRE(c->points.size() == 6);
+    for (std::size_t i = 0; i < c->points.size(); ++i) {
+      // The gap at each point is the distance between the two surfaces along the normal there.
+      CHECK(onSurfaceOrInside(a, c->points[i] - 0.5 * c->pointGaps[i] * c->normal, 1e-12));
+      CHECK(onSurfaceOrInside(b, c->points[i] + 0.5 * c->pointGaps[i] * c->normal, 1e-12));
+    }
     const auto deepest = std::min_element(c->pointGaps.begin(), c->pointGaps.end()) - c->pointGaps.begin();
     CHECK(c->pointGaps[deepest] == Approx(c->gap).margin(1e-9));
-    CHECK(std::abs(c->points[deepest].x()) == Approx(0.5 * (0.5 + kL)).margin(1e-3));  // moved by the tilt
+    CHECK(std::abs(c->points[deepest].x()) == Approx(0.5 * (0.5 + kL)).margin(1e-3));
+    for (std::size_t i = 0; i < c->points.size(); ++i)  // the others are clearly higher: all distinct
+      if (static_cast<std::ptrdiff_t>(i) != deepest) CHECK(c->pointGaps[i] > c->gap + 1e-5);
   }
 }
 
-TEST_CASE("contact: a wall contact with many vertices within alert keeps 4 points, the deepest among them") {
+TEST_CASE("contact: a polygon of more than 8 vertices is reduced to 4 points, the deepest among them") {
+  // Two regular octagonal prisms face to face, one turned by 22.5 deg: their caps overlap in a
+  // 16-gon. The upper one is tilted a little so that one vertex is deepest; it must be kept.
+  std::vector<Vec3> v;
+  std::vector<std::vector<int>> f(2);
+  for (int k = 0; k < 8; ++k) {
+    const double t = k * std::numbers::pi / 4;
+    v.emplace_back(std::cos(t), std::sin(t), -0.5);
+    v.emplace_back(std::cos(t), std::sin(t), 0.5);
+    f[0].push_back(2 * (7 - k));   // bottom cap, outward -z: clockwise seen from above
+    f[1].push_back(2 * k + 1);     // top cap, outward +z
+    f.push_back({2 * k, 2 * ((k + 1) % 8), 2 * ((k + 1) % 8) + 1, 2 * k + 1});
+  }
+  const ConvexPolyhedron prism(v, f);
+  const PlacedPolyhedron a{&prism, Vec3::Zero(), Mat3::Identity()};
+  for (double tilt : {2e-4, -2e-4}) {
+    const Mat3 r = Eigen::AngleAxisd(tilt, Vec3::UnitX()).toRotationMatrix() *
+                   Eigen::AngleAxisd(std::numbers::pi / 8, Vec3::UnitZ()).toRotationMatrix();
+    const PlacedPolyhedron b{&prism, Vec3(0, 0, 1.001), r};
+    const auto c = collidePolyhedra(a, b, 0.01);
+    REQUIRE(c);
+    CHECK(c->type == ContactType::Triple);
+    REQUIRE(c->points.size() == 4);
+    const double lowest = *std::min_element(c->pointGaps.begin(), c->pointGaps.end());
+    CHECK(lowest == Approx(c->gap).margin(1e-9));
+  }
+}
+
+TEST_CASE("contact: a wall contact keeps every vertex within alert, the deepest among them") {
   const ConvexPolyhedron p = makePinacoid(1.0, kParams);
   std::mt19937_64 rng(12);
   for (int trial = 0; trial < 50; ++trial) {
     const PlacedPolyhedron a{&p, Vec3(0, 0, 0.45), randomRotation(rng)};
-    // An alert of 2 d takes every vertex: 8 candidates reduced to 4.
+    // An alert of 2 d takes all 8 vertices, each with its height above the plane as gap.
     const auto c = collidePolyhedronPlane(a, Vec3::Zero(), Vec3::UnitZ(), 2.0);
     REQUIRE(c);
-    REQUIRE(c->points.size() == 4);
-    const double lowest = *std::min_element(c->pointGaps.begin(), c->pointGaps.end());
-    CHECK(lowest == Approx(c->gap).margin(1e-15));
-    double minZ = 1e9;
-    for (const Vec3& x : a.worldVertices()) minZ = std::min(minZ, x.z());
-    CHECK(c->gap == Approx(minZ).margin(1e-15));
+    REQUIRE(c->points.size() == 8);
+    std::vector<double> heights, gaps(c->pointGaps.begin(), c->pointGaps.end());
+    for (const Vec3& x : a.worldVertices()) heights.push_back(x.z());
+    std::sort(heights.begin(), heights.end());
+    std::sort(gaps.begin(), gaps.end());
+    for (int i = 0; i < 8; ++i) CHECK(gaps[i] == Approx(heights[i]).margin(1e-15));
+    CHECK(c->gap == Approx(heights[0]).margin(1e-15));
   }
 }
