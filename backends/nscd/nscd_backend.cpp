@@ -1,5 +1,6 @@
 #include "backends/nscd/nscd_backend.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -97,6 +98,7 @@ class NscdBackend final : public core::ContactBackend {
     if (!(dt > 0.0) || !std::isfinite(dt)) throw std::invalid_argument("nscd: time step dt must be positive");
     profile_ = core::StepProfile{};
     Stopwatch clock;
+    if (settings_.damping > 0.0) damp(std::exp(-settings_.damping * dt));
     predict(dt);
     profile_[Phase::Integrate] += clock.lap();
     broad_.findPairs(positionMid_, reach_, pairs_);
@@ -112,6 +114,7 @@ class NscdBackend final : public core::ContactBackend {
     profile_.contactPoints = solver_.rowCount();
     profile_[Phase::Solve] += clock.lap();
     correct(dt);
+    if (settings_.damping > 0.0) recordLoaded();
     profile_[Phase::Integrate] += clock.lap();
     storeImpulses(dt);
     profile_[Phase::StoreImpulses] += clock.lap();
@@ -136,6 +139,33 @@ class NscdBackend final : public core::ContactBackend {
       v.w = inverse_[i].invInertia * angularMomentum;
       v.v += dt * gravity_;
     }
+  }
+
+  // Damping (settings "damping" c): the velocity and angular velocity of every grain that carried
+  // a contact impulse in the last step are multiplied by exp(-c dt), before the free velocity.
+  // The same factor for every loaded grain, so the relative velocity at a contact between two of
+  // them scales alike and the contact problem keeps its structure. Two rules that damp only
+  // unbalanced motion were tried first on the 188-pinacoid pile and dropped: Cundall's local
+  // damping (each velocity component cut by alpha |its change|, per component or along v) took
+  // 1.5 to 7 times more MPRGP iterations per step, and damping only decelerating grains
+  // (v . dv < 0) 1.2 to 2 times more while settling more slowly than this rule.
+  void damp(double factor) {
+    for (int i = 0; i < n_ && i < static_cast<int>(loaded_.size()); ++i) {
+      if (!loaded_[i]) continue;
+      velocity_[i].v *= factor;
+      velocity_[i].w *= factor;
+    }
+  }
+
+  // Which grains carried a normal impulse in this step (for damp() in the next one).
+  void recordLoaded() {
+    loaded_.assign(n_, 0);
+    for (std::size_t c = 0; c < geometry_.size(); ++c)
+      for (int p = 0; p < geometry_[c].pointCount; ++p)
+        if (solver_.normalImpulse(static_cast<int>(c), p) > 0.0) {
+          loaded_[geometry_[c].a] = 1;
+          if (geometry_[c].b >= 0) loaded_[geometry_[c].b] = 1;
+        }
   }
 
   // Pair contacts in pair order, then wall contacts in grain order, whatever the thread count.
@@ -209,6 +239,8 @@ class NscdBackend final : public core::ContactBackend {
   // Hot solver state: velocities and inverse masses, one extra static body for the walls.
   std::vector<BodyVelocity> velocity_;
   std::vector<BodyInverseMass> inverse_;
+  // Grains that carried a contact impulse in the last step (only with settings "damping" > 0).
+  std::vector<char> loaded_;
   NarrowPhase narrow_;
   BroadPhase broad_;
   std::vector<CandidatePair> pairs_;

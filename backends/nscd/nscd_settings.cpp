@@ -26,6 +26,8 @@ void NscdSettings::validate() const {
     bad("gap_correction", fmt::format("must be in (0, 1] (got {})", gapCorrection));
   if (!(maxCorrectionVelocity > 0.0) || !std::isfinite(maxCorrectionVelocity))
     bad("max_correction_velocity", fmt::format("must be a positive number (got {})", maxCorrectionVelocity));
+  if (!(damping >= 0.0) || !std::isfinite(damping))
+    bad("damping", fmt::format("must be a number >= 0 (got {})", damping));
   if (threads < 1) bad("threads", fmt::format("must be >= 1 (got {})", threads));
 }
 
@@ -41,6 +43,7 @@ void to_json(nlohmann::json& j, const NscdSettings& s) {
        {"alert_distance", s.alertDistance},
        {"gap_correction", s.gapCorrection},
        {"max_correction_velocity", s.maxCorrectionVelocity},
+       {"damping", s.damping},
        {"threads", s.threads}};
 }
 
@@ -83,11 +86,12 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     else if (key == "alert_distance") number(s.alertDistance);
     else if (key == "gap_correction") number(s.gapCorrection);
     else if (key == "max_correction_velocity") number(s.maxCorrectionVelocity);
+    else if (key == "damping") number(s.damping);
     else if (key == "threads") integer(s.threads);
     else
       throw std::invalid_argument(fmt::format(
           "unknown nscd option '{}' (known: theta, solver, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
-          "gap_correction, max_correction_velocity, threads)",
+          "gap_correction, max_correction_velocity, damping, threads)",
           key));
   }
   s.validate();

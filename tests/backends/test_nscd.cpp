@@ -67,12 +67,56 @@ TEST_CASE("nscd free fall error is (theta - 1/2) g t dt", "[nscd]") {
   CHECK(b->states()[0].position.z() == Approx(expected).epsilon(1e-13));
 }
 
+TEST_CASE("nscd damping: a loaded grain tends to F / (m c); free flight and rest are untouched", "[nscd]") {
+  const double c = 0.8, dt = 1e-3;
+  const int n = 2000;
+  SECTION("sliding on the frictionless floor under a body force F_x") {
+    // Gravity (F_x, 0, -1): the floor carries the weight (so the grain is loaded) and nothing
+    // balances F_x. Step 1 is undamped (nothing was loaded before it); then v <- q v + F_x dt with
+    // q = exp(-c dt), so v_n = F_x dt (1 - q^n) / (1 - q), which tends to F_x / c.
+    const double fx = 0.3;
+    core::SystemDef s = box(20.0, 10.0);
+    s.gravity = Vec3(fx, 0.0, -1.0);
+    s.grains.push_back(sphere(1.0, Vec3(5.0, 5.0, 0.5)));
+    auto b = nscd::makeNscdBackend(s, {{"damping", c}});
+    for (int k = 0; k < n; ++k) b->step(dt);
+    const double q = std::exp(-c * dt);
+    CHECK(b->states()[0].velocity.x() == Approx(fx * dt * (1.0 - std::pow(q, n)) / (1.0 - q)).epsilon(1e-12));
+    CHECK(b->states()[0].velocity.x() < 0.85 * fx / c);  // far from undamped (fx n dt = 2 fx / c)
+    CHECK(std::abs(b->states()[0].velocity.z()) < 1e-12);
+    // Undamped, the same grain keeps the full acceleration.
+    auto free = nscd::makeNscdBackend(s, {});
+    for (int k = 0; k < n; ++k) free->step(dt);
+    CHECK(free->states()[0].velocity.x() == Approx(fx * n * dt).epsilon(1e-12));
+  }
+  SECTION("free fall is exact: a grain without contact is not damped") {
+    core::SystemDef s = box(20.0, 10.0);
+    s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 100.0)));
+    auto b = nscd::makeNscdBackend(s, {{"damping", c}});
+    for (int k = 0; k < n; ++k) b->step(dt);
+    const double t = n * dt;
+    CHECK(b->states()[0].position.z() == Approx(100.0 - 0.5 * t * t).epsilon(1e-13));
+  }
+  SECTION("a resting column still carries k m g at its k-th contact") {
+    core::SystemDef s = box(20.0, 10.0);
+    for (int k = 0; k < 10; ++k) s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5 + k)));
+    auto b = nscd::makeNscdBackend(s, {{"damping", c}, {"tolerance", 1e-12}});
+    for (int k = 0; k < n; ++k) b->step(dt);
+    const double m = std::numbers::pi / 6.0;
+    for (const core::Contact& c : b->contacts()) {
+      const int below = c.b < 0 ? 0 : std::min(c.a, c.b) + 1;  // grains under this contact
+      CHECK(c.normalForce() == Approx((10 - below) * m).epsilon(1e-9));
+    }
+    CHECK(b->contacts().size() == 10);
+  }
+}
+
 TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused by name", "[nscd]") {
   core::SystemDef s = box(20.0, 10.0);
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
   for (const char* key : {"theta", "tolerance", "max_iterations", "min_iterations", "alert_distance",
-                          "gap_correction", "max_correction_velocity", "threads"})
+                          "gap_correction", "max_correction_velocity", "damping", "threads"})
     CHECK(resolved.contains(key));
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
@@ -82,6 +126,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"theta", 0.3}}), Catch::Contains("theta"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"max_iterations", 0}}), Catch::Contains("max_iterations"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"gap_correction", 1.5}}), Catch::Contains("gap_correction"));
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping", -0.1}}), Catch::Contains("damping"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"tolerance", "small"}}), Catch::Contains("tolerance"));
   CHECK_THROWS_AS(nscd::makeNscdBackend(s, nlohmann::json::array()), std::invalid_argument);
   // A box too short for the grains' periodic images is refused, not silently wrong.
