@@ -141,8 +141,9 @@ class NscdBackend final : public core::ContactBackend {
     }
   }
 
-  // Damping (settings "damping" c): the velocity and angular velocity of every grain that carried
-  // a contact impulse in the last step are multiplied by exp(-c dt), before the free velocity.
+  // Damping (settings "damping" c, "damping_speed" v_d): the velocity and angular velocity of
+  // every grain that carried a contact impulse in the last step and moves slower than v_d are
+  // multiplied by exp(-c dt), before the free velocity.
   // The same factor for every loaded grain, so the relative velocity at a contact between two of
   // them scales alike and the contact problem keeps its structure. Two rules that damp only
   // unbalanced motion were tried first on the 188-pinacoid pile and dropped: Cundall's local
@@ -150,8 +151,9 @@ class NscdBackend final : public core::ContactBackend {
   // 1.5 to 7 times more MPRGP iterations per step, and damping only decelerating grains
   // (v . dv < 0) 1.2 to 2 times more while settling more slowly than this rule.
   void damp(double factor) {
+    const double speed2 = settings_.dampingSpeed * settings_.dampingSpeed;
     for (int i = 0; i < n_ && i < static_cast<int>(loaded_.size()); ++i) {
-      if (!loaded_[i]) continue;
+      if (!loaded_[i] || velocity_[i].v.squaredNorm() > speed2) continue;
       velocity_[i].v *= factor;
       velocity_[i].w *= factor;
     }

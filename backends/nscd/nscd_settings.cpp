@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -28,6 +29,7 @@ void NscdSettings::validate() const {
     bad("max_correction_velocity", fmt::format("must be a positive number (got {})", maxCorrectionVelocity));
   if (!(damping >= 0.0) || !std::isfinite(damping))
     bad("damping", fmt::format("must be a number >= 0 (got {})", damping));
+  if (!(dampingSpeed > 0.0)) bad("damping_speed", fmt::format("must be > 0 (got {})", dampingSpeed));
   if (threads < 1) bad("threads", fmt::format("must be >= 1 (got {})", threads));
 }
 
@@ -44,6 +46,7 @@ void to_json(nlohmann::json& j, const NscdSettings& s) {
        {"gap_correction", s.gapCorrection},
        {"max_correction_velocity", s.maxCorrectionVelocity},
        {"damping", s.damping},
+       {"damping_speed", std::isfinite(s.dampingSpeed) ? nlohmann::json(s.dampingSpeed) : nlohmann::json(nullptr)},
        {"threads", s.threads}};
 }
 
@@ -87,11 +90,15 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     else if (key == "gap_correction") number(s.gapCorrection);
     else if (key == "max_correction_velocity") number(s.maxCorrectionVelocity);
     else if (key == "damping") number(s.damping);
+    else if (key == "damping_speed") {
+      if (value.is_null()) s.dampingSpeed = std::numeric_limits<double>::infinity();  // no limit
+      else number(s.dampingSpeed);
+    }
     else if (key == "threads") integer(s.threads);
     else
       throw std::invalid_argument(fmt::format(
           "unknown nscd option '{}' (known: theta, solver, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
-          "gap_correction, max_correction_velocity, damping, threads)",
+          "gap_correction, max_correction_velocity, damping, damping_speed, threads)",
           key));
   }
   s.validate();

@@ -3,6 +3,7 @@
 // Every key of the options JSON is a field below; unknown keys are refused so that a typo never
 // silently runs with a default.
 #include <nlohmann/json.hpp>
+#include <limits>
 #include <string>
 
 namespace confpack::nscd {
@@ -65,20 +66,22 @@ struct NscdSettings {
   /// may ask for [sqrt(g d_L)], > 0. Protects against an initial configuration with large
   /// overlaps exploding; irrelevant once the overlaps are small.
   double maxCorrectionVelocity = 0.05;
-  /// ["damping"] viscous damping rate c >= 0 of grains in contact [sqrt(g / d_L)]: each step the
-  /// velocity and angular velocity of every grain that carried a contact impulse in the last step
-  /// are multiplied by exp(-c dt). Grains in free flight are not damped, and a static packing is
-  /// not moved (its velocities are zero), so SPEC 6.1 equilibria are equilibria of the undamped
-  /// model; a loaded grain under a constant unbalanced force F tends to the velocity F / (m c).
-  /// Default 0: the contact law alone (e_n = 0) dissipates only when contacts close or slide on
-  /// a wall. A frictionless pinacoid pile can keep a grain oscillating on contacts that never open
-  /// (measured on 188 pinacoids: period 3.6 t0, |v| ~ 2e-3 sqrt(g d), undamped over 10 t0), which
-  /// SPEC 6.1 then never accepts; with c = 0.4 the same pile, restarted at 60 t0, met SPEC 6.1
-  /// 7.4 t0 later at the usual ~690 iterations per step. Damping from the deposit on changes the
-  /// packing: the 493-sphere biperiodic pile (6 x 6, h = 12, seed 1) with c = 0.4 reached
-  /// equilibrium after 26,200 steps (t = 77.8) with phi = 0.627, against 13,400 steps (t = 39.8)
-  /// and phi = 0.636 undamped. Use it for piles that do not settle otherwise, and say so.
+  /// ["damping"] viscous damping rate c >= 0 of slow grains in contact [sqrt(g / d_L)]: each step
+  /// the velocity and angular velocity of every grain that carried a contact impulse in the last
+  /// step and moves slower than damping_speed are multiplied by exp(-c dt). Grains in free flight
+  /// are not damped and a static packing is not moved (its velocities are zero), so SPEC 6.1
+  /// equilibria are equilibria of the undamped model. Default 0: the contact law alone (e_n = 0)
+  /// dissipates only when contacts close or slide on a wall. A frictionless pinacoid pile can keep
+  /// a grain oscillating on contacts that never open (measured on 188 pinacoids: period 3.6 t0,
+  /// |v| ~ 2e-3 sqrt(g d), undamped over 10 t0), which SPEC 6.1 then never accepts; restarted at
+  /// 60 t0 with c = 0.4, that pile met SPEC 6.1 7.4 t0 later at the usual ~690 iterations per step.
   double damping = 0.0;
+  /// ["damping_speed"] grains faster than this are not damped [sqrt(g d_L)], > 0 (default: no
+  /// limit). It keeps the damping off the flow that forms the packing: on the 493-sphere
+  /// biperiodic pile (6 x 6, h = 12, seed 1) c = 0.4 for every loaded grain gave phi = 0.627 after
+  /// 26,200 steps, c = 0.4 below 0.01 gave phi = 0.640 after 18,600 steps, and no damping phi =
+  /// 0.641 after 16,600 steps (an earlier build, differing only in round-off: 0.636, 13,400).
+  double dampingSpeed = std::numeric_limits<double>::infinity();
   /// ["threads"] most OpenMP threads of a phase [-], >= 1 (`--threads` sets it unless the backend
   /// options name their own). The broad and narrow phases and the MPRGP passes use up to this
   /// many; each phase times its team against one thread and keeps the faster (thread_choice.hpp).

@@ -84,10 +84,13 @@ TEST_CASE("nscd damping: a loaded grain tends to F / (m c); free flight and rest
     CHECK(b->states()[0].velocity.x() == Approx(fx * dt * (1.0 - std::pow(q, n)) / (1.0 - q)).epsilon(1e-12));
     CHECK(b->states()[0].velocity.x() < 0.85 * fx / c);  // far from undamped (fx n dt = 2 fx / c)
     CHECK(std::abs(b->states()[0].velocity.z()) < 1e-12);
-    // Undamped, the same grain keeps the full acceleration.
-    auto free = nscd::makeNscdBackend(s, {});
-    for (int k = 0; k < n; ++k) free->step(dt);
-    CHECK(free->states()[0].velocity.x() == Approx(fx * n * dt).epsilon(1e-12));
+    // Undamped, or faster than damping_speed from step 1 on (v_1 = F_x dt), the same grain keeps
+    // the full acceleration.
+    for (const nlohmann::json& options : {nlohmann::json::object(), nlohmann::json{{"damping", c}, {"damping_speed", 0.1 * fx * dt}}}) {
+      auto free = nscd::makeNscdBackend(s, options);
+      for (int k = 0; k < n; ++k) free->step(dt);
+      CHECK(free->states()[0].velocity.x() == Approx(fx * n * dt).epsilon(1e-12));
+    }
   }
   SECTION("free fall is exact: a grain without contact is not damped") {
     core::SystemDef s = box(20.0, 10.0);
@@ -116,7 +119,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
   for (const char* key : {"theta", "tolerance", "max_iterations", "min_iterations", "alert_distance",
-                          "gap_correction", "max_correction_velocity", "damping", "threads"})
+                          "gap_correction", "max_correction_velocity", "damping", "damping_speed", "threads"})
     CHECK(resolved.contains(key));
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
@@ -127,6 +130,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"max_iterations", 0}}), Catch::Contains("max_iterations"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"gap_correction", 1.5}}), Catch::Contains("gap_correction"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping", -0.1}}), Catch::Contains("damping"));
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping_speed", 0.0}}), Catch::Contains("damping_speed"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"tolerance", "small"}}), Catch::Contains("tolerance"));
   CHECK_THROWS_AS(nscd::makeNscdBackend(s, nlohmann::json::array()), std::invalid_argument);
   // A box too short for the grains' periodic images is refused, not silently wrong.
