@@ -67,7 +67,7 @@ TEST_CASE("nscd free fall error is (theta - 1/2) g t dt", "[nscd]") {
   CHECK(b->states()[0].position.z() == Approx(expected).epsilon(1e-13));
 }
 
-TEST_CASE("nscd damping: a loaded grain tends to F / (m c); free flight and rest are untouched", "[nscd]") {
+TEST_CASE("nscd damping: a loaded grain tends to F / (m c), and free flight and rest are untouched", "[nscd]") {
   const double c = 0.8, dt = 1e-3;
   const int n = 2000;
   SECTION("sliding on the frictionless floor under a body force F_x") {
