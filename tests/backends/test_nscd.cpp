@@ -78,7 +78,7 @@ TEST_CASE("nscd damping: a loaded grain tends to F / (m c), and free flight and 
     core::SystemDef s = box(20.0, 10.0);
     s.gravity = Vec3(fx, 0.0, -1.0);
     s.grains.push_back(sphere(1.0, Vec3(5.0, 5.0, 0.5)));
-    auto b = nscd::makeNscdBackend(s, {{"damping", c}});
+    auto b = nscd::makeNscdBackend(s, {{"damping", c}, {"damping_speed", nullptr}});  // no speed limit
     for (int k = 0; k < n; ++k) b->step(dt);
     const double q = std::exp(-c * dt);
     CHECK(b->states()[0].velocity.x() == Approx(fx * dt * (1.0 - std::pow(q, n)) / (1.0 - q)).epsilon(1e-12));
