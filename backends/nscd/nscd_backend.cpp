@@ -1,6 +1,5 @@
 #include "backends/nscd/nscd_backend.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>

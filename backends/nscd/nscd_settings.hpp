@@ -3,7 +3,6 @@
 // Every key of the options JSON is a field below; unknown keys are refused so that a typo never
 // silently runs with a default.
 #include <nlohmann/json.hpp>
-#include <limits>
 #include <string>
 
 namespace confpack::nscd {
@@ -74,7 +73,8 @@ struct NscdSettings {
   /// dissipates only when contacts close or slide on a wall. A frictionless pinacoid pile can keep
   /// a grain oscillating on contacts that never open (measured on 188 pinacoids: period 3.6 t0,
   /// |v| ~ 2e-3 sqrt(g d), undamped over 10 t0), which SPEC 6.1 then never accepts; restarted at
-  /// 60 t0 with c = 0.4, that pile met SPEC 6.1 7.4 t0 later at the usual ~690 iterations per step.
+  /// 60 t0 with c = 0.4 (no speed limit), that pile met SPEC 6.1 7.4 t0 later at the usual ~690
+  /// iterations per step.
   double damping = 0.0;
   /// ["damping_speed"] grains faster than this are not damped [sqrt(g d_L)], > 0, or null for no
   /// limit. Default 0.01: it keeps the damping off the flow that forms the packing. On the
