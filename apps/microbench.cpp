@@ -375,31 +375,29 @@ Fixture* cachedFixture(benchmark::State& state, const Key& key, const std::funct
 // ---------------------------------------------------------------------------------------------
 // Benchmarks.
 
+// The timed loop of both broad-phase benchmarks: grains through findPairs, and pairs per grain.
+void timeFindPairs(benchmark::State& state, nscd::BroadPhase& broad, const std::vector<Vec3>& positions,
+                   const std::vector<double>& reach, std::vector<nscd::CandidatePair>& pairs) {
+  for (auto _ : state) {
+    broad.findPairs(positions, reach, pairs);
+    benchmark::DoNotOptimize(pairs.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(positions.size()));
+  state.counters["pairs_per_grain"] = static_cast<double>(pairs.size()) / static_cast<double>(positions.size());
+}
+
 void broadPhaseBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
   BroadPhaseFixture* f =
       cachedFixture<BroadPhaseFixture, int>(state, n, [&] { return makeBroadPhaseFixture(n, seed); });
-  if (!f) return;
-  for (auto _ : state) {
-    f->broad->findPairs(f->positions, f->reach, f->pairs);
-    benchmark::DoNotOptimize(f->pairs.data());
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(f->positions.size()));
-  state.counters["pairs_per_grain"] = static_cast<double>(f->pairs.size()) / static_cast<double>(f->positions.size());
+  if (f) timeFindPairs(state, *f->broad, f->positions, f->reach, f->pairs);
 }
 
 // The same search on the settled pile of the solver benchmarks, where every grain touches its
 // neighbours: the pairs that a compaction step finds (about 3 per grain) instead of a loose deposit's.
 void pileBroadPhaseBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
   SolverFixture* f = cachedFixture<SolverFixture, int>(state, n, [&] { return makeSolverFixture(n, seed); });
-  if (!f) return;
-  for (auto _ : state) {
-    f->broad->findPairs(f->positionMid, f->reach, f->pairs);
-    benchmark::DoNotOptimize(f->pairs.data());
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(f->positionMid.size()));
-  state.counters["pairs_per_grain"] = static_cast<double>(f->pairs.size()) / static_cast<double>(f->positionMid.size());
+  if (f) timeFindPairs(state, *f->broad, f->positionMid, f->reach, f->pairs);
 }
 
 void narrowPhaseBenchmark(benchmark::State& state, PairKind kind, std::uint64_t seed) {

@@ -113,7 +113,6 @@ class NscdBackend final : public core::ContactBackend {
     profile_.contactPoints = solver_.rowCount();
     profile_[Phase::Solve] += clock.lap();
     correct(dt);
-    if (settings_.damping > 0.0) recordLoaded();
     profile_[Phase::Integrate] += clock.lap();
     storeImpulses(dt);
     profile_[Phase::StoreImpulses] += clock.lap();
@@ -158,17 +157,6 @@ class NscdBackend final : public core::ContactBackend {
     }
   }
 
-  // Which grains carried a normal impulse in this step (for damp() in the next one).
-  void recordLoaded() {
-    loaded_.assign(n_, 0);
-    for (std::size_t c = 0; c < geometry_.size(); ++c)
-      for (int p = 0; p < geometry_[c].pointCount; ++p)
-        if (solver_.normalImpulse(static_cast<int>(c), p) > 0.0) {
-          loaded_[geometry_[c].a] = 1;
-          if (geometry_[c].b >= 0) loaded_[geometry_[c].b] = 1;
-        }
-  }
-
   // Pair contacts in pair order, then wall contacts in grain order, whatever the thread count.
   void collide() { narrow_.collideAll(pairs_, positionMid_, orientationMid_, geometry_, settings_.threads); }
 
@@ -187,13 +175,22 @@ class NscdBackend final : public core::ContactBackend {
     cache_.replace(cacheBuffer_, dt);
     // Contact list: every contact that carries force or is closed. Objects (and their point
     // vectors) are reused from step to step, so the list costs no allocation in steady state.
+    // The same pass records which grains carried an impulse, for damp() in the next step.
     std::size_t count = 0;
+    const bool damping = settings_.damping > 0.0;
+    if (damping) loaded_.assign(n_, 0);
     for (std::size_t c = 0; c < geometry_.size(); ++c) {
       const ContactGeometry& g = geometry_[c];
-      bool keep = false;
-      for (int p = 0; p < g.pointCount; ++p)
-        keep |= solver_.normalImpulse(static_cast<int>(c), p) > 0.0 || g.gaps[p] <= 0.0;
-      if (!keep) continue;
+      bool loaded = false, closed = false;
+      for (int p = 0; p < g.pointCount; ++p) {
+        loaded |= solver_.normalImpulse(static_cast<int>(c), p) > 0.0;
+        closed |= g.gaps[p] <= 0.0;
+      }
+      if (damping && loaded) {
+        loaded_[g.a] = 1;
+        if (g.b >= 0) loaded_[g.b] = 1;
+      }
+      if (!loaded && !closed) continue;
       if (contacts_.size() <= count) contacts_.emplace_back();
       core::Contact& out = contacts_[count++];
       out.a = g.a;
@@ -240,7 +237,8 @@ class NscdBackend final : public core::ContactBackend {
   // Hot solver state: velocities and inverse masses, one extra static body for the walls.
   std::vector<BodyVelocity> velocity_;
   std::vector<BodyInverseMass> inverse_;
-  // Grains that carried a contact impulse in the last step (only with settings "damping" > 0).
+  // Grains that carried a contact impulse in the last step (only with settings "damping" > 0;
+  // filled by storeImpulses()).
   std::vector<char> loaded_;
   NarrowPhase narrow_;
   BroadPhase broad_;
