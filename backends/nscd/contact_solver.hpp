@@ -134,10 +134,15 @@ class ContactSolver {
   // MPRGP building blocks (contact_solver_mprgp.cpp) over the normal unknowns (frictionless rows,
   // then the normal part of the friction rows), in the scaled variables y = r / s (s = W_nn^-1/2).
   void buildMprgpRows(std::size_t bodyCount);
+  // Body velocity changes M^-1 H S y: all parts, or linear only (linearOnly_).
   void applyImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& out, int threads) const;
-  // out = S (H^T vel + bias?); returns out . *dotWith when given.
-  double contactVelocities(const std::vector<BodyVelocity>& vel, bool withBias, std::vector<double>& out,
-                           int threads, const std::vector<double>* dotWith = nullptr);
+  void applyLinearImpulses(const std::vector<double>& y, std::vector<core::Vec3>& out, int threads) const;
+  // vel += M^-1 H S y.
+  void addImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& vel, int threads);
+  // out = S (H^T vel + bias): the scaled gradient of the step's quadratic program at vel.
+  double contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads);
+  // out = A x (A = S W S); returns x . A x.
+  double applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount, int threads);
   double scaledOperatorBound(std::size_t bodyCount);
   double frictionTangentPass(std::vector<BodyVelocity>& velocities);
   struct FrictionRow;
@@ -164,6 +169,7 @@ class ContactSolver {
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
   std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_;
   std::vector<BodyVelocity> dv_;
+  std::vector<core::Vec3> dvLinear_;
   std::vector<double> bodySum_, partial_;
   // Compact copies of the rows for the two passes of A p, scaled by s: the Jacobian of unknown k
   // (u_k = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a, times s_k), and per body the velocity
