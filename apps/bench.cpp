@@ -152,7 +152,7 @@ double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
 nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
                              const std::function<void(const std::string&)>& log) {
   nlohmann::json points = nlohmann::json::array();
-  std::map<std::string, std::vector<double>> logN, logT;
+  std::map<std::string, std::vector<double>> logN, logT, logTPerSweep;
   for (int n : def.scalingSizes) {
     core::RunConfig cfg = baseConfig(def, core::ShapeKind::Sphere);
     // Keep W = 10 and h = 16 and stretch the periodic length so that n grains fit.
@@ -161,29 +161,55 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
                       (cfg.deposition.expectedSolidFraction * cfg.box.width * cfg.box.height);
     cfg.compaction.timeLimit = 1e9;
     const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-    // Fall long enough for the pile to collapse (contacts everywhere), then time scalingSteps steps.
+    // Let the pile fall and load for scalingFall (rounded up to whole windows of scalingSteps),
+    // then time one window of scalingSteps steps: the cost per step of a compaction is that of a
+    // loaded pile (about 3 contact rows per grain), not of the first steps after the deposit.
     nlohmann::json point = {{"n_grains", dep.grains.size()}, {"length_x", cfg.box.lengthX}};
     for (const std::string backend : {"nscd", "bullet"}) {
       core::RunConfig c = cfg;
       c.backend = backend;
       const double dt = defaultTimeStep(c, dep);
       c.compaction.dt = dt;
+      const long fallWindows = static_cast<long>(std::ceil(def.scalingFall / (def.scalingSteps * dt) - 1e-9));
       c.compaction.checkInterval = def.scalingSteps;
-      c.compaction.timeLimit = 2.0 * def.scalingSteps * dt;
+      c.compaction.timeLimit = static_cast<double>((fallWindows + 1) * def.scalingSteps) * dt;
       const CompactionOutcome out = compact(c, dep);
+      // Over the timed window (between the two checks): time per step, solver iterations per
+      // step, and the solve time per contact update (rows x iterations), which separates the
+      // cost of one iteration from the number of them.
       const auto& h = out.history;
-      const double perStep = h.size() >= 2 ? (h.back().wallSeconds - h.front().wallSeconds) / (h.back().steps - h.front().steps)
-                                           : out.timing["compaction_s"].get<double>() / std::max(1L, out.timing["steps"].get<long>());
-      point[backend] = {{"time_per_step_s", perStep}, {"contact_updates_per_s", out.timing["contact_updates_per_s"]}};
+      if (h.empty()) throw std::runtime_error(fmt::format("bench scaling: {} stopped before its first check", backend));
+      const CheckPoint first = h.size() >= 2 ? h[h.size() - 2] : CheckPoint{}, last = h.back();
+      const double steps = static_cast<double>(last.steps - first.steps);
+      const double perStep = (last.stepSeconds - first.stepSeconds) / steps;
+      const double iterations = static_cast<double>(last.iterations - first.iterations);
+      const double rowUpdates = last.rowUpdates - first.rowUpdates;
+      const double solveSeconds = last.solveSeconds - first.solveSeconds;
+      point[backend] = {{"time_per_step_s", perStep},
+                        {"sweeps_per_step", iterations / steps},
+                        {"contact_rows", iterations > 0.0 ? rowUpdates / iterations : 0.0},
+                        {"solve_s_per_step", solveSeconds / steps},
+                        {"solve_ns_per_contact_update", rowUpdates > 0.0 ? 1e9 * solveSeconds / rowUpdates : 0.0},
+                        {"contact_updates_per_s", out.timing["contact_updates_per_s"]}};
       logN[backend].push_back(std::log(static_cast<double>(dep.grains.size())));
       logT[backend].push_back(std::log(perStep));
-      if (log) log(fmt::format("  scaling n={} {}: {:.3e} s/step", dep.grains.size(), backend, perStep));
+      logTPerSweep[backend].push_back(std::log(perStep * steps / std::max(1.0, iterations)));
+      if (log)
+        log(fmt::format("  scaling n={} {}: {:.3e} s/step, {:.0f} sweeps/step, {:.2f} contact rows per grain",
+                        dep.grains.size(), backend, perStep, iterations / steps,
+                        iterations > 0.0 ? rowUpdates / iterations / dep.grains.size() : 0.0));
     }
     points.push_back(point);
   }
   exponents = nlohmann::json::object();
   for (const auto& [backend, x] : logN)
     exponents[backend] = x.size() >= 2 ? nlohmann::json(logLogSlope(x, logT[backend])) : nlohmann::json(nullptr);
+  // The same fit for the time of a step divided by its solver iterations: how the cost of one
+  // iteration grows, apart from the number of iterations the configuration needs.
+  nlohmann::json perSweep = nlohmann::json::object();
+  for (const auto& [backend, x] : logN)
+    perSweep[backend] = x.size() >= 2 ? nlohmann::json(logLogSlope(x, logTPerSweep[backend])) : nlohmann::json(nullptr);
+  exponents["per_sweep"] = perSweep;
   return points;
 }
 

@@ -4,8 +4,9 @@
 // Cases:
 //   msp-w10  monodisperse spheres, L_x = 20, W = 10, h = 16 (about 3,700 grains at phi 0.6)
 //   mpp-w10  monodisperse pinacoids, same box
-//   scaling  spheres from about 2,000 to 30,400 grains: cost per step over a fixed number of
-//            steps from the deposit, fitted as t_step ~ n^k
+//   scaling  spheres from about 2,000 to 30,400 grains (W = 10, h = 16, the periodic length
+//            stretched): cost per step over a fixed number of steps once the pile has fallen
+//            for a while and carries its weight, fitted as t_step ~ n^k
 // For each backend: wall time to equilibrium (or to the time limit), final interpenetration and
 // equilibrium ratios, steps, sweeps per step, time per step and per phase, contact updates per
 // second, peak memory; and nscd/bullet ratios. Bullet is also credited with the first check at
@@ -21,6 +22,7 @@ struct BenchDef {
   double timeLimit = 200.0;       ///< simulated time limit of a compaction [t0]
   double scale = 1.0;             ///< multiplies the box length and width (smaller = quicker) [-]
   int scalingSteps = 200;         ///< steps timed per scaling point [-]
+  double scalingFall = 4.0;       ///< simulated time before the timed steps of a scaling point [t0]
   std::vector<int> scalingSizes = {2000, 4000, 8000, 16000, 30400};  ///< grains per scaling point
   std::uint64_t seed = 1;
   int threads = 1;

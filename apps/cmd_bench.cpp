@@ -86,6 +86,11 @@ void registerBench(CLI::App& app) {
   auto* scalingSteps = sub->add_option("--scaling-steps", st->def.scalingSteps, "Steps timed per scaling point")
                            ->check(positiveNumber())
                            ->capture_default_str();
+  auto* scalingFall =
+      sub->add_option("--scaling-fall", st->def.scalingFall,
+                      "Simulated time before the timed steps of a scaling point, for the pile to load [t0]")
+          ->check(nonNegativeNumber())
+          ->capture_default_str();
   auto* scalingSizes = sub->add_option("--scaling-sizes", st->def.scalingSizes, "Grain counts of the scaling series")
                            ->check(positiveNumber());
   sub->add_option("--seed", st->def.seed, "Seed of the deposits (and of the micro-benchmark poses)")
@@ -98,7 +103,7 @@ void registerBench(CLI::App& app) {
                               "narrow phase per pair type, one Gauss-Seidel sweep)");
   // The whole-run options mean nothing to the micro-benchmarks (which time one core): refuse them
   // rather than ignore them.
-  for (CLI::Option* o : {cases, timeLimit, scale, scalingSteps, scalingSizes, threads}) micro->excludes(o);
+  for (CLI::Option* o : {cases, timeLimit, scale, scalingSteps, scalingFall, scalingSizes, threads}) micro->excludes(o);
   sub->add_option("--micro-filter", st->microDef.filter, "Regex selecting micro-benchmarks by name")
       ->needs(micro)
       ->capture_default_str();

@@ -85,8 +85,11 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   double rowUpdates = 0.0;  // contact rows x sweeps, for contact updates per second
   analysis::EquilibriumReport eq;
   bool haveEq = false;
+  double stepSeconds = 0.0;  // wall time inside backend->step(), without checks and frames
   while (steps < maxSteps) {
+    const Clock::time_point stepStart = Clock::now();
     backend->step(out.dt);
+    stepSeconds += secondsSince(stepStart);
     ++steps;
     const core::StepProfile& prof = backend->profile();
     for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
@@ -107,7 +110,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       const double overlap =
           analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
       out.history.push_back({steps, steps * out.dt, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
-                             eq.maxKineticRatio, overlap});
+                             eq.maxKineticRatio, overlap, totalIterations, rowUpdates, totals[core::Phase::Solve],
+                             stepSeconds});
       if (progress)
         progress(static_cast<double>(steps) / maxSteps,
                  fmt::format("{} t={:.1f} step {} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
@@ -139,7 +143,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   for (const CheckPoint& c : out.history)
     history.push_back({{"steps", c.steps}, {"time", c.time}, {"wall_s", c.wallSeconds},
                        {"max_force_ratio", c.maxForceRatio}, {"max_moment_ratio", c.maxMomentRatio},
-                       {"max_kinetic_ratio", c.maxKineticRatio}, {"interpenetration_percent", c.interpenetrationPercent}});
+                       {"max_kinetic_ratio", c.maxKineticRatio}, {"interpenetration_percent", c.interpenetrationPercent},
+                       {"iterations", c.iterations}});
   out.timing = {{"wall_s", secondsSince(start)},
                 {"compaction_s", secondsSince(start)},
                 {"steps", steps},

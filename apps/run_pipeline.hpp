@@ -33,6 +33,10 @@ struct CheckPoint {
   double maxMomentRatio = 0.0;
   double maxKineticRatio = 0.0;
   double interpenetrationPercent = 0.0;  ///< exact bulk interpenetration [%] (no lattice)
+  long iterations = 0;            ///< solver iterations (sweeps) since the start, summed over steps
+  double rowUpdates = 0.0;        ///< contact rows x iterations since the start
+  double solveSeconds = 0.0;      ///< time in the solve phase since the start [s]
+  double stepSeconds = 0.0;       ///< time in the backend's steps since the start (no checks) [s]
 };
 
 struct CompactionOutcome {

@@ -1,9 +1,10 @@
-// `confpack bench --micro`: the Google Benchmark micro-benchmarks of the nscd phases, run through
-// the real binary (CONFPACK_BINARY) as a user runs them.
+// `confpack bench`: the Google Benchmark micro-benchmarks of the nscd phases (--micro) and the
+// scaling series, run through the real binary (CONFPACK_BINARY) as a user runs them.
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -158,4 +159,39 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
   CHECK(mprgp["items_per_second"].get<double>() > 0.0);
   CHECK(mprgp["iterations_per_solve"].get<double>() == Approx(50.0));
   CHECK(mprgp["rows_per_grain"].get<double>() == Approx(sweep["rows_per_grain"].get<double>()));
+}
+
+// The scaling series times the cost per step of a pile that carries its weight (the regime of a
+// whole compaction), not of the first steps after the deposit, where grains barely touch (0.17
+// contact rows per grain over steps 200 to 400 of 2,000 spheres, against 3.3 after 4 t0).
+TEST_CASE("bench --case scaling times loaded piles with both backends and fits the exponents") {
+  Scratch s("scaling");
+  const Run r = s.run(
+      "bench --case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --quiet "
+      "--out b.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const json cases = json::parse(confpack::testing::slurp(s.dir / "b.json"))["cases"];
+  const json& points = cases["scaling"];
+  REQUIRE(points.size() == 2);
+  for (const json& point : points) {
+    const double n = point["n_grains"].get<double>();
+    CHECK(n > 250.0);
+    for (const char* backend : {"nscd", "bullet"}) {
+      INFO(backend << " at n = " << n);
+      const json& b = point[backend];
+      CHECK(b["time_per_step_s"].get<double>() > 0.0);
+      CHECK(b["solve_s_per_step"].get<double>() <= b["time_per_step_s"].get<double>());
+      CHECK(b["sweeps_per_step"].get<double>() >= 1.0);
+      // A pile in contact: a settled frictionless sphere pile has about 3 rows per grain
+      // (isostatic Z = 6); it is still loading after 3 t0.
+      const double rowsPerGrain = b["contact_rows"].get<double>() / n;
+      CHECK(rowsPerGrain > 1.5);
+      CHECK(rowsPerGrain < 4.0);
+    }
+  }
+  for (const char* backend : {"nscd", "bullet"}) {
+    CHECK(std::isfinite(cases["scaling_exponent"][backend].get<double>()));
+    CHECK(std::isfinite(cases["scaling_exponent"]["per_sweep"][backend].get<double>()));
+  }
 }
