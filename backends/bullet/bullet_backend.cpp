@@ -30,8 +30,10 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <tuple>
+#include <vector>
 
 #include "backends/bullet/bullet_settings.hpp"
 #include "backends/bullet/periodic_pairs.hpp"
@@ -176,7 +178,7 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
   }
   btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                          const btContactSolverInfo& info) override {
-    // Impulses into the manifold points (next step's warm start, and what readBack reports),
+    // Impulses into the manifold points (next step's warm start, and what readContacts reports),
     // then Bullet's own write-back of velocities and split-impulse pushes. Bullet's
     // writeBackContacts would read the friction rows of every contact, which frictionless
     // rows do not have, so the contact part is done here and Bullet's is switched off.
@@ -340,7 +342,8 @@ class BulletBackend final : public core::ContactBackend {
   void collidePeriodicPairs();
   void solve();
   void wrapIntoBox();
-  void readBack(double dt);
+  void readStates();
+  void readContacts(double dt);
 
   core::SystemDef system_;
   BulletSettings settings_;
@@ -389,7 +392,7 @@ BulletBackend::BulletBackend(const core::SystemDef& system, const BulletSettings
   }
   pairFinder_ = std::make_unique<PeriodicPairFinder>(system_.box, 2.0 * maxRadius + settings_.contactBreakingThreshold);
   buildWorld();
-  readBack(0.0);
+  readStates();
 }
 
 BulletBackend::~BulletBackend() {
@@ -439,7 +442,7 @@ void BulletBackend::buildWorld() {
   info.m_restitution = 0.0;
   info.m_friction = 0.0;
   // Warm starting stays on: it is also what makes the solver write the impulses back into the
-  // manifold points, where readBack() finds them (a factor of 0 disables the warm start itself).
+  // manifold points, where readContacts() finds them (a factor of 0 disables the warm start itself).
   info.m_solverMode = SOLVER_USE_WARMSTARTING | SOLVER_SIMD;
   if (settings_.frictionDirections == 2) info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
   if (settings_.randomizeOrder) info.m_solverMode |= SOLVER_RANDMIZE_ORDER;
@@ -598,6 +601,8 @@ void BulletBackend::solve() {
 }
 
 void BulletBackend::wrapIntoBox() {
+  std::vector<btRigidBody*> jumped;
+  std::map<int, Vec3> jumps;  // grain -> its jump by whole periods
   for (auto& body : grains_) {
     btTransform t = body->getWorldTransform();
     const Vec3 p = fromBt(t.getOrigin());
@@ -606,14 +611,30 @@ void BulletBackend::wrapIntoBox() {
     t.setOrigin(toBt(w));
     body->setWorldTransform(t);
     body->setInterpolationWorldTransform(t);
-    // The grain jumped by a period: the cached points of its broad-phase manifolds now join
-    // anchors a period apart. Bullet would keep a point whose anchors are separated along the
-    // normal (it only drops points that open up or slide), i.e. a bogus overlap of a whole
-    // period, and the broad phase (btDbvtBroadphase) removes stale pairs only a few per step.
-    // Drop the grain's pair algorithms and their manifolds; the contacts it still has are found
-    // again as periodic pairs (they lose one step of warm starting).
-    broadphase_->getOverlappingPairCache()->cleanProxyFromPairs(body->getBroadphaseHandle(), dispatcher_.get());
+    jumped.push_back(body.get());
+    jumps[body->getUserIndex()] = w - p;
   }
+  if (jumped.empty()) return;
+  // The contacts were read before the wrap: keep their points near grain a's reported position.
+  for (core::Contact& c : contacts_)
+    if (auto it = jumps.find(c.a); it != jumps.end())
+      for (core::ContactPoint& p : c.points) p.position += it->second;
+  // A grain that jumped by a period leaves the cached points of its broad-phase manifolds joining
+  // anchors a period apart. Bullet would keep a point whose anchors are separated along the
+  // normal (it only drops points that open up or slide), i.e. a bogus overlap of a whole period,
+  // and the broad phase (btDbvtBroadphase) removes stale pairs only a few per step. Drop the
+  // grain's pair algorithms and their manifolds; the contacts it still has are found again as
+  // periodic pairs (they lose one step of warm starting). Those manifolds are freed, so they
+  // leave solved_ first (reading them later was a use after free: a crash once Bullet's manifold
+  // pool was full and they came from the heap, 4,000 spheres).
+  std::set<const btPersistentManifold*> periodic;
+  for (const auto& [key, pc] : periodic_) periodic.insert(pc.manifold.get());
+  const std::set<const btCollisionObject*> moved(jumped.begin(), jumped.end());
+  std::erase_if(solved_, [&](const btPersistentManifold* m) {
+    return !periodic.count(m) && (moved.count(m->getBody0()) || moved.count(m->getBody1()));
+  });
+  for (btRigidBody* body : jumped)
+    broadphase_->getOverlappingPairCache()->cleanProxyFromPairs(body->getBroadphaseHandle(), dispatcher_.get());
 }
 
 void BulletBackend::step(double dt) {
@@ -653,15 +674,20 @@ void BulletBackend::step(double dt) {
   t0 = Clock::now();
   world_->integrate(dt);
   world_->clearForces();
-  wrapIntoBox();
   profile_[Phase::Integrate] = secondsSince(t0);
+  t0 = Clock::now();
+  readContacts(dt);  // before the wrap, which frees the broad-phase manifolds of grains that jump
+  profile_[Phase::StoreImpulses] += secondsSince(t0);
 
   t0 = Clock::now();
-  readBack(dt);
+  wrapIntoBox();
+  profile_[Phase::Integrate] += secondsSince(t0);
+  t0 = Clock::now();
+  readStates();
   profile_[Phase::StoreImpulses] += secondsSince(t0);
 }
 
-void BulletBackend::readBack(double dt) {
+void BulletBackend::readStates() {
   states_.resize(grains_.size());
   for (std::size_t i = 0; i < grains_.size(); ++i) {
     const btRigidBody& b = *grains_[i];
@@ -673,8 +699,10 @@ void BulletBackend::readBack(double dt) {
     s.velocity = fromBt(b.getLinearVelocity());
     s.angularVelocity = fromBt(b.getAngularVelocity());
   }
+}
+
+void BulletBackend::readContacts(double dt) {
   contacts_.clear();
-  if (dt <= 0.0) return;
   // Shift of each solved periodic manifold (b's image = b + shift); interior ones have none.
   std::map<const btPersistentManifold*, Vec3> shifts;
   for (const auto& [key, pc] : periodic_) shifts[pc.manifold.get()] = pc.shift;

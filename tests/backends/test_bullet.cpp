@@ -622,6 +622,39 @@ TEST_CASE("bullet: a face-face contact carried across a periodic face stays a co
   CHECK(std::abs(st[0].position.z() - 5.0) < 1e-9);
 }
 
+TEST_CASE("bullet: the contact of a grain that wraps is reported at the grain's new position", "[bullet]") {
+  // Two unit spheres touching along x (overlap 1e-6), far above the floor, pulled along +x by
+  // g = (1, 0, 0): they move together and cross x = L_x, grain 0 (the contact's a) first. The
+  // step in which grain 0 wraps frees its broad-phase manifold; the contact is read before that
+  // and moved with the grain (core/contact.hpp: points near a's reported position). Reading it
+  // after the wrap was a use after free (and put the point a period away from the grain).
+  auto s = boxSystem(4.0, 4.0, true, 0.0);
+  s.gravity = Vec3(1.0, 0.0, 0.0);
+  s.grains = {sphere(1.0, {3.5, 2.0, 5.0}), sphere(1.0, {2.5 + 1e-6, 2.0, 5.0})};
+  auto b = makeBullet(s);
+  int wrapSteps = 0, reported = 0;
+  double worst = 0.0;
+  double previousX = b->states()[0].position.x();
+  for (int n = 0; n < 1500; ++n) {
+    b->step(1e-3);
+    const auto& st = b->states();
+    const bool wrapped = st[0].position.x() < previousX - 2.0;
+    previousX = st[0].position.x();
+    wrapSteps += wrapped;
+    for (const auto& c : b->contacts()) {
+      REQUIRE(c.a == 0);
+      REQUIRE(c.b == 1);
+      for (const auto& p : c.points) worst = std::max(worst, (p.position - st[0].position).norm());
+      reported += wrapped;
+    }
+  }
+  CHECK(wrapSteps == 1);  // x = 3.5 + t^2 / 2 passes 4 once within 1.5 t0
+  CHECK(reported == 1);   // and the contact was reported in that step
+  // Bullet's points are those of the collision stage, before the step moved the grain by v dt
+  // (at most 1.5e-3 here).
+  CHECK(worst == Approx(0.5).margin(2e-3));
+}
+
 TEST_CASE("bullet fixed-seed run hashes to its recorded value", "[bullet]") {
   // STYLE "Tests": the constant changes only in a commit that says why (a change of physics,
   // solver order or settings). FNV-1a over the bits of every pose and velocity after 300 steps
