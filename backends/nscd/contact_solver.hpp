@@ -110,6 +110,9 @@ class ContactSolver {
   /// sweeps (nlgs) or operator applications W p (mprgp, each about two sweeps of work).
   int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
   double residual() const { return residual_; }
+  /// The upper bound of ||S W S|| (S = diag(W_kk^-1/2)) that set the expansion step of the last
+  /// MPRGP solve (alpha_bar = 1.95 / bound); 0 before any.
+  double operatorBound() const { return operatorBound_; }
   int rowCount() const { return static_cast<int>(normalRows_.size() + frictionRows_.size()); }
 
   /// Impulses of contact c, point p, after solve(): normal and tangential (world vector).
@@ -170,7 +173,7 @@ class ContactSolver {
   std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_;
   std::vector<BodyVelocity> dv_;
   std::vector<core::Vec3> dvLinear_;
-  std::vector<double> bodySum_, partial_;
+  std::vector<double> rowSum_, partial_;
   // Compact copies of the rows for the two passes of A p, scaled by s: the Jacobian of unknown k
   // (u_k = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a, times s_k), and per body the velocity
   // change per unit y_k of each of its unknowns, contiguous so the scatter streams.
@@ -207,6 +210,7 @@ class ContactSolver {
   };
   std::vector<Measures> measures_;
   double residual_ = 0.0;
+  double operatorBound_ = 0.0;
 };
 
 }  // namespace confpack::nscd

@@ -9,7 +9,11 @@
 #include <set>
 #include <tuple>
 
+#include <Eigen/Eigenvalues>
+
 #include "backends/nscd/broad_phase.hpp"
+#include "backends/nscd/contact_solver.hpp"
+#include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_backend.hpp"
 #include "core/deposition.hpp"
 #include "backends/nscd/nscd_settings.hpp"
@@ -343,4 +347,71 @@ TEST_CASE("nscd mprgp: two threads give the bits of one on a pile large enough f
   REQUIRE(one->contacts().size() == two->contacts().size());
   for (std::size_t c = 0; c < one->contacts().size(); ++c)
     CHECK(one->contacts()[c].normalForce() == two->contacts()[c].normalForce());
+}
+
+TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin bound (spheres)", "[nscd]") {
+  // MPRGP's expansion step alpha_bar = 1.95 / bound needs bound >= ||S W S|| (Dostal); the closer,
+  // the longer the step. The bound must be the largest absolute row sum of S W S, formed here
+  // densely from the contact normals and masses. Rows of a touching sphere network: a geometric
+  // deposit with every grain given its placeholder's diameter (each seated on three supports or
+  // the floor), sizes then shrunk by up to 2% so that masses differ and gaps stay within the alert
+  // distance.
+  core::SystemDef s;
+  s.box.lengthX = 5.0;
+  s.box.width = 5.0;
+  core::DepositionDef def;
+  def.grainCount = 120;
+  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, 3);
+  s.grains = dep.grains;
+  core::Rng rng(5, core::StreamId::Test);
+  for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter * (1.0 - 0.02 * rng.uniform());
+  const int n = static_cast<int>(s.grains.size());
+  const nscd::NscdSettings settings;  // mprgp
+  nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
+  nscd::BroadPhase broad(s.box, narrow.maxReach());
+  std::vector<Vec3> positions;
+  std::vector<core::Quat> orientations;
+  std::vector<double> reach;
+  std::vector<nscd::BodyInverseMass> bodies(n + 1);  // the last: the static walls
+  std::vector<nscd::BodyVelocity> velocities(n + 1);
+  for (int i = 0; i < n; ++i) {
+    const core::Grain& g = s.grains[i];
+    positions.push_back(g.position);
+    orientations.push_back(g.orientation);
+    reach.push_back(narrow.reach(i));
+    bodies[i].invMass = 1.0 / (s.density * g.volume());
+    bodies[i].invInertia = g.bodyInertia(s.density).inverse();
+    velocities[i].v = Vec3(0.0, 0.0, -2e-3);
+  }
+  std::vector<nscd::CandidatePair> pairs;
+  broad.findPairs(positions, reach, pairs);
+  std::vector<nscd::ContactGeometry> contacts;
+  narrow.collideAll(pairs, positions, orientations, contacts, 1);
+  nscd::ContactSolver solver;
+  solver.prepare(contacts, positions, bodies, s.box, 2e-3, settings);
+  solver.warmStart(nscd::ContactCache{}, contacts, 2e-3, velocities);
+  solver.solve(velocities, settings);
+
+  // ||S W S|| = largest eigenvalue of B^T B, B = M^-1/2 H S: column k holds -s_k m_a^-1/2 n_k on
+  // grain a and +s_k m_b^-1/2 n_k on grain b (none on a wall), s_k = (1/m_a + 1/m_b)^-1/2.
+  std::vector<std::tuple<int, int, Vec3>> rows;
+  for (const auto& g : contacts)
+    for (int p = 0; p < g.pointCount; ++p) rows.emplace_back(g.a, g.b, g.normal);
+  Eigen::MatrixXd bMatrix = Eigen::MatrixXd::Zero(3 * n, static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto& [a, b, normal] = rows[k];
+    const double wa = bodies[a].invMass, wb = b >= 0 ? bodies[b].invMass : 0.0;
+    const double sk = 1.0 / std::sqrt(wa + wb);
+    bMatrix.block<3, 1>(3 * a, static_cast<Eigen::Index>(k)) = -sk * std::sqrt(wa) * normal;
+    if (b >= 0) bMatrix.block<3, 1>(3 * b, static_cast<Eigen::Index>(k)) = sk * std::sqrt(wb) * normal;
+  }
+  const Eigen::MatrixXd a = bMatrix.transpose() * bMatrix;
+  const double exact = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  const double gershgorin = a.cwiseAbs().rowwise().sum().maxCoeff();
+  INFO("rows " << rows.size() << ", exact " << exact << ", bound " << solver.operatorBound() << ", Gershgorin "
+               << gershgorin);
+  REQUIRE(rows.size() > 2 * static_cast<std::size_t>(n));  // a connected network, floor included
+  CHECK(solver.operatorBound() >= exact);
+  CHECK(solver.operatorBound() == Approx(gershgorin).epsilon(1e-12));
+  CHECK(solver.operatorBound() < 2.0 * exact);  // 1.72 here
 }
