@@ -152,7 +152,7 @@ double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
 nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
                              const std::function<void(const std::string&)>& log) {
   nlohmann::json points = nlohmann::json::array();
-  std::map<std::string, std::vector<double>> logN, logT, logTPerSweep;
+  std::map<std::string, std::vector<double>> logN, logT, logTPerSweep, logCpu;
   for (int n : def.scalingSizes) {
     core::RunConfig cfg = baseConfig(def, core::ShapeKind::Sphere);
     // Keep W = 10 and h = 16 and stretch the periodic length so that n grains fit.
@@ -182,10 +182,12 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
       const CheckPoint first = h.size() >= 2 ? h[h.size() - 2] : CheckPoint{}, last = h.back();
       const double steps = static_cast<double>(last.steps - first.steps);
       const double perStep = (last.stepSeconds - first.stepSeconds) / steps;
+      const double cpuPerStep = (last.stepCpuSeconds - first.stepCpuSeconds) / steps;
       const double iterations = static_cast<double>(last.iterations - first.iterations);
       const double rowUpdates = last.rowUpdates - first.rowUpdates;
       const double solveSeconds = last.solveSeconds - first.solveSeconds;
       point[backend] = {{"time_per_step_s", perStep},
+                        {"cpu_per_step_s", cpuPerStep},
                         {"sweeps_per_step", iterations / steps},
                         {"contact_rows", iterations > 0.0 ? rowUpdates / iterations : 0.0},
                         {"solve_s_per_step", solveSeconds / steps},
@@ -194,6 +196,7 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
       logN[backend].push_back(std::log(static_cast<double>(dep.grains.size())));
       logT[backend].push_back(std::log(perStep));
       logTPerSweep[backend].push_back(std::log(perStep * steps / std::max(1.0, iterations)));
+      logCpu[backend].push_back(std::log(cpuPerStep));
       if (log)
         log(fmt::format("  scaling n={} {}: {:.3e} s/step, {:.0f} sweeps/step, {:.2f} contact rows per grain",
                         dep.grains.size(), backend, perStep, iterations / steps,
@@ -210,6 +213,12 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
   for (const auto& [backend, x] : logN)
     perSweep[backend] = x.size() >= 2 ? nlohmann::json(logLogSlope(x, logTPerSweep[backend])) : nlohmann::json(nullptr);
   exponents["per_sweep"] = perSweep;
+  // And for the CPU time per step: on a shared machine, other jobs inflate the wall time of some
+  // points and not others.
+  nlohmann::json cpu = nlohmann::json::object();
+  for (const auto& [backend, x] : logN)
+    cpu[backend] = x.size() >= 2 ? nlohmann::json(logLogSlope(x, logCpu[backend])) : nlohmann::json(nullptr);
+  exponents["cpu"] = cpu;
   return points;
 }
 

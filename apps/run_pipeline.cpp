@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 
 #include "analysis/equilibrium.hpp"
 #include "analysis/interpenetration.hpp"
@@ -19,6 +20,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// CPU time of the whole process (every thread) [s]: unlike the wall clock, it does not count the
+/// time other jobs on a shared machine take from this one.
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 /// The packing as the backend has it now: poses from the states, contacts of the last step.
 core::Packing snapshot(const core::BoxDef& box, const std::vector<core::Grain>& grains,
@@ -86,10 +95,13 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   analysis::EquilibriumReport eq;
   bool haveEq = false;
   double stepSeconds = 0.0;  // wall time inside backend->step(), without checks and frames
+  double stepCpuSeconds = 0.0;  // the same in CPU time
   while (steps < maxSteps) {
     const Clock::time_point stepStart = Clock::now();
+    const double cpuStart = processCpuSeconds();
     backend->step(out.dt);
     stepSeconds += secondsSince(stepStart);
+    stepCpuSeconds += processCpuSeconds() - cpuStart;
     ++steps;
     const core::StepProfile& prof = backend->profile();
     for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
@@ -111,7 +123,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
           analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
       out.history.push_back({steps, steps * out.dt, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
                              eq.maxKineticRatio, overlap, totalIterations, rowUpdates, totals[core::Phase::Solve],
-                             stepSeconds});
+                             stepSeconds, stepCpuSeconds});
       if (progress)
         progress(static_cast<double>(steps) / maxSteps,
                  fmt::format("{} t={:.1f} step {} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",

@@ -37,6 +37,7 @@ struct CheckPoint {
   double rowUpdates = 0.0;        ///< contact rows x iterations since the start
   double solveSeconds = 0.0;      ///< time in the solve phase since the start [s]
   double stepSeconds = 0.0;       ///< time in the backend's steps since the start (no checks) [s]
+  double stepCpuSeconds = 0.0;    ///< the same in process CPU time (all threads) [s]
 };
 
 struct CompactionOutcome {

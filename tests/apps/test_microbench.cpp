@@ -182,6 +182,9 @@ TEST_CASE("bench --case scaling times loaded piles with both backends and fits t
       const json& b = point[backend];
       CHECK(b["time_per_step_s"].get<double>() > 0.0);
       CHECK(b["solve_s_per_step"].get<double>() <= b["time_per_step_s"].get<double>());
+      // One thread: its CPU time cannot exceed the wall time of the same steps (clock granularity aside).
+      CHECK(b["cpu_per_step_s"].get<double>() > 0.0);
+      CHECK(b["cpu_per_step_s"].get<double>() <= 1.02 * b["time_per_step_s"].get<double>() + 1e-5);
       CHECK(b["sweeps_per_step"].get<double>() >= 1.0);
       // A pile in contact: a settled frictionless sphere pile has about 3 rows per grain
       // (isostatic Z = 6); it is still loading after 3 t0.
@@ -193,5 +196,6 @@ TEST_CASE("bench --case scaling times loaded piles with both backends and fits t
   for (const char* backend : {"nscd", "bullet"}) {
     CHECK(std::isfinite(cases["scaling_exponent"][backend].get<double>()));
     CHECK(std::isfinite(cases["scaling_exponent"]["per_sweep"][backend].get<double>()));
+    CHECK(std::isfinite(cases["scaling_exponent"]["cpu"][backend].get<double>()));
   }
 }
