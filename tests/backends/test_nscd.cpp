@@ -35,6 +35,18 @@ core::SystemDef box(double lx, double w, bool periodicY = false) {
   return s;
 }
 
+/// Spheres that touch at once: a geometric deposit of `count` grains, each given its
+/// placeholder's diameter (so seated on three supports or the floor).
+core::SystemDef touchingSpheres(double lx, double w, bool periodicY, std::size_t count, std::uint64_t seed) {
+  core::SystemDef s = box(lx, w, periodicY);
+  core::DepositionDef def;
+  def.grainCount = count;
+  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, seed);
+  s.grains = dep.grains;
+  for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter;
+  return s;
+}
+
 /// A pinacoid (L = G = E = 1, alpha = 60 deg) with its lowest vertex at height zBottom.
 core::Grain pinacoid(const core::Quat& q, double x, double y, double zBottom) {
   core::Grain g;
@@ -321,15 +333,7 @@ TEST_CASE("nscd mprgp: two threads give the bits of one on a pile large enough f
   // 1,500 spheres of a geometric deposit, each given its placeholder's diameter so that they touch
   // at once (seated on three supports each): more than the 4,096 unknowns from which the solver's
   // passes run in parallel (contact_solver_mprgp.cpp).
-  core::SystemDef s;
-  s.box.lengthX = 14.0;
-  s.box.width = 14.0;
-  s.box.periodicY = true;
-  core::DepositionDef def;
-  def.grainCount = 1500;
-  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, 5);
-  s.grains = dep.grains;
-  for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter;
+  const core::SystemDef s = touchingSpheres(14.0, 14.0, true, 1500, 5);
   auto one = nscd::makeNscdBackend(s, {{"threads", 1}, {"max_iterations", 30}});
   auto two = nscd::makeNscdBackend(s, {{"threads", 2}, {"max_iterations", 30}});
   for (int k = 0; k < 4; ++k) {
@@ -356,15 +360,9 @@ TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin b
   // deposit with every grain given its placeholder's diameter (each seated on three supports or
   // the floor), sizes then shrunk by up to 2% so that masses differ and gaps stay within the alert
   // distance.
-  core::SystemDef s;
-  s.box.lengthX = 5.0;
-  s.box.width = 5.0;
-  core::DepositionDef def;
-  def.grainCount = 120;
-  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, 3);
-  s.grains = dep.grains;
+  core::SystemDef s = touchingSpheres(5.0, 5.0, false, 120, 3);
   core::Rng rng(5, core::StreamId::Test);
-  for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter * (1.0 - 0.02 * rng.uniform());
+  for (core::Grain& g : s.grains) g.size *= 1.0 - 0.02 * rng.uniform();
   const int n = static_cast<int>(s.grains.size());
   const nscd::NscdSettings settings;  // mprgp
   nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
