@@ -110,6 +110,15 @@ class ContactSolver {
   /// sweeps (nlgs) or operator applications W p (mprgp, each about two sweeps of work).
   int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
   double residual() const { return residual_; }
+  /// What the MPRGP iterations of the last solve were (their sum is its iteration count, less the
+  /// tangential passes with wall friction).
+  struct MprgpSteps {
+    int conjugate = 0;      ///< conjugate gradient steps
+    int projected = 0;      ///< expansions by a projected conjugate gradient step
+    int gradient = 0;       ///< expansions by Dostal's step (first bound, then projected gradient)
+    int proportioning = 0;  ///< proportioning steps (release of bound unknowns)
+  };
+  const MprgpSteps& mprgpSteps() const { return steps_; }
   /// The upper bound of ||S W S|| (S = diag(W_kk^-1/2)) that set the expansion step of the last
   /// MPRGP solve (alpha_bar = 1.95 / bound); 0 before any.
   double operatorBound() const { return operatorBound_; }
@@ -147,6 +156,7 @@ class ContactSolver {
   // out = A x (A = S W S); returns x . A x.
   double applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount, int threads);
   double scaledOperatorBound(std::size_t bodyCount);
+  bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
   double frictionTangentPass(std::vector<BodyVelocity>& velocities);
   struct FrictionRow;
   static std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va);
@@ -170,7 +180,7 @@ class ContactSolver {
   std::vector<int> slot_;
   std::vector<NormalRow> sorted_;  // scratch of prepare(), kept to avoid reallocations
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
-  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_;
+  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_;
   std::vector<BodyVelocity> dv_;
   std::vector<core::Vec3> dvLinear_;
   std::vector<double> rowSum_, partial_;
@@ -211,6 +221,7 @@ class ContactSolver {
   std::vector<Measures> measures_;
   double residual_ = 0.0;
   double operatorBound_ = 0.0;
+  MprgpSteps steps_;
 };
 
 }  // namespace confpack::nscd

@@ -34,10 +34,12 @@ void NscdSettings::validate() const {
 }
 
 std::string toString(SolverKind k) { return k == SolverKind::Mprgp ? "mprgp" : "nlgs"; }
+std::string toString(ExpansionKind k) { return k == ExpansionKind::ProjectedCg ? "projected_cg" : "gradient"; }
 
 void to_json(nlohmann::json& j, const NscdSettings& s) {
   j = {{"theta", s.theta},
        {"solver", toString(s.solver)},
+       {"expansion", toString(s.expansion)},
        {"tolerance", s.tolerance},
        {"max_iterations", s.maxIterations},
        {"min_iterations", s.minIterations},
@@ -82,6 +84,13 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     };
     if (key == "theta") number(s.theta);
     else if (key == "solver") continue;  // read above
+    else if (key == "expansion") {
+      if (value == "projected_cg") s.expansion = ExpansionKind::ProjectedCg;
+      else if (value == "gradient") s.expansion = ExpansionKind::Gradient;
+      else
+        throw std::invalid_argument(
+            fmt::format("nscd option 'expansion' must be \"projected_cg\" or \"gradient\" (got {})", value.dump()));
+    }
     else if (key == "tolerance") number(s.tolerance);
     else if (key == "max_iterations") integer(s.maxIterations);
     else if (key == "min_iterations") integer(s.minIterations);
@@ -97,7 +106,7 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     else if (key == "threads") integer(s.threads);
     else
       throw std::invalid_argument(fmt::format(
-          "unknown nscd option '{}' (known: theta, solver, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
+          "unknown nscd option '{}' (known: theta, solver, expansion, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
           "gap_correction, max_correction_velocity, damping, damping_speed, threads)",
           key));
   }

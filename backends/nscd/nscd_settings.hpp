@@ -13,6 +13,12 @@ enum class SolverKind {
   Mprgp,  ///< "mprgp": projected conjugate gradient (Dostal's MPRGP) on the same problem
 };
 
+/// How MPRGP expands the active set when a conjugate gradient step would leave y >= 0.
+enum class ExpansionKind {
+  ProjectedCg,  ///< "projected_cg": the whole CG step projected on y >= 0, if it lowers the energy
+  Gradient,     ///< "gradient": Dostal's step to the first bound, then a fixed projected gradient step
+};
+
 /// Options of the nscd backend. JSON keys in brackets.
 struct NscdSettings {
   /// ["theta"] Moreau-Jean theta in [0.5, 1] [-]. 0.5 integrates constant forces exactly
@@ -34,6 +40,17 @@ struct NscdSettings {
   /// overall: from the deposit, the same pile met SPEC 6.1 after 27,600 steps at 365 iterations
   /// per step (231 s), against 16,600 steps at 419 (151 s) with 1e-10, the two run side by side.
   double tolerance = 1e-10;
+  /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
+  /// conjugate gradient step would make an impulse negative (contact_solver_mprgp.cpp).
+  /// "gradient" is Dostal's original: to the first bound, then a projected gradient step of fixed
+  /// length 1.95 / ||A||, and conjugate gradients restart. In a jammed pile nearly every second
+  /// step was one (2,000 spheres, 4 t0 fall and 200 steps: 162k conjugate gradient steps, 139k
+  /// expansions), so conjugate gradients hardly ever ran two steps in a row. "projected_cg" takes
+  /// the whole conjugate gradient step projected on r >= 0 when that lowers the energy, else
+  /// Dostal's step (after Kruzik et al. 2020), and goes on conjugating from it instead of
+  /// restarting. On the same problems (that pile, every step solved both ways) it needs 26% fewer
+  /// iterations (116 against 158 per step) and 22% less solve time.
+  ExpansionKind expansion = ExpansionKind::ProjectedCg;
   /// ["max_iterations"] cap on the iterations per step [-], >= 1: sweeps (nlgs, default 2000) or
   /// applications of W (mprgp, default 5000; the jammed 493-sphere pile needs ~400 at 1e-10).
   int maxIterations = 5000;
@@ -99,6 +116,7 @@ struct NscdSettings {
 
 void to_json(nlohmann::json& j, const NscdSettings& s);
 std::string toString(SolverKind k);
+std::string toString(ExpansionKind k);
 /// Defaults of the solver-dependent settings (tolerance, max_iterations) for `kind`.
 NscdSettings defaultsFor(SolverKind kind);
 /// Reads the keys that are present (missing ones keep their defaults); throws

@@ -47,6 +47,52 @@ core::SystemDef touchingSpheres(double lx, double w, bool periodicY, std::size_t
   return s;
 }
 
+/// Slightly shrunk touching spheres (sizes times 1 - 0.02 u, u uniform in [0, 1)): masses differ
+/// and gaps stay within the alert distance.
+core::SystemDef shrunkTouchingSpheres(double lx, double w, std::size_t count, std::uint64_t seed) {
+  core::SystemDef s = touchingSpheres(lx, w, false, count, seed);
+  core::Rng rng(5, core::StreamId::Test);
+  for (core::Grain& g : s.grains) g.size *= 1.0 - 0.02 * rng.uniform();
+  return s;
+}
+
+/// One step's contact problem of the grains of `s` at rest, solved cold (no warm start) with
+/// `settings`: contacts from the broad and narrow phases at the grains' positions, inverse masses
+/// (the last body is the static walls), velocities kicked by gravity over dt = 2e-3 and then
+/// corrected by the solve.
+struct ColdStep {
+  static constexpr double kDt = 2e-3;
+  std::vector<nscd::BodyInverseMass> bodies;
+  std::vector<nscd::BodyVelocity> velocities;
+  std::vector<nscd::ContactGeometry> contacts;
+  nscd::ContactSolver solver;
+  int iterations = 0;
+
+  ColdStep(const core::SystemDef& s, const nscd::NscdSettings& settings)
+      : bodies(s.grains.size() + 1), velocities(s.grains.size() + 1) {
+    nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
+    nscd::BroadPhase broad(s.box, narrow.maxReach());
+    std::vector<Vec3> positions;
+    std::vector<core::Quat> orientations;
+    std::vector<double> reach;
+    for (std::size_t i = 0; i < s.grains.size(); ++i) {
+      const core::Grain& g = s.grains[i];
+      positions.push_back(g.position);
+      orientations.push_back(g.orientation);
+      reach.push_back(narrow.reach(static_cast<int>(i)));
+      bodies[i].invMass = 1.0 / (s.density * g.volume());
+      bodies[i].invInertia = g.bodyInertia(s.density).inverse();
+      velocities[i].v = Vec3(0.0, 0.0, -kDt);  // g = 1
+    }
+    std::vector<nscd::CandidatePair> pairs;
+    broad.findPairs(positions, reach, pairs);
+    narrow.collideAll(pairs, positions, orientations, contacts, 1);
+    solver.prepare(contacts, positions, bodies, s.box, kDt, settings);
+    solver.warmStart(nscd::ContactCache{}, contacts, kDt, velocities);
+    iterations = solver.solve(velocities, settings);
+  }
+};
+
 /// A pinacoid (L = G = E = 1, alpha = 60 deg) with its lowest vertex at height zBottom.
 core::Grain pinacoid(const core::Quat& q, double x, double y, double zBottom) {
   core::Grain g;
@@ -134,7 +180,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   core::SystemDef s = box(20.0, 10.0);
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
-  for (const char* key : {"theta", "tolerance", "max_iterations", "min_iterations", "alert_distance",
+  for (const char* key : {"theta", "expansion", "tolerance", "max_iterations", "min_iterations", "alert_distance",
                           "gap_correction", "max_correction_velocity", "damping", "damping_speed", "threads"})
     CHECK(resolved.contains(key));
   CHECK(resolved["theta"] == 0.5);
@@ -148,6 +194,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping", -0.1}}), Catch::Contains("damping"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping_speed", 0.0}}), Catch::Contains("damping_speed"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"tolerance", "small"}}), Catch::Contains("tolerance"));
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"expansion", "cg"}}), Catch::Contains("expansion"));
   CHECK_THROWS_AS(nscd::makeNscdBackend(s, nlohmann::json::array()), std::invalid_argument);
   // A box too short for the grains' periodic images is refused, not silently wrong.
   core::SystemDef tiny = box(1.5, 10.0);
@@ -360,35 +407,13 @@ TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin b
   // deposit with every grain given its placeholder's diameter (each seated on three supports or
   // the floor), sizes then shrunk by up to 2% so that masses differ and gaps stay within the alert
   // distance.
-  core::SystemDef s = touchingSpheres(5.0, 5.0, false, 120, 3);
-  core::Rng rng(5, core::StreamId::Test);
-  for (core::Grain& g : s.grains) g.size *= 1.0 - 0.02 * rng.uniform();
+  const core::SystemDef s = shrunkTouchingSpheres(5.0, 5.0, 120, 3);
   const int n = static_cast<int>(s.grains.size());
   const nscd::NscdSettings settings;  // mprgp
-  nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
-  nscd::BroadPhase broad(s.box, narrow.maxReach());
-  std::vector<Vec3> positions;
-  std::vector<core::Quat> orientations;
-  std::vector<double> reach;
-  std::vector<nscd::BodyInverseMass> bodies(n + 1);  // the last: the static walls
-  std::vector<nscd::BodyVelocity> velocities(n + 1);
-  for (int i = 0; i < n; ++i) {
-    const core::Grain& g = s.grains[i];
-    positions.push_back(g.position);
-    orientations.push_back(g.orientation);
-    reach.push_back(narrow.reach(i));
-    bodies[i].invMass = 1.0 / (s.density * g.volume());
-    bodies[i].invInertia = g.bodyInertia(s.density).inverse();
-    velocities[i].v = Vec3(0.0, 0.0, -2e-3);
-  }
-  std::vector<nscd::CandidatePair> pairs;
-  broad.findPairs(positions, reach, pairs);
-  std::vector<nscd::ContactGeometry> contacts;
-  narrow.collideAll(pairs, positions, orientations, contacts, 1);
-  nscd::ContactSolver solver;
-  solver.prepare(contacts, positions, bodies, s.box, 2e-3, settings);
-  solver.warmStart(nscd::ContactCache{}, contacts, 2e-3, velocities);
-  solver.solve(velocities, settings);
+  ColdStep step(s, settings);
+  const std::vector<nscd::BodyInverseMass>& bodies = step.bodies;
+  const std::vector<nscd::ContactGeometry>& contacts = step.contacts;
+  const nscd::ContactSolver& solver = step.solver;
 
   // ||S W S|| = largest eigenvalue of B^T B, B = M^-1/2 H S: column k holds -s_k m_a^-1/2 n_k on
   // grain a and +s_k m_b^-1/2 n_k on grain b (none on a wall), s_k = (1/m_a + 1/m_b)^-1/2.
@@ -412,4 +437,39 @@ TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin b
   CHECK(solver.operatorBound() >= exact);
   CHECK(solver.operatorBound() == Approx(gershgorin).epsilon(1e-12));
   CHECK(solver.operatorBound() < 2.0 * exact);  // 1.72 here
+}
+
+TEST_CASE("nscd mprgp: the projected-CG and Dostal expansions reach the same velocities", "[nscd]") {
+  // Both expansions (NscdSettings::expansion) minimise the same quadratic program
+  // 1/2 r.W r + r.(u_free + c) over r >= 0, W = H^T M^-1 H. Its minimisers all share W r (the
+  // objective is convex and quadratic, so it is constant along the segment between two of them,
+  // which forces (r1 - r2).W (r1 - r2) = 0), hence M^-1 H r: the grains' velocities after the step
+  // are unique, whichever path reaches them. The pile must make both expansions run: touching
+  // spheres, so that every grain is stopped by a network of active contacts.
+  const core::SystemDef s = touchingSpheres(6.0, 6.0, false, 250, 7);
+  // Tolerance 1e-12 on the relative projected gradient: near jamming a small residual still
+  // allows a larger velocity error (W is ill-conditioned); at the default 1e-10 the two differ by
+  // 7e-7 of the largest velocity, at 1e-12 by 8e-9.
+  nscd::NscdSettings projected;
+  projected.tolerance = 1e-12;
+  nscd::NscdSettings gradient = projected;
+  gradient.expansion = nscd::ExpansionKind::Gradient;
+  const ColdStep a(s, projected), b(s, gradient);
+  INFO("rows " << a.solver.rowCount() << "; iterations projected " << a.iterations << " (cg " << a.solver.mprgpSteps().conjugate
+       << ", projected " << a.solver.mprgpSteps().projected << ", gradient " << a.solver.mprgpSteps().gradient
+       << "), gradient " << b.iterations << " (cg " << b.solver.mprgpSteps().conjugate << ", gradient "
+       << b.solver.mprgpSteps().gradient << ")");
+  REQUIRE(a.solver.mprgpSteps().projected > 0);
+  REQUIRE(b.solver.mprgpSteps().gradient > 0);
+  CHECK(b.solver.mprgpSteps().projected == 0);
+  CHECK(a.solver.residual() < projected.tolerance);
+  CHECK(b.solver.residual() < gradient.tolerance);
+  double largest = 0.0, difference = 0.0;
+  for (std::size_t i = 0; i + 1 < a.velocities.size(); ++i) {
+    largest = std::max(largest, a.velocities[i].v.norm());
+    difference = std::max(difference, (a.velocities[i].v - b.velocities[i].v).norm());
+  }
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(largest > 0.5 * ColdStep::kDt);  // not a trivial solution
+  CHECK(difference < 1e-7 * largest);
 }
