@@ -47,15 +47,6 @@ core::SystemDef touchingSpheres(double lx, double w, bool periodicY, std::size_t
   return s;
 }
 
-/// Slightly shrunk touching spheres (sizes times 1 - 0.02 u, u uniform in [0, 1)): masses differ
-/// and gaps stay within the alert distance.
-core::SystemDef shrunkTouchingSpheres(double lx, double w, std::size_t count, std::uint64_t seed) {
-  core::SystemDef s = touchingSpheres(lx, w, false, count, seed);
-  core::Rng rng(5, core::StreamId::Test);
-  for (core::Grain& g : s.grains) g.size *= 1.0 - 0.02 * rng.uniform();
-  return s;
-}
-
 /// One step's contact problem of the grains of `s` at rest, solved cold (no warm start) with
 /// `settings`: contacts from the broad and narrow phases at the grains' positions, inverse masses
 /// (the last body is the static walls), velocities kicked by gravity over dt = 2e-3 and then
@@ -407,7 +398,9 @@ TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin b
   // deposit with every grain given its placeholder's diameter (each seated on three supports or
   // the floor), sizes then shrunk by up to 2% so that masses differ and gaps stay within the alert
   // distance.
-  const core::SystemDef s = shrunkTouchingSpheres(5.0, 5.0, 120, 3);
+  core::SystemDef s = touchingSpheres(5.0, 5.0, false, 120, 3);
+  core::Rng rng(5, core::StreamId::Test);
+  for (core::Grain& g : s.grains) g.size *= 1.0 - 0.02 * rng.uniform();
   const int n = static_cast<int>(s.grains.size());
   const nscd::NscdSettings settings;  // mprgp
   ColdStep step(s, settings);
