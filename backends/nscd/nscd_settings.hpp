@@ -43,13 +43,13 @@ struct NscdSettings {
   /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
   /// conjugate gradient step would make an impulse negative (contact_solver_mprgp.cpp).
   /// "gradient" is Dostal's original: to the first bound, then a projected gradient step of fixed
-  /// length 1.95 / ||A||, and conjugate gradients restart. In a jammed pile nearly every second
+  /// length 1.95 / ||A||, and conjugate gradients restart. In a loading pile nearly every second
   /// step was one (2,000 spheres, 4 t0 fall and 200 steps: 162k conjugate gradient steps, 139k
   /// expansions), so conjugate gradients hardly ever ran two steps in a row. "projected_cg" takes
   /// the whole conjugate gradient step projected on r >= 0 when that lowers the energy, else
   /// Dostal's step (after Kruzik et al. 2020), and goes on conjugating from it instead of
-  /// restarting. On the same problems (that pile, every step solved both ways) it needs 26% fewer
-  /// iterations (116 against 158 per step) and 22% less solve time.
+  /// restarting. It saves most while contacts open and close (22% of the solve time on that
+  /// pile) and nothing near jamming; measurements in contact_solver_mprgp.cpp and the README.
   ExpansionKind expansion = ExpansionKind::ProjectedCg;
   /// ["max_iterations"] cap on the iterations per step [-], >= 1: sweeps (nlgs, default 2000) or
   /// applications of W (mprgp, default 5000; the jammed 493-sphere pile needs ~400 at 1e-10).
