@@ -155,8 +155,12 @@ class ContactSolver {
   double contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads);
   // out = A x (A = S W S); returns x . A x.
   double applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount, int threads);
+  double gatherOperator(const std::vector<double>& dot, std::vector<double>& out, int threads);
   double scaledOperatorBound(std::size_t bodyCount);
   bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
+  // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel
+  // splitting of A restricted to F, and az_ = A z; returns z . ap_.
+  double precondition(std::size_t bodyCount, int threads);
   double frictionTangentPass(std::vector<BodyVelocity>& velocities);
   struct FrictionRow;
   static std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va);
@@ -180,7 +184,7 @@ class ContactSolver {
   std::vector<int> slot_;
   std::vector<NormalRow> sorted_;  // scratch of prepare(), kept to avoid reallocations
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
-  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_;
+  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_, az_;
   std::vector<BodyVelocity> dv_;
   std::vector<core::Vec3> dvLinear_;
   std::vector<double> rowSum_, partial_;
@@ -208,15 +212,28 @@ class ContactSolver {
     core::Vec3 linear;
     int k = 0;
   };
+  // What the preconditioner's sweeps scatter, per unknown in row order: the inverse masses of a
+  // and b (the linear velocity change per unit y_k is -invMa s n on a, invMb s n on b) and, unless
+  // linearOnly_, the angular changes -s I_a^-1 (l_a x n) on a and s I_b^-1 (l_b x n) on b.
+  struct SweepMass {
+    double invMa = 0.0, invMb = 0.0;
+  };
+  struct SweepAngular {
+    core::Vec3 a, b;
+  };
+  std::vector<SweepMass> sweepMass_;
+  std::vector<SweepAngular> sweepAngular_;
   bool linearOnly_ = false;
   ThreadChoice threadChoice_;  // MPRGP's team against one thread, timed
   std::vector<LinearRow> linearRows_;
   std::vector<LinearEntry> linearEntries_;
   std::vector<int> bodyEntryStart_, bodyCursor_;
-  // Per-iteration norms of MPRGP: ||g^P||^2, ||beta||^2, phi~.phi, g.p, largest feasible step.
+  // Per-iteration norms of MPRGP: ||g^P||^2, ||beta||^2, phi~.phi, g.p;
+  // with the preconditioner also p.A p of the new direction, and whether restricting it to the
+  // free set zeroed an entry.
   struct Measures {
-    double projected2 = 0.0, chopped2 = 0.0, reducedFree = 0.0, gDotP = 0.0;
-    double feasible = std::numeric_limits<double>::infinity();
+    double projected2 = 0.0, chopped2 = 0.0, reducedFree = 0.0, gDotP = 0.0, pAp = 0.0;
+    bool restricted = false;
   };
   std::vector<Measures> measures_;
   double residual_ = 0.0;

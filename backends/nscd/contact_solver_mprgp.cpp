@@ -102,6 +102,16 @@ void ContactSolver::buildMprgpRows(std::size_t bodyCount) {
     const double s = scale_[nN + f];
     bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(nN + f)};
   }
+  sweepMass_.resize(m);
+  for (std::size_t k = 0; k < nN; ++k) sweepMass_[k] = {normalRows_[k].invMa, normalRows_[k].invMb};
+  for (std::size_t f = 0; f < frictionRows_.size(); ++f) sweepMass_[nN + f] = {frictionRows_[f].invMa, 0.0};
+  if (!linearOnly_) {
+    sweepAngular_.resize(m);
+    for (std::size_t k = 0; k < nN; ++k)
+      sweepAngular_[k] = {scale_[k] * normalRows_[k].iaAxn, scale_[k] * normalRows_[k].ibBxn};
+    for (std::size_t f = 0; f < frictionRows_.size(); ++f)
+      sweepAngular_[nN + f] = {scale_[nN + f] * frictionRows_[f].iaAxn, Vec3::Zero()};
+  }
   if (linearOnly_) {
     linearEntries_.resize(bodyEntries_.size());
     for (std::size_t e = 0; e < bodyEntries_.size(); ++e) linearEntries_[e] = {bodyEntries_[e].linear, bodyEntries_[e].k};
@@ -173,20 +183,28 @@ double ContactSolver::applyOperator(const std::vector<double>& x, std::vector<do
   if (linearOnly_) {
     dvLinear_.resize(bodyCount);
     applyLinearImpulses(x, dvLinear_, threads);
+  } else {
+    dv_.resize(bodyCount);
+    applyImpulses(x, dv_, threads);
+  }
+  return gatherOperator(x, out, threads);
+}
+
+// The second pass of applyOperator: out = S H^T dv for the body velocity changes dv of some x
+// (dvLinear_ or dv_); returns out . dot.
+double ContactSolver::gatherOperator(const std::vector<double>& dot, std::vector<double>& out, int threads) {
+  if (linearOnly_)
     return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
       const LinearRow& row = linearRows_[k];
       out[k] = row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
-      return out[k] * x[k];
+      return out[k] * dot[k];
     });
-  }
-  dv_.resize(bodyCount);
-  applyImpulses(x, dv_, threads);
   return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
     const GatherRow& row = gatherRows_[k];
     const BodyVelocity& va = dv_[row.a];
     const BodyVelocity& vb = dv_[row.b];
     out[k] = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
-    return out[k] * x[k];
+    return out[k] * dot[k];
   });
 }
 
@@ -269,6 +287,51 @@ bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int t
   return true;
 }
 
+// Symmetric Gauss-Seidel preconditioning in face (Dostal 2009, "Optimal Quadratic Programming
+// Algorithms", MPRGP with preconditioning in face): z = M_F^-1 phi with
+// M_F = (I + L_F) (I + L_F^T), L_F the strictly lower part of A restricted to the free rows
+// (A has a unit diagonal). That is one forward and one backward Gauss-Seidel sweep from z = 0
+// over the free rows, in row order (bottom to top), on A_FF z = phi: the sweeps of nlgs without
+// the projection, matrix-free through the body velocity changes of z. M_F is symmetric positive
+// definite for any free set, so conjugate gradients stay conjugate gradients on the face, and it
+// follows the free set with no factorisation to redo. Serial: a sweep's order is its point.
+double ContactSolver::precondition(std::size_t bodyCount, int threads) {
+  const std::size_t m = y_.size();
+  std::fill(z_.begin(), z_.end(), 0.0);
+  if (linearOnly_) {
+    dvLinear_.assign(bodyCount, Vec3::Zero());
+    auto visit = [&](std::size_t k) {
+      if (!(y_[k] > 0.0)) return;
+      const LinearRow& row = linearRows_[k];
+      const double delta = g_[k] - row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
+      z_[k] += delta;
+      dvLinear_[row.a] -= (delta * sweepMass_[k].invMa) * row.n;
+      dvLinear_[row.b] += (delta * sweepMass_[k].invMb) * row.n;
+    };
+    for (std::size_t k = 0; k < m; ++k) visit(k);
+    for (std::size_t k = m; k-- > 0;) visit(k);
+  } else {
+    dv_.assign(bodyCount, BodyVelocity{});
+    auto visit = [&](std::size_t k) {
+      if (!(y_[k] > 0.0)) return;
+      const GatherRow& row = gatherRows_[k];
+      BodyVelocity& va = dv_[row.a];
+      BodyVelocity& vb = dv_[row.b];
+      const double delta = g_[k] - (row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w));
+      z_[k] += delta;
+      va.v -= (delta * sweepMass_[k].invMa) * row.n;
+      va.w -= delta * sweepAngular_[k].a;
+      vb.v += (delta * sweepMass_[k].invMb) * row.n;
+      vb.w += delta * sweepAngular_[k].b;
+    };
+    for (std::size_t k = 0; k < m; ++k) visit(k);
+    for (std::size_t k = m; k-- > 0;) visit(k);
+  }
+  // The sweeps leave the body velocity changes of z in dv: A z costs one gather pass.
+  gatherOperator(z_, az_, threads);
+  return blockedSum(m, threads, partial_, [&](std::size_t k) { return z_[k] * ap_[k]; });
+}
+
 // Dostal & Schoeberl (2005), "Minimizing quadratic functions subject to bound constraints with
 // the rate of convergence and finite termination", Comput. Optim. Appl. 30; Dostal (2009),
 // "Optimal Quadratic Programming Algorithms", Springer, algorithm MPRGP. With the free set
@@ -293,7 +356,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   if (threadChoice_.maxThreads() != settings.threads) threadChoice_ = ThreadChoice(settings.threads);
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
-  for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_}) v->resize(m);
+  for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_, &z_, &az_}) v->resize(m);
   for (std::size_t k = 0; k < nN; ++k) {
     scale_[k] = std::sqrt(normalRows_[k].invW);
     y_[k] = normalRows_[k].r / scale_[k];
@@ -315,13 +378,43 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
     addImpulses(step_, vel, threads);
     y0_ = y_;
   };
-  auto freeGradientToP = [&] {
-    for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
+  const bool preconditioned = settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel;
+  // With the preconditioner, A p comes without applying A: the sweeps leave A z (az_), and after
+  // p = z - gamma p, A p = A z - gamma A p. That holds unless restricting p to the free set
+  // zeroed an entry (the free set changed): then A is applied afresh.
+  bool apReady = false;
+  double pApReady = 0.0;
+  auto freeGradientToP = [&] {  // p = M_F^-1 phi (or phi): restart of the conjugate gradients
+    if (preconditioned) {
+      precondition(vel.size(), threads);
+      p_ = z_;
+      ap_ = az_;
+      pApReady = blockedSum(m, threads, partial_, [&](std::size_t k) { return p_[k] * ap_[k]; });
+      apReady = true;
+    } else {
+      for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
+    }
   };
   // The norms that steer the next iteration, in one blocked pass: ||g^P||^2, ||beta||^2,
-  // phi~.phi, g.p, and the largest feasible step along -p. After a conjugate gradient step the
+  // phi~.phi and g.p. After a conjugate gradient step the
   // same pass first makes the new direction p = phi - gamma p (gamma = `conjugate`), which saves
   // a pass over y, g and p per iteration.
+  // Whether the step y - alpha p stays in y >= 0, tested on the very update the step makes. A
+  // separate pass, and no division: the largest feasible step (min y_k / p_k) used to be taken
+  // in measure(), whose divisions cost more than the rest of that pass; Dostal's expansion, the
+  // only user of that step length, is rare and computes it itself.
+  auto fitsBounds = [&](double alpha) {
+    const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
+    int outside = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(|| : outside) if (threads > 1 && m >= kParallelMin)
+    for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+      const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
+      int o = 0;
+      for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) o |= y_[k] - alpha * p_[k] < 0.0;
+      outside = outside || o;
+    }
+    return outside == 0;
+  };
   std::vector<Measures>& partial = measures_;
   double conjugate = std::numeric_limits<double>::quiet_NaN();  // NaN: p is already up to date
   auto measure = [&] {
@@ -336,17 +429,23 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
       const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
       for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) {
         const double g = g_[k], y = y_[k];
-        if (conjugateFirst) p_[k] = y > 0.0 ? g - gamma * p_[k] : 0.0;
-        const double p = p_[k];
-        if (y > 0.0) {
-          r.projected2 += g * g;
-          r.reducedFree += std::min(y * invAlphaBar, g) * g;
-        } else if (g < 0.0) {
-          r.projected2 += g * g;
-          r.chopped2 += g * g;
+        if (conjugateFirst && preconditioned) {
+          r.restricted = r.restricted || (!(y > 0.0) && p_[k] != 0.0);
+          p_[k] = y > 0.0 ? z_[k] - gamma * p_[k] : 0.0;
+          ap_[k] = az_[k] - gamma * ap_[k];
+          r.pAp += p_[k] * ap_[k];
+        } else if (conjugateFirst) {
+          p_[k] = y > 0.0 ? g - gamma * p_[k] : 0.0;
         }
+        const double p = p_[k];
+        // Without branches (selects): whether a row is free is no pattern a predictor can learn,
+        // and this pass ran at about a third of a solve's time with them. Same sums, same bits.
+        const bool free = y > 0.0;
+        const double chopped = !free && g < 0.0 ? g : 0.0;
+        r.projected2 += free ? g * g : chopped * chopped;
+        r.chopped2 += chopped * chopped;
+        r.reducedFree += free ? std::min(y * invAlphaBar, g) * g : 0.0;
         r.gDotP += g * p;
-        if (p > 0.0) r.feasible = std::min(r.feasible, y / p);
       }
       partial[static_cast<std::size_t>(blk)] = r;
     }
@@ -356,7 +455,12 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
       total.chopped2 += r.chopped2;
       total.reducedFree += r.reducedFree;
       total.gDotP += r.gDotP;
-      total.feasible = std::min(total.feasible, r.feasible);
+      total.pAp += r.pAp;
+      total.restricted = total.restricted || r.restricted;
+    }
+    if (conjugateFirst && preconditioned) {
+      apReady = !total.restricted;
+      pApReady = total.pAp;
     }
     return total;
   };
@@ -392,25 +496,30 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
       if (residual_ < innerTolerance || iterations >= settings.maxIterations) break;
       ++iterations;
       if (now.chopped2 <= kGamma * kGamma * now.reducedFree) {
-        const double pAp = applyOperator(p_, ap_, vel.size(), threads);
+        const double pAp = apReady ? pApReady : applyOperator(p_, ap_, vel.size(), threads);
+        apReady = false;
         const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
-        if (alphaCg <= now.feasible) {  // conjugate gradient step
+        if (fitsBounds(alphaCg)) {  // conjugate gradient step
           const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
             y_[k] -= alphaCg * p_[k];
             g_[k] -= alphaCg * ap_[k];
             return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
           });
-          conjugate = phiAp / pAp;  // p <- phi - gamma p, done by the next measure()
+          // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure()
+          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
           ++steps_.conjugate;
         } else if (double phiAp = 0.0; projectedCg && projectedCgStep(alphaCg, vel.size(), threads, phiAp)) {
           ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
-          conjugate = phiAp / pAp;
+          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
           checkDescent = true;
         } else {  // expansion: to the first bound, then a projected gradient step of length alpha_bar
           ++steps_.gradient;
+          double feasible = std::numeric_limits<double>::infinity();  // the first bound along -p
+          for (std::size_t k = 0; k < m; ++k)
+            if (p_[k] > 0.0) feasible = std::min(feasible, y_[k] / p_[k]);
           for (std::size_t k = 0; k < m; ++k) {
-            y_[k] = std::max(0.0, y_[k] - now.feasible * p_[k]);
-            g_[k] -= now.feasible * ap_[k];
+            y_[k] = std::max(0.0, y_[k] - feasible * p_[k]);
+            g_[k] -= feasible * ap_[k];
             y_[k] = std::max(0.0, y_[k] - alphaBar * (y_[k] > 0.0 ? g_[k] : 0.0));
           }
           syncVelocities();

@@ -35,11 +35,13 @@ void NscdSettings::validate() const {
 
 std::string toString(SolverKind k) { return k == SolverKind::Mprgp ? "mprgp" : "nlgs"; }
 std::string toString(ExpansionKind k) { return k == ExpansionKind::ProjectedCg ? "projected_cg" : "gradient"; }
+std::string toString(PreconditionerKind k) { return k == PreconditionerKind::SymmetricGaussSeidel ? "sgs" : "none"; }
 
 void to_json(nlohmann::json& j, const NscdSettings& s) {
   j = {{"theta", s.theta},
        {"solver", toString(s.solver)},
        {"expansion", toString(s.expansion)},
+       {"preconditioner", toString(s.preconditioner)},
        {"tolerance", s.tolerance},
        {"max_iterations", s.maxIterations},
        {"min_iterations", s.minIterations},
@@ -91,6 +93,13 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
         throw std::invalid_argument(
             fmt::format("nscd option 'expansion' must be \"projected_cg\" or \"gradient\" (got {})", value.dump()));
     }
+    else if (key == "preconditioner") {
+      if (value == "sgs") s.preconditioner = PreconditionerKind::SymmetricGaussSeidel;
+      else if (value == "none") s.preconditioner = PreconditionerKind::None;
+      else
+        throw std::invalid_argument(
+            fmt::format("nscd option 'preconditioner' must be \"sgs\" or \"none\" (got {})", value.dump()));
+    }
     else if (key == "tolerance") number(s.tolerance);
     else if (key == "max_iterations") integer(s.maxIterations);
     else if (key == "min_iterations") integer(s.minIterations);
@@ -106,7 +115,7 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     else if (key == "threads") integer(s.threads);
     else
       throw std::invalid_argument(fmt::format(
-          "unknown nscd option '{}' (known: theta, solver, expansion, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
+          "unknown nscd option '{}' (known: theta, solver, expansion, preconditioner, tolerance, max_iterations, min_iterations, relaxation, alert_distance, "
           "gap_correction, max_correction_velocity, damping, damping_speed, threads)",
           key));
   }
