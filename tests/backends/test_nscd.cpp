@@ -171,8 +171,9 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   core::SystemDef s = box(20.0, 10.0);
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
-  for (const char* key : {"theta", "expansion", "tolerance", "max_iterations", "min_iterations", "alert_distance",
-                          "gap_correction", "max_correction_velocity", "damping", "damping_speed", "threads"})
+  for (const char* key : {"theta", "expansion", "preconditioner", "tolerance", "max_iterations", "min_iterations",
+                          "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed",
+                          "threads"})
     CHECK(resolved.contains(key));
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
@@ -186,6 +187,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping_speed", 0.0}}), Catch::Contains("damping_speed"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"tolerance", "small"}}), Catch::Contains("tolerance"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"expansion", "cg"}}), Catch::Contains("expansion"));
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"preconditioner", "ic"}}), Catch::Contains("preconditioner"));
   CHECK_THROWS_AS(nscd::makeNscdBackend(s, nlohmann::json::array()), std::invalid_argument);
   // A box too short for the grains' periodic images is refused, not silently wrong.
   core::SystemDef tiny = box(1.5, 10.0);
