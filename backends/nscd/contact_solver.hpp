@@ -159,8 +159,9 @@ class ContactSolver {
   double scaledOperatorBound(std::size_t bodyCount);
   bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
   // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel
-  // splitting of A restricted to F, and az_ = A z; returns z . ap_.
-  double precondition(std::size_t bodyCount, int threads);
+  // splitting of A restricted to F, leaving M^-1 H S z in dvLinear_ / dv_; returns z . ap_.
+  double precondition(std::size_t bodyCount);
+  double dvAlongRow(std::size_t k) const;
   double frictionTangentPass(std::vector<BodyVelocity>& velocities);
   struct FrictionRow;
   static std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va);
@@ -184,7 +185,7 @@ class ContactSolver {
   std::vector<int> slot_;
   std::vector<NormalRow> sorted_;  // scratch of prepare(), kept to avoid reallocations
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
-  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_, az_;
+  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_;
   std::vector<BodyVelocity> dv_;
   std::vector<core::Vec3> dvLinear_;
   std::vector<double> rowSum_, partial_;

@@ -190,20 +190,24 @@ double ContactSolver::applyOperator(const std::vector<double>& x, std::vector<do
   return gatherOperator(x, out, threads);
 }
 
+// Row k's scaled relative normal velocity S H^T dv for the body velocity changes dv in
+// dvLinear_ (spheres) or dv_.
+inline double ContactSolver::dvAlongRow(std::size_t k) const {
+  if (linearOnly_) {
+    const LinearRow& row = linearRows_[k];
+    return row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
+  }
+  const GatherRow& row = gatherRows_[k];
+  const BodyVelocity& va = dv_[row.a];
+  const BodyVelocity& vb = dv_[row.b];
+  return row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+}
+
 // The second pass of applyOperator: out = S H^T dv for the body velocity changes dv of some x
 // (dvLinear_ or dv_); returns out . dot.
 double ContactSolver::gatherOperator(const std::vector<double>& dot, std::vector<double>& out, int threads) {
-  if (linearOnly_)
-    return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
-      const LinearRow& row = linearRows_[k];
-      out[k] = row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
-      return out[k] * dot[k];
-    });
   return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
-    const GatherRow& row = gatherRows_[k];
-    const BodyVelocity& va = dv_[row.a];
-    const BodyVelocity& vb = dv_[row.b];
-    out[k] = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+    out[k] = dvAlongRow(k);
     return out[k] * dot[k];
   });
 }
@@ -295,41 +299,62 @@ bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int t
 // the projection, matrix-free through the body velocity changes of z. M_F is symmetric positive
 // definite for any free set, so conjugate gradients stay conjugate gradients on the face, and it
 // follows the free set with no factorisation to redo. Serial: a sweep's order is its point.
-double ContactSolver::precondition(std::size_t bodyCount, int threads) {
+double ContactSolver::precondition(std::size_t bodyCount) {
   const std::size_t m = y_.size();
+  // Raw pointers: with the vectors as members, the compiler reloaded their data pointers after
+  // every store of a double.
+  const double* y = y_.data();
+  const double* g = g_.data();
+  const double* ap = ap_.data();
+  double* z = z_.data();
+  const SweepMass* mass = sweepMass_.data();
+  double zAp = 0.0;  // summed in the backward sweep, where each z_k takes its final value
   std::fill(z_.begin(), z_.end(), 0.0);
   if (linearOnly_) {
     dvLinear_.assign(bodyCount, Vec3::Zero());
+    Vec3* dv = dvLinear_.data();
+    const LinearRow* rows = linearRows_.data();
     auto visit = [&](std::size_t k) {
-      if (!(y_[k] > 0.0)) return;
-      const LinearRow& row = linearRows_[k];
-      const double delta = g_[k] - row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
-      z_[k] += delta;
-      dvLinear_[row.a] -= (delta * sweepMass_[k].invMa) * row.n;
-      dvLinear_[row.b] += (delta * sweepMass_[k].invMb) * row.n;
+      const LinearRow& row = rows[k];
+      const double delta = g[k] - row.n.dot(dv[row.b] - dv[row.a]);
+      z[k] += delta;
+      dv[row.a] -= (delta * mass[k].invMa) * row.n;
+      dv[row.b] += (delta * mass[k].invMb) * row.n;
     };
-    for (std::size_t k = 0; k < m; ++k) visit(k);
-    for (std::size_t k = m; k-- > 0;) visit(k);
+    for (std::size_t k = 0; k < m; ++k)
+      if (y[k] > 0.0) visit(k);
+    for (std::size_t k = m; k-- > 0;)
+      if (y[k] > 0.0) {
+        visit(k);
+        zAp += z[k] * ap[k];
+      }
   } else {
     dv_.assign(bodyCount, BodyVelocity{});
+    BodyVelocity* dv = dv_.data();
+    const GatherRow* rows = gatherRows_.data();
+    const SweepAngular* angular = sweepAngular_.data();
     auto visit = [&](std::size_t k) {
-      if (!(y_[k] > 0.0)) return;
-      const GatherRow& row = gatherRows_[k];
-      BodyVelocity& va = dv_[row.a];
-      BodyVelocity& vb = dv_[row.b];
-      const double delta = g_[k] - (row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w));
-      z_[k] += delta;
-      va.v -= (delta * sweepMass_[k].invMa) * row.n;
-      va.w -= delta * sweepAngular_[k].a;
-      vb.v += (delta * sweepMass_[k].invMb) * row.n;
-      vb.w += delta * sweepAngular_[k].b;
+      const GatherRow& row = rows[k];
+      BodyVelocity& va = dv[row.a];
+      BodyVelocity& vb = dv[row.b];
+      const double delta = g[k] - (row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w));
+      z[k] += delta;
+      va.v -= (delta * mass[k].invMa) * row.n;
+      va.w -= delta * angular[k].a;
+      vb.v += (delta * mass[k].invMb) * row.n;
+      vb.w += delta * angular[k].b;
     };
-    for (std::size_t k = 0; k < m; ++k) visit(k);
-    for (std::size_t k = m; k-- > 0;) visit(k);
+    for (std::size_t k = 0; k < m; ++k)
+      if (y[k] > 0.0) visit(k);
+    for (std::size_t k = m; k-- > 0;)
+      if (y[k] > 0.0) {
+        visit(k);
+        zAp += z[k] * ap[k];
+      }
   }
-  // The sweeps leave the body velocity changes of z in dv: A z costs one gather pass.
-  gatherOperator(z_, az_, threads);
-  return blockedSum(m, threads, partial_, [&](std::size_t k) { return z_[k] * ap_[k]; });
+  // The sweeps leave the body velocity changes of z in dv: A z costs one gather pass, which the
+  // next measure() makes (with A p = A z - gamma A p).
+  return zAp;
 }
 
 // Dostal & Schoeberl (2005), "Minimizing quadratic functions subject to bound constraints with
@@ -356,7 +381,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   if (threadChoice_.maxThreads() != settings.threads) threadChoice_ = ThreadChoice(settings.threads);
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
-  for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_, &z_, &az_}) v->resize(m);
+  for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_, &z_}) v->resize(m);
   for (std::size_t k = 0; k < nN; ++k) {
     scale_[k] = std::sqrt(normalRows_[k].invW);
     y_[k] = normalRows_[k].r / scale_[k];
@@ -379,26 +404,24 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
     y0_ = y_;
   };
   const bool preconditioned = settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel;
-  // With the preconditioner, A p comes without applying A: the sweeps leave A z (az_), and after
-  // p = z - gamma p, A p = A z - gamma A p. That holds unless restricting p to the free set
-  // zeroed an entry (the free set changed): then A is applied afresh.
+  // The norms that steer the next iteration come from one blocked pass (measure() below). After a
+  // conjugate gradient step the same pass first makes the new direction p = phi - gamma p, or
+  // p = z - gamma p with the preconditioner (gamma = `conjugate`), which saves a pass over y, g
+  // and p per iteration. With the preconditioner it also makes A p without applying A: the sweeps
+  // leave the body velocity changes of z, so A z is one gather, done in that pass, and
+  // A p = A z - gamma A p. That holds unless restricting p to the free set zeroed an entry (the
+  // free set changed): then A is applied afresh. A restart is the same with gamma = 0.
+  double conjugate = std::numeric_limits<double>::quiet_NaN();  // NaN: p is already up to date
   bool apReady = false;
   double pApReady = 0.0;
   auto freeGradientToP = [&] {  // p = M_F^-1 phi (or phi): restart of the conjugate gradients
     if (preconditioned) {
-      precondition(vel.size(), threads);
-      p_ = z_;
-      ap_ = az_;
-      pApReady = blockedSum(m, threads, partial_, [&](std::size_t k) { return p_[k] * ap_[k]; });
-      apReady = true;
+      precondition(vel.size());
+      conjugate = 0.0;  // p = z, made by the next measure()
     } else {
       for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
     }
   };
-  // The norms that steer the next iteration, in one blocked pass: ||g^P||^2, ||beta||^2,
-  // phi~.phi and g.p. After a conjugate gradient step the
-  // same pass first makes the new direction p = phi - gamma p (gamma = `conjugate`), which saves
-  // a pass over y, g and p per iteration.
   // Whether the step y - alpha p stays in y >= 0, tested on the very update the step makes. A
   // separate pass, and no division: the largest feasible step (min y_k / p_k) used to be taken
   // in measure(), whose divisions cost more than the rest of that pass; Dostal's expansion, the
@@ -416,7 +439,6 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
     return outside == 0;
   };
   std::vector<Measures>& partial = measures_;
-  double conjugate = std::numeric_limits<double>::quiet_NaN();  // NaN: p is already up to date
   auto measure = [&] {
     const bool conjugateFirst = !std::isnan(conjugate);
     const double gamma = conjugate;
@@ -430,9 +452,10 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
       for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) {
         const double g = g_[k], y = y_[k];
         if (conjugateFirst && preconditioned) {
-          r.restricted = r.restricted || (!(y > 0.0) && p_[k] != 0.0);
+          const double az = dvAlongRow(k);  // (A z)_k
+          r.restricted = r.restricted || (gamma != 0.0 && !(y > 0.0) && p_[k] != 0.0);
           p_[k] = y > 0.0 ? z_[k] - gamma * p_[k] : 0.0;
-          ap_[k] = az_[k] - gamma * ap_[k];
+          ap_[k] = az - gamma * ap_[k];
           r.pAp += p_[k] * ap_[k];
         } else if (conjugateFirst) {
           p_[k] = y > 0.0 ? g - gamma * p_[k] : 0.0;
@@ -500,17 +523,17 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
         apReady = false;
         const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
         if (fitsBounds(alphaCg)) {  // conjugate gradient step
+          // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure()
           const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
             y_[k] -= alphaCg * p_[k];
             g_[k] -= alphaCg * ap_[k];
             return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
           });
-          // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure()
-          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
+          conjugate = (preconditioned ? precondition(vel.size()) : phiAp) / pAp;
           ++steps_.conjugate;
         } else if (double phiAp = 0.0; projectedCg && projectedCgStep(alphaCg, vel.size(), threads, phiAp)) {
           ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
-          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
+          conjugate = (preconditioned ? precondition(vel.size()) : phiAp) / pAp;
           checkDescent = true;
         } else {  // expansion: to the first bound, then a projected gradient step of length alpha_bar
           ++steps_.gradient;
