@@ -65,7 +65,9 @@
 //   the Signorini law above; it is solved by Dostal's MPRGP, conjugate gradients with gradient
 //   projections for the bounds (after LMGC90's conjugate-gradient solvers, Renouf & Alart 2004).
 //   Iterations grow like the square root of the condition number instead of linearly, and the
-//   stopping rule is the true residual of the law. Wall friction (Coulomb, not a quadratic program)
+//   stopping rule is the true residual of the law. Its conjugate gradients are preconditioned on
+//   the free set by a forward and a backward Gauss-Seidel sweep (NscdSettings::preconditioner):
+//   the sweeps of nlgs serve inside MPRGP, where they cut the iterations 2.5 to 3.5 times. Wall friction (Coulomb, not a quadratic program)
 //   is handled by block Gauss-Seidel: MPRGP on every normal impulse with the tangential ones fixed,
 //   then one projected pass over the tangential impulses, until both have converged.
 //   Measured on the same 493-sphere biperiodic pile (seed 1): with nlgs at its default tolerance
