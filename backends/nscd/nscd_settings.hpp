@@ -61,12 +61,12 @@ struct NscdSettings {
   /// preconditioned on the free set (contact_solver_mprgp.cpp). "sgs" applies one forward and one
   /// backward Gauss-Seidel sweep over the free rows per iteration, which about doubles the cost of
   /// an iteration and cuts the iterations 2.5 to 3.5 times. Measured, the two side by side on the
-  /// 493-sphere biperiodic pile (6 x 6, h = 12), seeds 1 to 4, up to 60 t0: 139 to 179 iterations
-  /// and 4.2 to 5.2 ms of solve per step with "sgs", 429 to 498 and 7.7 to 8.1 ms with "none";
+  /// 493-sphere biperiodic pile (6 x 6, h = 12), seeds 1 to 10, up to 60 t0: 139 to 179 iterations
+  /// and 4.2 to 5.2 ms of solve per step with "sgs", 429 to 559 and 7.5 to 9.6 ms with "none";
   /// 2,000 spheres over their first 8 t0, 67 against 173 iterations per step, solve time x0.65;
   /// 188 pinacoids over 6 t0, 16 against 34, x0.66. The time to equilibrium follows the trajectory,
-  /// not only the cost per step: within 60 t0, "none" reached it for 3 of those 4 seeds and "sgs"
-  /// for 2 (README, Performance).
+  /// not only the cost per step: within 60 t0, "none" reached it for 7 of those 10 seeds (median
+  /// wall time of the ten 122 s) and "sgs" for 6 (median about 100 s) (README, Performance).
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
   /// ["max_iterations"] cap on the iterations per step [-], >= 1: sweeps (nlgs, default 2000) or
   /// applications of W (mprgp, default 5000; the jammed 493-sphere pile needs ~400 at 1e-10).
