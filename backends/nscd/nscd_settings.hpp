@@ -66,7 +66,7 @@ struct NscdSettings {
   /// 2,000 spheres over their first 8 t0, 67 against 173 iterations per step, solve time x0.65;
   /// 188 pinacoids over 6 t0, 16 against 34, x0.66. The time to equilibrium follows the trajectory,
   /// not only the cost per step: within 60 t0, "none" reached it for 7 of those 10 seeds (median
-  /// wall time of the ten 122 s) and "sgs" for 6 (median about 100 s) (README, Performance).
+  /// wall time of the ten 122 s) and "sgs" for 6 (median at least 100 s) (README, Performance).
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
   /// ["max_iterations"] cap on the iterations per step [-], >= 1: sweeps (nlgs, default 2000) or
   /// applications of W (mprgp, default 5000; the jammed 493-sphere pile needs ~400 at 1e-10).
