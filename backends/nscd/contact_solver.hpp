@@ -67,9 +67,10 @@
 //   Iterations grow like the square root of the condition number instead of linearly, and the
 //   stopping rule is the true residual of the law. Its conjugate gradients are preconditioned on
 //   the free set by a forward and a backward Gauss-Seidel sweep (NscdSettings::preconditioner):
-//   the sweeps of nlgs serve inside MPRGP, where they cut the iterations 2.5 to 3.5 times. Wall friction (Coulomb, not a quadratic program)
-//   is handled by block Gauss-Seidel: MPRGP on every normal impulse with the tangential ones fixed,
-//   then one projected pass over the tangential impulses, until both have converged.
+//   the sweeps of nlgs serve inside MPRGP, where they cut the iterations 2.5 to 3.5 times.
+//   Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
+//   every normal impulse with the tangential ones fixed, then one projected pass over the
+//   tangential impulses, until both have converged.
 //   Measured on the same 493-sphere biperiodic pile (seed 1): with nlgs at its default tolerance
 //   1e-6, the largest |sum F| / (d^2 P) stays at 2.5e-3 after 40 t0 and ~1,000 sweeps per step;
 //   with mprgp at 1e-10, SPEC 6.1 holds from t = 39.8 with ~400 iterations per step.
@@ -217,7 +218,8 @@ class ContactSolver {
   };
   // What the preconditioner's sweeps scatter, per unknown in row order: the inverse masses of a
   // and b (the linear velocity change per unit y_k is -invMa s n on a, invMb s n on b) and, unless
-  // linearOnly_, the angular changes -s I_a^-1 (l_a x n) on a and s I_b^-1 (l_b x n) on b.
+  // linearOnly_, s I_a^-1 (l_a x n) and s I_b^-1 (l_b x n) (the angular change on a is minus the
+  // first, on b the second).
   struct SweepMass {
     double invMa = 0.0, invMb = 0.0;
   };
