@@ -310,17 +310,8 @@ double ContactSolver::precondition(std::size_t bodyCount) {
   const SweepMass* mass = sweepMass_.data();
   double zAp = 0.0;  // summed in the backward sweep, where each z_k takes its final value
   std::fill(z_.begin(), z_.end(), 0.0);
-  if (linearOnly_) {
-    dvLinear_.assign(bodyCount, Vec3::Zero());
-    Vec3* dv = dvLinear_.data();
-    const LinearRow* rows = linearRows_.data();
-    auto visit = [&](std::size_t k) {
-      const LinearRow& row = rows[k];
-      const double delta = g[k] - row.n.dot(dv[row.b] - dv[row.a]);
-      z[k] += delta;
-      dv[row.a] -= (delta * mass[k].invMa) * row.n;
-      dv[row.b] += (delta * mass[k].invMb) * row.n;
-    };
+  // Both sweeps over the free rows; `visit(k)` updates unknown k.
+  auto sweeps = [&](const auto& visit) {
     for (std::size_t k = 0; k < m; ++k)
       if (y[k] > 0.0) visit(k);
     for (std::size_t k = m; k-- > 0;)
@@ -328,12 +319,24 @@ double ContactSolver::precondition(std::size_t bodyCount) {
         visit(k);
         zAp += z[k] * ap[k];
       }
+  };
+  if (linearOnly_) {
+    dvLinear_.assign(bodyCount, Vec3::Zero());
+    Vec3* dv = dvLinear_.data();
+    const LinearRow* rows = linearRows_.data();
+    sweeps([&](std::size_t k) {
+      const LinearRow& row = rows[k];
+      const double delta = g[k] - row.n.dot(dv[row.b] - dv[row.a]);
+      z[k] += delta;
+      dv[row.a] -= (delta * mass[k].invMa) * row.n;
+      dv[row.b] += (delta * mass[k].invMb) * row.n;
+    });
   } else {
     dv_.assign(bodyCount, BodyVelocity{});
     BodyVelocity* dv = dv_.data();
     const GatherRow* rows = gatherRows_.data();
     const SweepAngular* angular = sweepAngular_.data();
-    auto visit = [&](std::size_t k) {
+    sweeps([&](std::size_t k) {
       const GatherRow& row = rows[k];
       BodyVelocity& va = dv[row.a];
       BodyVelocity& vb = dv[row.b];
@@ -343,14 +346,7 @@ double ContactSolver::precondition(std::size_t bodyCount) {
       va.w -= delta * angular[k].a;
       vb.v += (delta * mass[k].invMb) * row.n;
       vb.w += delta * angular[k].b;
-    };
-    for (std::size_t k = 0; k < m; ++k)
-      if (y[k] > 0.0) visit(k);
-    for (std::size_t k = m; k-- > 0;)
-      if (y[k] > 0.0) {
-        visit(k);
-        zAp += z[k] * ap[k];
-      }
+    });
   }
   // The sweeps leave the body velocity changes of z in dv: A z costs one gather pass, which the
   // next measure() makes (with A p = A z - gamma A p).
