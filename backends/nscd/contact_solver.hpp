@@ -74,7 +74,6 @@
 //   Measured on the same 493-sphere biperiodic pile (seed 1): with nlgs at its default tolerance
 //   1e-6, the largest |sum F| / (d^2 P) stays at 2.5e-3 after 40 t0 and ~1,000 sweeps per step;
 //   with mprgp at 1e-10, SPEC 6.1 holds from t = 39.8 with ~400 iterations per step.
-#include <limits>
 #include <utility>
 #include <vector>
 
@@ -158,7 +157,6 @@ class ContactSolver {
   double contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads);
   // out = A x (A = S W S); returns x . A x.
   double applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount, int threads);
-  double gatherOperator(const std::vector<double>& dot, std::vector<double>& out, int threads);
   double scaledOperatorBound(std::size_t bodyCount);
   bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
   // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel

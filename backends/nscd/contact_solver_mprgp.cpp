@@ -175,21 +175,6 @@ double ContactSolver::contactVelocities(const std::vector<BodyVelocity>& vel, st
   });
 }
 
-// out = A x = S H^T M^-1 H S x, in two passes (impulses to body velocities, then back to rows);
-// returns out . x. Spheres (linearOnly_) move linear velocities only: 24 bytes per body instead of
-// 48 between the passes, and no angular terms.
-double ContactSolver::applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount,
-                                    int threads) {
-  if (linearOnly_) {
-    dvLinear_.resize(bodyCount);
-    applyLinearImpulses(x, dvLinear_, threads);
-  } else {
-    dv_.resize(bodyCount);
-    applyImpulses(x, dv_, threads);
-  }
-  return gatherOperator(x, out, threads);
-}
-
 // Row k's scaled relative normal velocity S H^T dv for the body velocity changes dv in
 // dvLinear_ (spheres) or dv_.
 inline double ContactSolver::dvAlongRow(std::size_t k) const {
@@ -203,12 +188,21 @@ inline double ContactSolver::dvAlongRow(std::size_t k) const {
   return row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
 }
 
-// The second pass of applyOperator: out = S H^T dv for the body velocity changes dv of some x
-// (dvLinear_ or dv_); returns out . dot.
-double ContactSolver::gatherOperator(const std::vector<double>& dot, std::vector<double>& out, int threads) {
+// out = A x = S H^T M^-1 H S x, in two passes (impulses to body velocities, then back to rows);
+// returns out . x. Spheres (linearOnly_) move linear velocities only: 24 bytes per body instead of
+// 48 between the passes, and no angular terms.
+double ContactSolver::applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount,
+                                    int threads) {
+  if (linearOnly_) {
+    dvLinear_.resize(bodyCount);
+    applyLinearImpulses(x, dvLinear_, threads);
+  } else {
+    dv_.resize(bodyCount);
+    applyImpulses(x, dv_, threads);
+  }
   return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
     out[k] = dvAlongRow(k);
-    return out[k] * dot[k];
+    return out[k] * x[k];
   });
 }
 

@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace confpack::nscd {
 
@@ -54,6 +56,25 @@ void to_json(nlohmann::json& j, const NscdSettings& s) {
        {"threads", s.threads}};
 }
 
+namespace {
+
+/// Sets `field` to the choice named by `value`, or refuses it with the key and the names allowed.
+template <class Kind>
+void readChoice(const std::string& key, const nlohmann::json& value, Kind& field,
+                std::initializer_list<std::pair<const char*, Kind>> choices) {
+  std::string allowed;
+  for (const auto& [name, kind] : choices) {
+    if (value == name) {
+      field = kind;
+      return;
+    }
+    allowed += fmt::format("{}\"{}\"", allowed.empty() ? "" : " or ", name);
+  }
+  throw std::invalid_argument(fmt::format("nscd option '{}' must be {} (got {})", key, allowed, value.dump()));
+}
+
+}  // namespace
+
 NscdSettings defaultsFor(SolverKind kind) {
   NscdSettings s;
   s.solver = kind;
@@ -70,9 +91,9 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
   if (!j.is_object()) throw std::invalid_argument("nscd options must be a JSON object");
   // The solver first: it sets the defaults of the keys that depend on it.
   if (const auto it = j.find("solver"); it != j.end()) {
-    if (*it == "nlgs") s = defaultsFor(SolverKind::Nlgs);
-    else if (*it == "mprgp") s = defaultsFor(SolverKind::Mprgp);
-    else throw std::invalid_argument(fmt::format("nscd option 'solver' must be \"nlgs\" or \"mprgp\" (got {})", it->dump()));
+    SolverKind kind = SolverKind::Mprgp;
+    readChoice("solver", *it, kind, {{"nlgs", SolverKind::Nlgs}, {"mprgp", SolverKind::Mprgp}});
+    s = defaultsFor(kind);
   }
   for (const auto& [key, value] : j.items()) {
     auto number = [&](double& field) {
@@ -86,20 +107,12 @@ NscdSettings settingsFromJson(const nlohmann::json& j) {
     };
     if (key == "theta") number(s.theta);
     else if (key == "solver") continue;  // read above
-    else if (key == "expansion") {
-      if (value == "projected_cg") s.expansion = ExpansionKind::ProjectedCg;
-      else if (value == "gradient") s.expansion = ExpansionKind::Gradient;
-      else
-        throw std::invalid_argument(
-            fmt::format("nscd option 'expansion' must be \"projected_cg\" or \"gradient\" (got {})", value.dump()));
-    }
-    else if (key == "preconditioner") {
-      if (value == "sgs") s.preconditioner = PreconditionerKind::SymmetricGaussSeidel;
-      else if (value == "none") s.preconditioner = PreconditionerKind::None;
-      else
-        throw std::invalid_argument(
-            fmt::format("nscd option 'preconditioner' must be \"sgs\" or \"none\" (got {})", value.dump()));
-    }
+    else if (key == "expansion")
+      readChoice(key, value, s.expansion,
+                 {{"projected_cg", ExpansionKind::ProjectedCg}, {"gradient", ExpansionKind::Gradient}});
+    else if (key == "preconditioner")
+      readChoice(key, value, s.preconditioner,
+                 {{"sgs", PreconditionerKind::SymmetricGaussSeidel}, {"none", PreconditionerKind::None}});
     else if (key == "tolerance") number(s.tolerance);
     else if (key == "max_iterations") integer(s.maxIterations);
     else if (key == "min_iterations") integer(s.minIterations);
