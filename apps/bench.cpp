@@ -73,11 +73,21 @@ struct BackendRun {
   CompactionOutcome outcome;
 };
 
-BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const core::Deposit& dep) {
+/// `progress` with every status led by `what` (the case: a compaction's own status starts with
+/// its backend).
+RunProgressFn labelled(const RunProgressFn& progress, std::string what) {
+  if (!progress) return {};
+  return [progress, what = std::move(what)](double fraction, const std::string& status) {
+    progress(fraction, what + " " + status);
+  };
+}
+
+BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const core::Deposit& dep,
+                      const RunProgressFn& progress) {
   cfg.backend = backend;
   resetPeakRss();
   BackendRun run;
-  run.outcome = compact(cfg, dep);
+  run.outcome = compact(cfg, dep, {}, progress);
   const CompactionOutcome& out = run.outcome;
   const analysis::Interpenetration inter =
       analysis::interpenetration(out.packing, analysis::bulkRegion(out.packing), analysis::InterpenetrationDef{});
@@ -104,18 +114,18 @@ BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const cor
   return run;
 }
 
-nlohmann::json compareCase(const BenchDef& def, core::ShapeKind shape,
-                           const std::function<void(const std::string&)>& log) {
+nlohmann::json compareCase(const BenchDef& def, const std::string& name, core::ShapeKind shape,
+                           const std::function<void(const std::string&)>& log, const RunProgressFn& progress) {
   const core::RunConfig cfg = baseConfig(def, shape);
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   nlohmann::json c = {{"n_grains", dep.grains.size()},
                       {"shape", std::string(core::toString(shape))},
                       {"box", cfg.box},
                       {"deposit_s", dep.seconds}};
-  BackendRun nscd = runBackend(cfg, "nscd", dep);
+  BackendRun nscd = runBackend(cfg, "nscd", dep, labelled(progress, name));
   if (log) log(fmt::format("  nscd: {:.1f} s, {} steps, reached {}", nscd.json["wall_s"].get<double>(),
                            nscd.json["steps"].get<long>(), nscd.outcome.reached));
-  BackendRun bullet = runBackend(cfg, "bullet", dep);
+  BackendRun bullet = runBackend(cfg, "bullet", dep, labelled(progress, name));
   if (log) log(fmt::format("  bullet: {:.1f} s, {} steps, reached {}", bullet.json["wall_s"].get<double>(),
                            bullet.json["steps"].get<long>(), bullet.outcome.reached));
   // From when on did Bullet stay at nscd's final interpenetration or lower? Not the first check
@@ -150,7 +160,7 @@ double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
 }
 
 nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
-                             const std::function<void(const std::string&)>& log) {
+                             const std::function<void(const std::string&)>& log, const RunProgressFn& progress) {
   nlohmann::json points = nlohmann::json::array();
   std::map<std::string, std::vector<double>> logN, logT, logTPerSweep, logCpu;
   for (int n : def.scalingSizes) {
@@ -173,7 +183,8 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
       const long fallWindows = static_cast<long>(std::ceil(def.scalingFall / (def.scalingSteps * dt) - 1e-9));
       c.compaction.checkInterval = def.scalingSteps;
       c.compaction.timeLimit = static_cast<double>((fallWindows + 1) * def.scalingSteps) * dt;
-      const CompactionOutcome out = compact(c, dep);
+      const CompactionOutcome out =
+          compact(c, dep, {}, labelled(progress, fmt::format("scaling n={}", dep.grains.size())));
       // Over the timed window (between the two checks): time per step, solver iterations per
       // step, and the solve time per contact update (rows x iterations), which separates the
       // cost of one iteration from the number of them.
@@ -229,17 +240,18 @@ const std::vector<std::string>& benchCaseNames() {
   return names;
 }
 
-nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log) {
+nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log,
+                        const RunProgressFn& progress) {
   nlohmann::json cases = nlohmann::json::object();
   for (const std::string& name : def.cases) {
     if (log) log(fmt::format("case {}", name));
     if (name == "msp-w10")
-      cases[name] = compareCase(def, core::ShapeKind::Sphere, log);
+      cases[name] = compareCase(def, name, core::ShapeKind::Sphere, log, progress);
     else if (name == "mpp-w10")
-      cases[name] = compareCase(def, core::ShapeKind::Pinacoid, log);
+      cases[name] = compareCase(def, name, core::ShapeKind::Pinacoid, log, progress);
     else if (name == "scaling") {
       nlohmann::json exponents;
-      cases[name] = scalingSeries(def, exponents, log);
+      cases[name] = scalingSeries(def, exponents, log, progress);
       cases["scaling_exponent"] = exponents;  // t_step ~ n^k, least squares in log-log
     }
     else

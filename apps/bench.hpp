@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "apps/run_pipeline.hpp"
+
 namespace confpack::app {
 
 struct BenchDef {
@@ -31,7 +33,10 @@ struct BenchDef {
 /// Names accepted in BenchDef::cases.
 const std::vector<std::string>& benchCaseNames();
 
-/// Runs the benchmark and returns bench.json (shape documented in the README).
-nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log = {});
+/// Runs the benchmark and returns bench.json (shape documented in the README). `log` gets one line
+/// per case and per finished compaction; `progress` the progress of each compaction, its status
+/// led by the case ("msp-w10 nscd t=12.0 step ...").
+nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log = {},
+                        const RunProgressFn& progress = {});
 
 }  // namespace confpack::app

@@ -12,6 +12,7 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "apps/microbench.hpp"
+#include "apps/progress.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::app {
@@ -58,9 +59,12 @@ void runBenchCommand(BenchState& st) {
   });
   runWork("bench", [&] {
     applyThreads(st.def.threads);
-    const nlohmann::json result = runBench(st.def, [&](const std::string& line) {
-      if (!st.quiet) fmt::print(stderr, "bench: {}\n", line);
-    });
+    // A full bench runs for hours: each compaction reports its progress (simulated time, steps,
+    // iterations, equilibrium ratios) between the lines that say which case and backend ran.
+    Progress progress("bench", !st.quiet, 30.0);
+    const nlohmann::json result = runBench(
+        st.def, [&](const std::string& line) { progress.note(line); },
+        [&](double fraction, const std::string& status) { progress.update(fraction, status); });
     core::writeFileAtomically(st.out, result.dump(2));
     fmt::print("bench: wrote {}\n", st.out.string());
   });

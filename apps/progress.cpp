@@ -50,4 +50,13 @@ void Progress::done(std::string_view status) {
   lineOpen_ = false;
 }
 
+void Progress::note(std::string_view line) {
+  if (!enabled_) return;
+  std::lock_guard lock(mutex_);
+  if (lineOpen_) fmt::print(stderr, "\r\033[K");
+  fmt::print(stderr, "{}: {}\n", label_, line);
+  lineOpen_ = false;
+  lastPrint_ = -1e300;  // the stretch that follows reports at once
+}
+
 }  // namespace confpack::app

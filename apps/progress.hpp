@@ -21,6 +21,10 @@ class Progress {
   void update(double fraction, std::string_view status = {});
   /// Ends the live line with a final status (also printed in plain mode).
   void done(std::string_view status = {});
+  /// Prints `line` as a line of its own ("label: line"), clearing the live line first; the next
+  /// update() is printed at once, on a new line. For events between stretches of progress (a
+  /// case begins, a compaction ends).
+  void note(std::string_view line);
 
   /// True when stderr is a terminal (live mode).
   bool live() const { return live_; }

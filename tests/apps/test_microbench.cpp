@@ -167,10 +167,14 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
 TEST_CASE("bench --case scaling times loaded piles with both backends and fits the exponents") {
   Scratch s("scaling");
   const Run r = s.run(
-      "bench --case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --quiet "
-      "--out b.json");
+      "bench --case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --out b.json");
   INFO(r.err);
   REQUIRE(r.code == 0);
+  // Progress on stderr (a file here, so plain lines): which case runs, then each compaction's own
+  // progress (the first report of a compaction is always printed), led by the case.
+  CHECK(r.err.find("bench: case scaling\n") != std::string::npos);
+  CHECK(r.err.find("scaling n=450 nscd t=") != std::string::npos);
+  CHECK(r.err.find("scaling n=450 bullet t=") != std::string::npos);
   const json cases = json::parse(confpack::testing::slurp(s.dir / "b.json"))["cases"];
   const json& points = cases["scaling"];
   REQUIRE(points.size() == 2);
