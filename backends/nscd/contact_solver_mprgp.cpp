@@ -19,6 +19,8 @@
 #include <cmath>
 #include <limits>
 
+#include <omp.h>
+
 #include "backends/nscd/contact_solver.hpp"
 
 namespace confpack::nscd {
@@ -48,6 +50,14 @@ double blockedSum(std::size_t m, int threads, std::vector<double>& partial, cons
   double total = 0.0;
   for (double s : partial) total += s;
   return total;
+}
+
+/// body(0) and body(1) on a team of two threads (one thread takes both if the team is smaller).
+/// Its own function, so that the parallel region does not share a frame with serial loops.
+template <class Body>
+[[gnu::noinline]] void onTwoThreads(const Body body) {
+#pragma omp parallel num_threads(2)
+  for (int blk = omp_get_thread_num(); blk < 2; blk += omp_get_num_threads()) body(blk);
 }
 
 }  // namespace
@@ -292,8 +302,9 @@ bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int t
 // over the free rows, in row order (bottom to top), on A_FF z = phi: the sweeps of nlgs without
 // the projection, matrix-free through the body velocity changes of z. M_F is symmetric positive
 // definite for any free set, so conjugate gradients stay conjugate gradients on the face, and it
-// follows the free set with no factorisation to redo. Serial: a sweep's order is its point.
-double ContactSolver::precondition(std::size_t bodyCount) {
+// follows the free set with no factorisation to redo. A sweep's order is its point, so the
+// rows come in blocks that share no grain (prepare()), and only those run on two threads.
+double ContactSolver::precondition(std::size_t bodyCount, int threads) {
   const std::size_t m = y_.size();
   // Raw pointers: with the vectors as members, the compiler reloaded their data pointers after
   // every store of a double.
@@ -302,35 +313,66 @@ double ContactSolver::precondition(std::size_t bodyCount) {
   const double* ap = ap_.data();
   double* z = z_.data();
   const SweepMass* mass = sweepMass_.data();
-  double zAp = 0.0;  // summed in the backward sweep, where each z_k takes its final value
+  const int world = static_cast<int>(bodyCount) - 1;
   std::fill(z_.begin(), z_.end(), 0.0);
-  // Both sweeps over the free rows; `visit(k)` updates unknown k.
-  auto sweeps = [&](const auto& visit) {
-    for (std::size_t k = 0; k < m; ++k)
-      if (y[k] > 0.0) visit(k);
-    for (std::size_t k = m; k-- > 0;)
-      if (y[k] > 0.0) {
-        visit(k);
-        zAp += z[k] * ap[k];
-      }
+  // Both sweeps over the free rows; `visit(k)` updates unknown k. The rows of the two blocks
+  // (prepare(): the halves of the box along x, less a strip at their edges) share no grain, so
+  // the two threads sweep one each; the strip rows and the wall friction rows follow, serial.
+  // Backward, the same in reverse. Either block may run first or both at once: the same bits.
+  const std::size_t blockEnd[2] = {static_cast<std::size_t>(sweepBlockEnd_[0]),
+                                   static_cast<std::size_t>(sweepBlockEnd_[1])};
+  const bool team = threads > 1 && blockEnd[1] > 0;
+  double blockZAp[2] = {0.0, 0.0};
+  double serialZAp = 0.0;  // summed in the backward sweep, where each z_k takes its final value
+  // Everything by value: a closure holding references to these locals made them escape into
+  // the parallel region, and the serial sweeps reloaded them from memory (10-15% slower).
+  auto sweeps = [=, &serialZAp, &blockZAp](const auto visit) {
+    const auto forward = [=](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k)
+        if (y[k] > 0.0) visit(k);
+    };
+    const auto backward = [=](std::size_t begin, std::size_t end) {
+      double sum = 0.0;
+      for (std::size_t k = end; k-- > begin;)
+        if (y[k] > 0.0) {
+          visit(k);
+          sum += z[k] * ap[k];
+        }
+      return sum;
+    };
+    const std::size_t e0 = blockEnd[0], e1 = blockEnd[1];
+    if (team)
+      onTwoThreads([=](int blk) { forward(blk == 0 ? 0 : e0, blk == 0 ? e0 : e1); });
+    else
+      forward(0, e1);
+    forward(e1, m);
+    serialZAp = backward(e1, m);
+    if (team) {
+      double* sums = blockZAp;
+      onTwoThreads([=](int blk) { sums[blk] = backward(blk == 0 ? 0 : e0, blk == 0 ? e0 : e1); });
+    } else {
+      blockZAp[1] = backward(e0, e1);
+      blockZAp[0] = backward(0, e0);
+    }
   };
   if (linearOnly_) {
     dvLinear_.assign(bodyCount, Vec3::Zero());
     Vec3* dv = dvLinear_.data();
     const LinearRow* rows = linearRows_.data();
-    sweeps([&](std::size_t k) {
+    sweeps([=](std::size_t k) {
       const LinearRow& row = rows[k];
       const double delta = g[k] - row.n.dot(dv[row.b] - dv[row.a]);
       z[k] += delta;
       dv[row.a] -= (delta * mass[k].invMa) * row.n;
-      dv[row.b] += (delta * mass[k].invMb) * row.n;
+      // The world's velocity never changes: no write, which both blocks would make.
+      if (row.b != world) dv[row.b] += (delta * mass[k].invMb) * row.n;
     });
   } else {
     dv_.assign(bodyCount, BodyVelocity{});
     BodyVelocity* dv = dv_.data();
     const GatherRow* rows = gatherRows_.data();
     const SweepAngular* angular = sweepAngular_.data();
-    sweeps([&](std::size_t k) {
+    sweeps([=](std::size_t k) {
       const GatherRow& row = rows[k];
       BodyVelocity& va = dv[row.a];
       BodyVelocity& vb = dv[row.b];
@@ -338,10 +380,13 @@ double ContactSolver::precondition(std::size_t bodyCount) {
       z[k] += delta;
       va.v -= (delta * mass[k].invMa) * row.n;
       va.w -= delta * angular[k].a;
-      vb.v += (delta * mass[k].invMb) * row.n;
-      vb.w += delta * angular[k].b;
+      if (row.b != world) {
+        vb.v += (delta * mass[k].invMb) * row.n;
+        vb.w += delta * angular[k].b;
+      }
     });
   }
+  const double zAp = serialZAp + blockZAp[0] + blockZAp[1];
   // The sweeps leave the body velocity changes of z in dv: A z costs one gather pass, which the
   // next measure() makes (with A p = A z - gamma A p).
   return zAp;
@@ -415,7 +460,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   double pApReady = 0.0;
   auto freeGradientToP = [&] {  // p = M_F^-1 phi (or phi): restart of the conjugate gradients
     if (preconditioned) {
-      precondition(vel.size());
+      precondition(vel.size(), threads);
       conjugate = 0.0;  // p = z, made by the next measure()
     } else {
       for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
@@ -529,11 +574,11 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
             g_[k] -= alphaCg * ap_[k];
             return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
           });
-          conjugate = (preconditioned ? precondition(vel.size()) : phiAp) / pAp;
+          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
           ++steps_.conjugate;
         } else if (double phiAp = 0.0; projectedCg && projectedCgStep(alphaCg, vel.size(), threads, phiAp)) {
           ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
-          conjugate = (preconditioned ? precondition(vel.size()) : phiAp) / pAp;
+          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
           checkDescent = true;
         } else {  // expansion: to the first bound, then a projected gradient step of length alpha_bar
           ++steps_.gradient;

@@ -1,9 +1,11 @@
 // Tests specific to the native contact dynamics backend (the conformance suite covers what both
 // backends share).
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <set>
@@ -393,6 +395,49 @@ TEST_CASE("nscd mprgp: two threads give the bits of one on a pile large enough f
   REQUIRE(one->contacts().size() == two->contacts().size());
   for (std::size_t c = 0; c < one->contacts().size(); ++c)
     CHECK(one->contacts()[c].normalForce() == two->contacts()[c].normalForce());
+}
+
+TEST_CASE("nscd mprgp: the preconditioner's two sweep blocks share no grain, and two threads sweep them to the bits of one",
+          "[nscd]") {
+  // Spheres (rows without lever arms across the normal) and pinacoids (angular rows, multi-point
+  // contacts, side walls with friction), each in a box long enough for the rows to be split.
+  const bool pinacoids = GENERATE(false, true);
+  core::SystemDef s;
+  if (pinacoids) {
+    s = box(28.0, 5.0);
+    s.box.wallFriction = 0.3;
+    core::PopulationDef population;
+    population.shape = core::ShapeKind::Pinacoid;
+    core::DepositionDef def;
+    def.grainCount = 3000;
+    s.grains = core::deposit(s.box, population, def, 11).grains;
+    // Placeholders circumscribe the grains: grown by half, neighbours overlap, as in a pile
+    // pressed together (one cold step: overlaps only set the gap terms).
+    for (core::Grain& g : s.grains) g.size *= 1.5;
+  } else {
+    s = touchingSpheres(14.0, 14.0, true, 1500, 5);
+  }
+  nscd::NscdSettings one;  // the defaults: MPRGP preconditioned by Gauss-Seidel
+  one.maxIterations = 30;
+  nscd::NscdSettings two = one;
+  two.threads = 2;
+  const ColdStep a(s, one), b(s, two);
+  INFO("pinacoids " << pinacoids << ", rows " << a.solver.rowCount() << ", iterations " << a.iterations);
+  // Enough rows for the solver to run on the team (its passes need 4,096 unknowns), and each
+  // block a good part of the pile.
+  REQUIRE(a.solver.rowCount() > 4096);
+  const auto blocks = a.solver.sweepBlockBodies(static_cast<int>(s.grains.size()));
+  CHECK(blocks[0].size() > s.grains.size() / 4);
+  CHECK(blocks[1].size() > s.grains.size() / 4);
+  std::vector<int> shared;
+  std::set_intersection(blocks[0].begin(), blocks[0].end(), blocks[1].begin(), blocks[1].end(),
+                        std::back_inserter(shared));
+  CHECK(shared.empty());
+  CHECK(a.iterations == b.iterations);
+  std::size_t different = 0;
+  for (std::size_t i = 0; i < s.grains.size(); ++i)
+    different += a.velocities[i].v != b.velocities[i].v || a.velocities[i].w != b.velocities[i].w;
+  CHECK(different == 0);
 }
 
 TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin bound (spheres)", "[nscd]") {
