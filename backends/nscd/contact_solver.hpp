@@ -203,6 +203,13 @@ class ContactSolver {
   // swept serially. e0 = e1 = 0 when the box is not split.
   int sweepBlockEnd_[2] = {0, 0};
   std::vector<NormalRow> sorted_;  // scratch of prepare(), kept to avoid reallocations
+  struct SortKey {  // a row's place in the sweep order (prepare())
+    int segment;
+    double z;
+    int a, b, c, p;
+    int index;
+  };
+  std::vector<SortKey> sortKeys_;
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
   std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_;
   std::vector<BodyVelocity> dv_;
