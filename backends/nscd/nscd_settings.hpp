@@ -65,8 +65,9 @@ struct NscdSettings {
   /// and 4.2 to 5.2 ms of solve per step with "sgs", 429 to 559 and 7.5 to 9.6 ms with "none";
   /// 2,000 spheres over their first 8 t0, 67 against 173 iterations per step, solve time x0.65;
   /// 188 pinacoids over 6 t0, 16 against 34, x0.66. The time to equilibrium follows the trajectory,
-  /// not only the cost per step: within 60 t0, "none" reached it for 7 of those 10 seeds (median
-  /// wall time of the ten 122 s) and "sgs" for 6 (median at least 100 s) (README, Performance).
+  /// not only the cost per step: within 60 t0, over seeds 1 to 20, "none" reached it 14 times and
+  /// "sgs" 12; seed by seed "none" got there first 11 times and "sgs" 7 (sign test p ~ 0.5: no
+  /// effect shown), with median wall times of 159 and 113 s (README, Performance).
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
   /// ["max_iterations"] cap on the iterations per step [-], >= 1: sweeps (nlgs, default 2000) or
   /// applications of W (mprgp, default 5000; the jammed 493-sphere pile needs ~400 at 1e-10).
