@@ -73,8 +73,9 @@
 //   strips within a lever arm of their edges, each half bottom to top, then the strip rows bottom
 //   to top. The halves share no grain, so two threads sweep them at once and give the bits of
 //   one: the order depends on the configuration only, never on the thread count. On one thread
-//   it costs about 1% more iterations (8,000 spheres between walls, first 6 t0: 58.5 against
-//   57.7 per step).
+//   it costs a few iterations: 58.5 against 57.7 per step on 8,000 spheres between walls (first
+//   6 t0), 69.9 against 66.7 on 2,000 in a biperiodic 10.4 x 10.4 box (first 8 t0), where the
+//   strips hold a fifth of the rows. Two threads ran the 8,000-sphere case 1.33x faster.
 //   Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
 //   every normal impulse with the tangential ones fixed, then one projected pass over the
 //   tangential impulses, until both have converged.
