@@ -319,40 +319,47 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads) {
   // (prepare(): the halves of the box along x, less a strip at their edges) share no grain, so
   // the two threads sweep one each; the strip rows and the wall friction rows follow, serial.
   // Backward, the same in reverse. Either block may run first or both at once: the same bits.
-  const std::size_t blockEnd[2] = {static_cast<std::size_t>(sweepBlockEnd_[0]),
-                                   static_cast<std::size_t>(sweepBlockEnd_[1])};
-  const bool team = threads > 1 && blockEnd[1] > 0;
+  // Block b is rows [first[b], last[b]); the serial rows are [last[1], m).
+  const std::size_t first[2] = {0, static_cast<std::size_t>(sweepBlockEnd_[0])};
+  const std::size_t last[2] = {first[1], static_cast<std::size_t>(sweepBlockEnd_[1])};
+  const bool team = threads > 1 && last[1] > 0;
   double blockZAp[2] = {0.0, 0.0};
   double serialZAp = 0.0;  // summed in the backward sweep, where each z_k takes its final value
   // Everything by value: a closure holding references to these locals made them escape into
   // the parallel region, and the serial sweeps reloaded them from memory (10-15% slower).
   auto sweeps = [=, &serialZAp, &blockZAp](const auto visit) {
-    const auto forward = [=](std::size_t begin, std::size_t end) {
-      for (std::size_t k = begin; k < end; ++k)
+    const auto forward = [=](int blk) {
+      for (std::size_t k = first[blk]; k < last[blk]; ++k)
         if (y[k] > 0.0) visit(k);
     };
-    const auto backward = [=](std::size_t begin, std::size_t end) {
+    const auto backward = [=](int blk) {
       double sum = 0.0;
-      for (std::size_t k = end; k-- > begin;)
+      for (std::size_t k = last[blk]; k-- > first[blk];)
         if (y[k] > 0.0) {
           visit(k);
           sum += z[k] * ap[k];
         }
       return sum;
     };
-    const std::size_t e0 = blockEnd[0], e1 = blockEnd[1];
-    if (team)
-      onTwoThreads([=](int blk) { forward(blk == 0 ? 0 : e0, blk == 0 ? e0 : e1); });
-    else
-      forward(0, e1);
-    forward(e1, m);
-    serialZAp = backward(e1, m);
+    if (team) {
+      onTwoThreads(forward);
+    } else {
+      forward(0);
+      forward(1);
+    }
+    for (std::size_t k = last[1]; k < m; ++k)
+      if (y[k] > 0.0) visit(k);
+    for (std::size_t k = m; k-- > last[1];)
+      if (y[k] > 0.0) {
+        visit(k);
+        serialZAp += z[k] * ap[k];
+      }
     if (team) {
       double* sums = blockZAp;
-      onTwoThreads([=](int blk) { sums[blk] = backward(blk == 0 ? 0 : e0, blk == 0 ? e0 : e1); });
+      onTwoThreads([=](int blk) { sums[blk] = backward(blk); });
     } else {
-      blockZAp[1] = backward(e0, e1);
-      blockZAp[0] = backward(0, e0);
+      blockZAp[1] = backward(1);
+      blockZAp[0] = backward(0);
     }
   };
   if (linearOnly_) {
