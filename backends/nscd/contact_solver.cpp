@@ -53,6 +53,7 @@ void ContactSolver::prepare(const std::vector<ContactGeometry>& contacts, const 
   normalRows_.clear();
   frictionRows_.clear();
   rowRef_.clear();
+  warmNormalsInSolve_ = settings.solver == SolverKind::Mprgp;
   int contactIndex = -1;
   double leverMax = 0.0;
   const int staticBody = static_cast<int>(bodies.size()) - 1;
@@ -202,13 +203,15 @@ void ContactSolver::warmStart(const ContactCache& cache, const std::vector<Conta
         row.rn = take(old->normal, p);
         row.rt1 = take(old->tangent1, p);
         row.rt2 = take(old->tangent2, p);
-        // Impulse on a is minus that on the wall.
+        // Impulse on a is minus that on the wall; MPRGP applies the normal part itself.
+        const double rn = warmNormalsInSolve_ ? 0.0 : row.rn;
         BodyVelocity& va = vel[row.a];
-        va.v -= row.invMa * (row.rn * row.n + row.rt1 * row.t1 + row.rt2 * row.t2);
-        va.w -= row.rn * row.iaAxn + row.rt1 * row.iaAxt1 + row.rt2 * row.iaAxt2;
+        va.v -= row.invMa * (rn * row.n + row.rt1 * row.t1 + row.rt2 * row.t2);
+        va.w -= rn * row.iaAxn + row.rt1 * row.iaAxt1 + row.rt2 * row.iaAxt2;
       } else {
         NormalRow& row = normalRows_[slot_[ref.first + p]];
         row.r = take(old->normal, p);
+        if (warmNormalsInSolve_) continue;
         vel[row.a].v -= row.invMa * row.r * row.n;
         vel[row.a].w -= row.r * row.iaAxn;
         vel[row.b].v += row.invMb * row.r * row.n;
@@ -220,8 +223,14 @@ void ContactSolver::warmStart(const ContactCache& cache, const std::vector<Conta
 
 int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
   residual_ = 0.0;
+  impulseOfRow_.clear();
   if (normalRows_.empty() && frictionRows_.empty()) return 0;
-  return settings.solver == SolverKind::Mprgp ? solveMprgp(vel, settings) : solveNlgs(vel, settings);
+  if (settings.solver == SolverKind::Mprgp) return solveMprgp(vel, settings);
+  const int sweeps = solveNlgs(vel, settings);
+  impulseOfRow_.resize(normalRows_.size());
+  for (std::size_t k = 0; k < normalRows_.size(); ++k)
+    impulseOfRow_[static_cast<std::size_t>(sortKeys_[k].index)] = normalRows_[k].r;
+  return sweeps;
 }
 
 int ContactSolver::solveNlgs(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
@@ -274,7 +283,7 @@ int ContactSolver::solveNlgs(std::vector<BodyVelocity>& vel, const NscdSettings&
 
 double ContactSolver::normalImpulse(int c, int p) const {
   const RowRef ref = rowRef_[c];
-  return ref.friction ? frictionRows_[ref.first + p].rn : normalRows_[slot_[ref.first + p]].r;
+  return ref.friction ? frictionRows_[ref.first + p].rn : impulseOfRow_[static_cast<std::size_t>(ref.first + p)];
 }
 
 Vec3 ContactSolver::tangentImpulse(int c, int p) const {
@@ -300,7 +309,7 @@ void ContactSolver::exportImpulses(const std::vector<ContactGeometry>& contacts,
         e.tangent1[p] = row.rt1;
         e.tangent2[p] = row.rt2;
       } else {
-        e.normal[p] = normalRows_[slot_[ref.first + p]].r;
+        e.normal[p] = impulseOfRow_[static_cast<std::size_t>(ref.first + p)];
       }
     }
     out.push_back(e);

@@ -76,6 +76,12 @@
 //   it costs a few iterations: 58.5 against 57.7 per step on 8,000 spheres between walls (first
 //   6 t0), 69.9 against 66.7 on 2,000 in a biperiodic 10.4 x 10.4 box (first 8 t0), where the
 //   strips hold a fifth of the rows. Two threads ran the 8,000-sphere case 1.33x faster.
+//   The passes around the solve (building the rows, sorting their keys, the warm start's lookups,
+//   MPRGP's scatter entries and operator bound, the export to the cache) were also tried on the
+//   team, each part writing only its own rows, and not kept: on this 2-core machine they were no
+//   faster (prepare 2.58 s on two threads against 2.18 s on one; 8,000 spheres between walls,
+//   first 3.5 t0), memory-bound passes on a machine whose bandwidth grows only 1.4x with the
+//   second core (one streaming loop 10.5 GB/s, one on each core 15.1 GB/s together).
 //   Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
 //   every normal impulse with the tangential ones fixed, then one projected pass over the
 //   tangential impulses, until both have converged.
@@ -113,7 +119,9 @@ class ContactSolver {
   void prepare(const std::vector<ContactGeometry>& contacts, const std::vector<core::Vec3>& positions,
                const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
                const NscdSettings& settings);
-  /// Sets the impulses from the cache (scaled to this dt) and applies them to the velocities.
+  /// Sets the impulses from the cache (scaled to this dt) and applies them to the velocities;
+  /// with mprgp (the solver of the last prepare()), only the tangential ones: solve() applies the
+  /// normal impulses in its own pass over the bodies.
   void warmStart(const ContactCache& cache, const std::vector<ContactGeometry>& contacts, double dt,
                  std::vector<BodyVelocity>& velocities);
   /// Solves the step's contact problem with settings.solver, updating `velocities` (v_free plus
@@ -200,6 +208,9 @@ class ContactSolver {
   // Normal rows are stored in sweep order; the row of contact c, point p (frictionless) is
   // normalRows_[slot_[rowRef_[c].first + p]].
   std::vector<int> slot_;
+  // The normal impulse of each frictionless row in contact order (row ref.first + p of contact c),
+  // set by solve().
+  std::vector<double> impulseOfRow_;
   // Sweep blocks of the normal rows (prepare()): [0, e0) and [e0, e1) share no grain; [e1, m) is
   // swept serially. e0 = e1 = 0 when the box is not split.
   int sweepBlockEnd_[2] = {0, 0};
@@ -253,6 +264,10 @@ class ContactSolver {
   std::vector<SweepMass> sweepMass_;
   std::vector<SweepAngular> sweepAngular_;
   bool linearOnly_ = false;
+  // The warm start's normal impulses are applied to the velocities by solveMprgp(), one pass per
+  // body over its scatter entries, on the solver's team, instead of by warmStart(), contact by
+  // contact through the rows in sweep order (a cache miss per point).
+  bool warmNormalsInSolve_ = false;
   ThreadChoice threadChoice_;  // MPRGP's team against one thread, timed
   std::vector<LinearRow> linearRows_;
   std::vector<LinearEntry> linearEntries_;

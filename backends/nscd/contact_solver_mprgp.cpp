@@ -456,6 +456,9 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
     y_[nN + f] = frictionRows_[f].rn / scale_[nN + f];
   }
   buildMprgpRows(vel.size());
+  // warmStart() left the velocities without the normal impulses of the warm start y: applied
+  // here, body by body over the scatter entries (on the team, the same bits for any team).
+  if (warmNormalsInSolve_) addImpulses(y_, vel, threads);
   y0_ = y_;  // `vel` holds the velocities of y0_; iterations move y only (see syncVelocities)
   const double bound = operatorBound_ = scaledOperatorBound(vel.size());
   const double alphaBar = bound > 0.0 ? 1.95 / bound : 1.0;  // safe: bound >= ||A||
@@ -640,7 +643,10 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
     innerTolerance = std::max(settings.tolerance, std::min(innerTolerance, 0.1 * tangentChange));
   }
   residual_ = std::max(residual_, tangentChange);
-  for (std::size_t k = 0; k < nN; ++k) normalRows_[k].r = scale_[k] * y_[k];
+  // The impulses in contact order, for exportImpulses() and normalImpulse(), which read every
+  // contact's points: through the rows in sweep order, each read missed the cache.
+  impulseOfRow_.resize(nN);
+  for (std::size_t k = 0; k < nN; ++k) impulseOfRow_[static_cast<std::size_t>(sortKeys_[k].index)] = scale_[k] * y_[k];
   for (std::size_t f = 0; f < frictionRows_.size(); ++f) frictionRows_[f].rn = scale_[nN + f] * y_[nN + f];
   if (m >= kParallelMin)  // time per iteration: the iteration count changes from step to step
     threadChoice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /

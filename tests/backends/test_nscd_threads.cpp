@@ -66,8 +66,9 @@ std::vector<nscd::CandidatePair> candidatePairs(const core::SystemDef& s, const 
 }
 
 /// Steps the same system with threads = 1 and threads = 2 and requires identical bits in every
-/// pose, velocity, contact and force at the end.
-void requireSameRun(const core::SystemDef& s, int steps, double dt) {
+/// pose, velocity, contact and force at the end. With `teamRows`, the last step must have had
+/// enough contact rows for MPRGP's passes (among them the warm start's impulses) to run on the team.
+void requireSameRun(const core::SystemDef& s, int steps, double dt, bool teamRows) {
   // A capped solver keeps the test fast; convergence is not the point, identical iterates are.
   auto one = nscd::makeNscdBackend(s, {{"threads", 1}, {"max_iterations", 10}});
   auto two = nscd::makeNscdBackend(s, {{"threads", 2}, {"max_iterations", 10}});
@@ -76,8 +77,10 @@ void requireSameRun(const core::SystemDef& s, int steps, double dt) {
     two->step(dt);
   }
   // Not vacuous: the pile is loaded, its contacts carry force.
-  INFO("contacts " << one->contacts().size() << ", grains " << s.grains.size());
+  INFO("contacts " << one->contacts().size() << ", grains " << s.grains.size() << ", rows "
+                   << one->profile().contactPoints);
   REQUIRE(one->contacts().size() > s.grains.size() / 8);
+  if (teamRows) REQUIRE(one->profile().contactPoints >= 4096);  // MPRGP's kParallelMin
   double total = 0.0;
   for (const auto& c : one->contacts()) total += c.normalForce();
   REQUIRE(total > 0.0);
@@ -205,7 +208,7 @@ TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread 
 TEST_CASE("nscd: a sphere pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
   // 2500 spheres: the broad phase runs on 2 threads (sphere-only systems collide on one).
   // Grown to the placeholder size (1.1 d): a touching, loaded pile from the start.
-  requireSameRun(pile(core::ShapeKind::Sphere, 12.0, 8.0, 2500, 1.1), 4, 2e-3);
+  requireSameRun(pile(core::ShapeKind::Sphere, 12.0, 8.0, 2500, 1.1), 4, 2e-3, true);
 }
 
 TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thread run", "[nscd][threads]") {
@@ -215,7 +218,16 @@ TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thre
   const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
   INFO("candidate pairs " << pairs.size());
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
-  requireSameRun(s, 30, 2e-3);
+  requireSameRun(s, 30, 2e-3, false);
+}
+
+TEST_CASE("nscd: a pressed pinacoid pile between rough walls, warm started on 2 threads, is bitwise the "
+          "single-thread run",
+          "[nscd][threads]") {
+  // Grown by half, the grains overlap their neighbours from the first step: thousands of rows
+  // (angular, multi-point, wall friction), so that the solver's passes run on the team, and the
+  // later steps are warm started from the cache.
+  requireSameRun(pile(core::ShapeKind::Pinacoid, 28.0, 5.0, 3000, 1.5), 3, 2e-3, true);
 }
 
 TEST_CASE("nscd ThreadChoice keeps the faster of the team and one thread, and measures again every epoch",
