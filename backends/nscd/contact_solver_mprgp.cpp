@@ -319,15 +319,16 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads) {
   // (prepare(): the halves of the box along x, less a strip at their edges) share no grain, so
   // the two threads sweep one each; the strip rows and the wall friction rows follow, serial.
   // Backward, the same in reverse. Either block may run first or both at once: the same bits.
-  // Block b is rows [first[b], last[b]); the serial rows are [last[1], m).
-  const std::size_t first[2] = {0, static_cast<std::size_t>(sweepBlockEnd_[0])};
-  const std::size_t last[2] = {first[1], static_cast<std::size_t>(sweepBlockEnd_[1])};
+  // Range b is rows [first[b], last[b]): the two blocks, then (b = 2) the serial rows.
+  const std::size_t first[3] = {0, static_cast<std::size_t>(sweepBlockEnd_[0]),
+                                static_cast<std::size_t>(sweepBlockEnd_[1])};
+  const std::size_t last[3] = {first[1], first[2], m};
   const bool team = threads > 1 && last[1] > 0;
-  double blockZAp[2] = {0.0, 0.0};
-  double serialZAp = 0.0;  // summed in the backward sweep, where each z_k takes its final value
+  // z . A p of each range, summed in the backward sweep, where each z_k takes its final value.
+  double rangeZAp[3] = {0.0, 0.0, 0.0};
   // Everything by value: a closure holding references to these locals made them escape into
   // the parallel region, and the serial sweeps reloaded them from memory (10-15% slower).
-  auto sweeps = [=, &serialZAp, &blockZAp](const auto visit) {
+  auto sweeps = [=, &rangeZAp](const auto visit) {
     const auto forward = [=](int blk) {
       for (std::size_t k = first[blk]; k < last[blk]; ++k)
         if (y[k] > 0.0) visit(k);
@@ -347,19 +348,14 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads) {
       forward(0);
       forward(1);
     }
-    for (std::size_t k = last[1]; k < m; ++k)
-      if (y[k] > 0.0) visit(k);
-    for (std::size_t k = m; k-- > last[1];)
-      if (y[k] > 0.0) {
-        visit(k);
-        serialZAp += z[k] * ap[k];
-      }
+    forward(2);
+    rangeZAp[2] = backward(2);
     if (team) {
-      double* sums = blockZAp;
+      double* sums = rangeZAp;
       onTwoThreads([=](int blk) { sums[blk] = backward(blk); });
     } else {
-      blockZAp[1] = backward(1);
-      blockZAp[0] = backward(0);
+      rangeZAp[1] = backward(1);
+      rangeZAp[0] = backward(0);
     }
   };
   if (linearOnly_) {
@@ -393,7 +389,7 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads) {
       }
     });
   }
-  const double zAp = serialZAp + blockZAp[0] + blockZAp[1];
+  const double zAp = rangeZAp[2] + rangeZAp[0] + rangeZAp[1];
   // The sweeps leave the body velocity changes of z in dv: A z costs one gather pass, which the
   // next measure() makes (with A p = A z - gamma A p).
   return zAp;
