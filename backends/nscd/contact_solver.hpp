@@ -89,6 +89,7 @@
 //   1e-6, the largest |sum F| / (d^2 P) stays at 2.5e-3 after 40 t0 and ~1,000 sweeps per step;
 //   with mprgp at 1e-10, SPEC 6.1 holds from t = 39.8 with ~400 iterations per step.
 #include <array>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -184,8 +185,10 @@ class ContactSolver {
   bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
   // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel
   // splitting of A restricted to F, leaving M^-1 H S z in dvLinear_ / dv_; returns z . ap_.
+  // Given alphaCg, the forward sweep first makes the conjugate gradient step y -= alphaCg p,
+  // g -= alphaCg A p on each row as it reaches it, which saves that step its own pass.
   // With threads > 1 the two sweep blocks (sweepBlockEnd_) run at once, to the same bits.
-  double precondition(std::size_t bodyCount, int threads);
+  double precondition(std::size_t bodyCount, int threads, std::optional<double> alphaCg = std::nullopt);
   double dvAlongRow(std::size_t k) const;
   double frictionTangentPass(std::vector<BodyVelocity>& velocities);
   struct FrictionRow;

@@ -304,17 +304,23 @@ bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int t
 // definite for any free set, so conjugate gradients stay conjugate gradients on the face, and it
 // follows the free set with no factorisation to redo. A sweep's order is its point, so the
 // rows come in blocks that share no grain (prepare()), and only those run on two threads.
-double ContactSolver::precondition(std::size_t bodyCount, int threads) {
+double ContactSolver::precondition(std::size_t bodyCount, int threads, std::optional<double> alphaCg) {
   const std::size_t m = y_.size();
   // Raw pointers: with the vectors as members, the compiler reloaded their data pointers after
   // every store of a double.
-  const double* y = y_.data();
-  const double* g = g_.data();
+  double* y = y_.data();
+  double* g = g_.data();
+  const double* p = p_.data();
   const double* ap = ap_.data();
   double* z = z_.data();
   const SweepMass* mass = sweepMass_.data();
   const int world = static_cast<int>(bodyCount) - 1;
-  std::fill(z_.begin(), z_.end(), 0.0);
+  // The forward sweep reads row k's own y_k and g_k only, so the conjugate gradient step can be
+  // made row by row as the sweep reaches it (and z_k zeroed there), with the same values as in a
+  // pass of its own before: one pass over y, g, p, A p and z fewer per iteration, where the
+  // iteration streams memory (8,000 to 30,400 grains).
+  const bool step = alphaCg.has_value();
+  const double alpha = alphaCg.value_or(0.0);
   // Both sweeps over the free rows; `visit(k)` updates unknown k. The rows of the two blocks
   // (prepare(): the halves of the box along x, less a strip at their edges) share no grain, so
   // the two threads sweep one each; the strip rows and the wall friction rows follow, serial.
@@ -330,8 +336,14 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads) {
   // the parallel region, and the serial sweeps reloaded them from memory (10-15% slower).
   auto sweeps = [=, &rangeZAp](const auto visit) {
     const auto forward = [=](int blk) {
-      for (std::size_t k = first[blk]; k < last[blk]; ++k)
+      for (std::size_t k = first[blk]; k < last[blk]; ++k) {
+        if (step) {
+          y[k] -= alpha * p[k];
+          g[k] -= alpha * ap[k];
+        }
+        z[k] = 0.0;
         if (y[k] > 0.0) visit(k);
+      }
     };
     const auto backward = [=](int blk) {
       double sum = 0.0;
@@ -588,13 +600,18 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
         apReady = false;
         const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
         if (fitsBounds(alphaCg)) {  // conjugate gradient step
-          // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure()
-          const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
-            y_[k] -= alphaCg * p_[k];
-            g_[k] -= alphaCg * ap_[k];
-            return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
-          });
-          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
+          // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure(); preconditioned,
+          // the step itself is made by the forward sweep.
+          if (preconditioned) {
+            conjugate = precondition(vel.size(), threads, alphaCg) / pAp;
+          } else {
+            const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
+              y_[k] -= alphaCg * p_[k];
+              g_[k] -= alphaCg * ap_[k];
+              return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
+            });
+            conjugate = phiAp / pAp;
+          }
           ++steps_.conjugate;
         } else if (double phiAp = 0.0; projectedCg && projectedCgStep(alphaCg, vel.size(), threads, phiAp)) {
           ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
