@@ -55,7 +55,7 @@ struct NscdSettings {
   /// the whole conjugate gradient step projected on r >= 0 when that lowers the energy, else
   /// Dostal's step (after Kruzik et al. 2020), and goes on conjugating from it instead of
   /// restarting. It saves most while contacts open and close (22% of the solve time on that
-  /// pile) and nothing near jamming; measurements in contact_solver_mprgp.cpp and the README.
+  /// pile) and nothing near jamming; measurements in contact_solver_mprgp.cpp and docs/performance.md.
   ExpansionKind expansion = ExpansionKind::ProjectedCg;
   /// ["preconditioner"] (mprgp) "sgs" (default) or "none": how conjugate gradients are
   /// preconditioned on the free set (contact_solver_mprgp.cpp). "sgs" applies one forward and one
@@ -67,7 +67,7 @@ struct NscdSettings {
   /// 188 pinacoids over 6 t0, 16 against 34, x0.66. The time to equilibrium follows the trajectory,
   /// not only the cost per step: within 60 t0, over seeds 1 to 20, "none" reached it 14 times and
   /// "sgs" 12; seed by seed "none" got there first 11 times and "sgs" 7 (sign test p ~ 0.5: no
-  /// effect shown), with median wall times of 159 and 113 s (README, Performance).
+  /// effect shown), with median wall times of 159 and 113 s (docs/performance.md).
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
   /// ["max_iterations"] cap on the iterations per step [-], >= 1: sweeps (nlgs, default 2000) or
   /// applications of W (mprgp, default 5000; the jammed 493-sphere pile needs ~400 at 1e-10).
