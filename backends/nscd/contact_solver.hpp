@@ -80,8 +80,8 @@
 //   MPRGP's scatter entries and operator bound, the export to the cache) were also tried on the
 //   team, each part writing only its own rows, and not kept: on this 2-core machine they were no
 //   faster (prepare 2.58 s on two threads against 2.18 s on one, one run each; 8,000 spheres
-//   between walls, first 3.5 t0), memory-bound passes on a machine whose bandwidth grows only 1.4x with the
-//   second core (one streaming loop 10.5 GB/s, one on each core 15.1 GB/s together).
+//   between walls, first 3.5 t0): they stream memory, and this machine's bandwidth grows only
+//   1.4x with the second core (one streaming loop 10.5 GB/s, one on each core 15.1 GB/s).
 //   Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
 //   every normal impulse with the tangential ones fixed, then one projected pass over the
 //   tangential impulses, until both have converged.
