@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <numeric>
@@ -49,10 +50,23 @@ nlohmann::json machineInfo() {
       model = line.substr(line.find(':') + 2);
       break;
     }
+  // The kernel's transparent huge page mode (the bracketed word) and glibc's tunables: with
+  // "madvise", GLIBC_TUNABLES=glibc.malloc.hugetlb=1 puts the solver's arrays on 2 MiB pages,
+  // which changes the cost of an iteration at 30,000 grains (docs/performance.md).
+  std::string thp;
+  std::ifstream thpIn("/sys/kernel/mm/transparent_hugepage/enabled");
+  if (std::getline(thpIn, thp)) {
+    const auto open = thp.find('['), close = thp.find(']');
+    if (open != std::string::npos && close != std::string::npos && close > open)
+      thp = thp.substr(open + 1, close - open - 1);
+  }
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
   return {{"cpu", model},
           {"hardware_threads", std::thread::hardware_concurrency()},
           {"compiler", __VERSION__},
-          {"confpack_version", CONFPACK_VERSION}};
+          {"confpack_version", CONFPACK_VERSION},
+          {"transparent_hugepage", thp.empty() ? nlohmann::json() : nlohmann::json(thp)},
+          {"glibc_tunables", tunables ? nlohmann::json(tunables) : nlohmann::json()}};
 }
 
 core::RunConfig baseConfig(const BenchDef& def, core::ShapeKind shape) {

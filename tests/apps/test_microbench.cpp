@@ -166,10 +166,18 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
 // contact rows per grain over steps 200 to 400 of 2,000 spheres, against 3.3 after 4 t0).
 TEST_CASE("bench --case scaling times loaded piles with both backends and fits the exponents") {
   Scratch s("scaling");
+  // glibc's tunables change the memory the solver runs on (2 MiB pages): the bench records them.
+  const char* tunables = "glibc.malloc.hugetlb=1";
+  REQUIRE(::setenv("GLIBC_TUNABLES", tunables, 1) == 0);
   const Run r = s.run(
       "bench --case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --out b.json");
+  ::unsetenv("GLIBC_TUNABLES");
   INFO(r.err);
   REQUIRE(r.code == 0);
+  const json machine = json::parse(confpack::testing::slurp(s.dir / "b.json"))["machine"];
+  CHECK(machine["glibc_tunables"] == tunables);
+  const json& thp = machine["transparent_hugepage"];
+  CHECK((thp.is_null() || thp == "always" || thp == "madvise" || thp == "never"));
   // Progress on stderr (a file here, so plain lines): which case runs, then each compaction's own
   // progress (the first report of a compaction is always printed), led by the case.
   CHECK(r.err.find("bench: case scaling\n") != std::string::npos);
