@@ -78,6 +78,7 @@ core::RunConfig baseConfig(const BenchDef& def, core::ShapeKind shape) {
   cfg.seed = def.seed;
   cfg.threads = def.threads;
   cfg.compaction.timeLimit = def.timeLimit;
+  cfg.compaction.adaptiveDt = def.adaptiveDt;
   return cfg;
 }
 
@@ -118,6 +119,7 @@ BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const cor
               {"interpenetration_percent", inter.exactPercent},
               {"steps", steps},
               {"dt", out.dt},
+              {"dt_largest", out.dtLargest},
               {"sweeps_per_step", out.timing["iterations_per_step"]},
               {"time_per_step_s", steps > 0 ? wall / steps : 0.0},
               {"contact_updates_per_s", out.timing["contact_updates_per_s"]},
@@ -194,6 +196,7 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
       c.backend = backend;
       const double dt = defaultTimeStep(c, dep);
       c.compaction.dt = dt;
+      c.compaction.adaptiveDt = false;  // the window below counts fixed steps
       const long fallWindows = static_cast<long>(std::ceil(def.scalingFall / (def.scalingSteps * dt) - 1e-9));
       c.compaction.checkInterval = def.scalingSteps;
       c.compaction.timeLimit = static_cast<double>((fallWindows + 1) * def.scalingSteps) * dt;

@@ -28,6 +28,9 @@ struct BenchDef {
   std::vector<int> scalingSizes = {2000, 4000, 8000, 16000, 30400};  ///< grains per scaling point
   std::uint64_t seed = 1;
   int threads = 1;
+  /// Both backends of msp-w10 and mpp-w10 on the adaptive time step (compaction.adaptive_dt);
+  /// the scaling series always takes fixed steps (it times a step, not a compaction).
+  bool adaptiveDt = false;
 };
 
 /// Names accepted in BenchDef::cases.

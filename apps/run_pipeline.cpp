@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <limits>
 
 #include "analysis/equilibrium.hpp"
 #include "analysis/interpenetration.hpp"
@@ -53,6 +54,20 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 
 }  // namespace
 
+double nextTimeStep(double floor, double previous, const std::vector<core::BodyState>& states,
+                    const std::vector<core::Grain>& grains, double gravity) {
+  double v = 0.0, smallest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    v = std::max(v, states[i].velocity.norm() + states[i].angularVelocity.norm() * grains[i].boundingRadius());
+    smallest = std::min(smallest, grains[i].size);
+  }
+  if (grains.empty()) return floor;
+  // v dt + g dt^2 / 2 = s, the positive root written without cancellation for small g.
+  const double s = 0.01 * smallest;
+  const double dt = 2.0 * s / (v + std::sqrt(v * v + 2.0 * gravity * s));
+  return std::max(floor, std::min(dt, kAdaptiveGrowth * previous));
+}
+
 analysis::AnalysisOptions analysisOptions() {
   analysis::AnalysisOptions o;
   o.equilibrium = false;  // the pipeline has the velocities: it writes its own block
@@ -79,7 +94,15 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
 
   CompactionOutcome out;
   out.dt = cfg.compaction.dt > 0.0 ? cfg.compaction.dt : defaultTimeStep(cfg, deposit);
-  const long maxSteps = static_cast<long>(std::ceil(cfg.compaction.timeLimit / out.dt));
+  out.dtLargest = out.dt;
+  const bool adaptive = cfg.compaction.adaptiveDt;
+  const double timeLimit = cfg.compaction.timeLimit;
+  // A fixed step runs ceil(limit / dt) steps, its time counted as steps x dt (no round-off drift);
+  // an adaptive one sums its steps until the sum reaches the limit.
+  const long maxSteps = static_cast<long>(std::ceil(timeLimit / out.dt));
+  const double gravity = system.gravity.norm();
+  double simTime = 0.0;
+  double dt = out.dt;
 
   std::optional<core::VtkSeries> frames;
   if (!vtkDir.empty()) {
@@ -96,23 +119,29 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   bool haveEq = false;
   double stepSeconds = 0.0;  // wall time inside backend->step(), without checks and frames
   double stepCpuSeconds = 0.0;  // the same in CPU time
-  while (steps < maxSteps) {
+  while (adaptive ? simTime < timeLimit : steps < maxSteps) {
+    if (adaptive && steps > 0) {
+      dt = nextTimeStep(out.dt, dt, backend->states(), deposit.grains, gravity);
+      out.dtLargest = std::max(out.dtLargest, dt);
+    }
     const Clock::time_point stepStart = Clock::now();
     const double cpuStart = processCpuSeconds();
-    backend->step(out.dt);
+    backend->step(dt);
     stepSeconds += secondsSince(stepStart);
     stepCpuSeconds += processCpuSeconds() - cpuStart;
     ++steps;
+    simTime = adaptive ? simTime + dt : static_cast<double>(steps) * out.dt;
+    const bool lastStep = adaptive ? simTime >= timeLimit : steps == maxSteps;
     const core::StepProfile& prof = backend->profile();
     for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
     totalIterations += prof.iterations;
     rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
 
     const bool frameDue = frames && cfg.compaction.frameInterval > 0 && steps % cfg.compaction.frameInterval == 0;
-    const bool checkDue = steps % cfg.compaction.checkInterval == 0 || steps == maxSteps;
+    const bool checkDue = steps % cfg.compaction.checkInterval == 0 || lastStep;
     if (!frameDue && !checkDue) continue;
     const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
-    if (frameDue) frames->addFrame(steps * out.dt, now, velocities(backend->states()));
+    if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
     if (checkDue) {
       eq = analysis::equilibrium(now, backend->states(), system.gravity, system.density, cfg.compaction.forceRatio,
                                  cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
@@ -121,14 +150,15 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       exactOnly.lattice = false;  // the lattice bounds are for the final state only (costly)
       const double overlap =
           analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
-      out.history.push_back({steps, steps * out.dt, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
+      out.history.push_back({steps, simTime, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
                              eq.maxKineticRatio, overlap, totalIterations, rowUpdates, totals[core::Phase::Solve],
                              stepSeconds, stepCpuSeconds});
       if (progress)
-        progress(static_cast<double>(steps) / maxSteps,
-                 fmt::format("{} t={:.1f} step {} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
-                             backend->name(), steps * out.dt, steps, static_cast<double>(totalIterations) / steps,
-                             eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio));
+        progress(std::min(1.0, simTime / timeLimit),
+                 fmt::format("{} t={:.1f} step {}{} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
+                             backend->name(), simTime, steps, adaptive ? fmt::format(" dt {:.1e}", dt) : "",
+                             static_cast<double>(totalIterations) / steps, eq.maxForceRatio, eq.maxMomentRatio,
+                             eq.maxKineticRatio));
       if (eq.reached) break;
     }
   }
@@ -139,12 +169,12 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     eq = analysis::equilibrium(out.packing, out.states, system.gravity, system.density, cfg.compaction.forceRatio,
                                cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
   if (frames) {
-    frames->addFrame(steps * out.dt, out.packing, velocities(out.states));
+    frames->addFrame(simTime, out.packing, velocities(out.states));
     frames->finish();
   }
   out.reached = eq.reached;
   out.equilibrium = eq;
-  out.equilibrium["simulated_time"] = steps * out.dt;
+  out.equilibrium["simulated_time"] = simTime;
   out.equilibrium["time_limit"] = cfg.compaction.timeLimit;
 
   nlohmann::json phases = nlohmann::json::object();
@@ -161,6 +191,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                 {"compaction_s", secondsSince(start)},
                 {"steps", steps},
                 {"dt", out.dt},
+                {"dt_largest", out.dtLargest},
                 {"iterations", totalIterations},
                 {"iterations_per_step", steps > 0 ? static_cast<double>(totalIterations) / steps : 0.0},
                 {"contact_updates_per_s", solveSeconds > 0.0 ? rowUpdates / solveSeconds : 0.0},

@@ -24,6 +24,21 @@ using RunProgressFn = std::function<void(double fraction, const std::string& sta
 /// dh = pile height - (grain volume / (L_x W phi_expected)), floored at one grain size.
 double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit);
 
+/// Largest growth of the adaptive time step from one step to the next [-].
+inline constexpr double kAdaptiveGrowth = 1.25;
+
+/// The next step of an adaptive compaction (compaction.adaptive_dt). SPEC 4 asks that no grain
+/// move more than d_L/100 per step; its formula meets that at the worst speed of the compaction,
+/// sqrt(2 g dh), which the pile reaches only while it falls. This step meets it at the speeds the
+/// grains have now: the largest dt with v dt + g dt^2 / 2 <= s, where v is the fastest surface
+/// point of any grain (|v| + |omega| r_bound) and s is a hundredth of the smallest grain's size
+/// (d_L/100 for a monodisperse sample; smaller grains get a proportionally smaller bound, so that
+/// nscd's alert distance, a fraction of the smaller grain of a pair, still covers an approach).
+/// Clamped to [floor, kAdaptiveGrowth x previous]: never below the fixed step, and growing only
+/// gradually, so that a grain set moving by a contact within a step is caught a step later.
+double nextTimeStep(double floor, double previous, const std::vector<core::BodyState>& states,
+                    const std::vector<core::Grain>& grains, double gravity);
+
 /// The state of a compaction at one equilibrium check.
 struct CheckPoint {
   long steps = 0;
@@ -47,7 +62,8 @@ struct CompactionOutcome {
   nlohmann::json timing;                  ///< wall_s, steps, iterations, phases, ...
   nlohmann::json backendSettings;         ///< resolved backend settings
   std::vector<CheckPoint> history;        ///< one entry per equilibrium check
-  double dt = 0.0;
+  double dt = 0.0;        ///< the fixed step, or the smallest (first) step of an adaptive run [t0]
+  double dtLargest = 0.0; ///< the largest step taken [t0] (dt unless adaptive)
   bool reached = false;
 };
 

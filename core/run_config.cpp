@@ -48,6 +48,7 @@ constexpr std::string_view kBackendNames[] = {"nscd", "bullet"};
 
 void to_json(json& j, const CompactionDef& c) {
   j = {{"dt", c.dt},
+       {"adaptive_dt", c.adaptiveDt},
        {"time_limit", c.timeLimit},
        {"check_interval", c.checkInterval},
        {"frame_interval", c.frameInterval},
@@ -59,9 +60,11 @@ void to_json(json& j, const CompactionDef& c) {
 void from_json(const json& j, CompactionDef& c) {
   constexpr std::string_view w = "compaction";
   onlyKeys(j, w,
-           {"dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio", "kinetic_ratio"});
+           {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
+            "kinetic_ratio"});
   const CompactionDef d;
   c.dt = valueOr(j, w, "dt", d.dt);
+  c.adaptiveDt = valueOr(j, w, "adaptive_dt", d.adaptiveDt);
   c.timeLimit = valueOr(j, w, "time_limit", d.timeLimit);
   c.checkInterval = valueOr(j, w, "check_interval", d.checkInterval);
   c.frameInterval = valueOr(j, w, "frame_interval", d.frameInterval);

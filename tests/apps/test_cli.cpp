@@ -202,6 +202,7 @@ TEST_CASE("the run configuration round-trips through JSON") {
   c.population.pinacoid.alphaDeg = 55.5;
   c.deposition.expectedSolidFraction = 0.58;
   c.compaction.dt = 3.3e-4;
+  c.compaction.adaptiveDt = true;
   c.compaction.timeLimit = 123.0;
   c.compaction.checkInterval = 77;
   c.compaction.frameInterval = 5;
@@ -218,13 +219,15 @@ TEST_CASE("the run configuration round-trips through JSON") {
   CHECK(d.population.shape == core::ShapeKind::Pinacoid);
   CHECK(d.compaction.dt == c.compaction.dt);
   CHECK(d.compaction.checkInterval == 77);
+  CHECK(d.compaction.adaptiveDt);
   CHECK_NOTHROW(d.validate());
   // snake_case keys, as in the packing file.
   for (const char* k :
        {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed", "threads"})
     CHECK(j.contains(k));
   for (const char* k :
-       {"dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio", "kinetic_ratio"})
+       {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
+        "kinetic_ratio"})
     CHECK(j.at("compaction").contains(k));
   // A partial document takes the defaults for the rest (sweeps override a base this way).
   const auto partial = json::parse(R"({"box": {"width": 5}, "seed": 9})").get<core::RunConfig>();
@@ -254,6 +257,8 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   CHECK_THROWS_WITH(json::parse(R"({"sed": 3})").get<core::RunConfig>(), Catch::Contains("config.sed: unknown key"));
   CHECK_THROWS_WITH(json::parse(R"({"seed": -3})").get<core::RunConfig>(), Catch::Contains("config.seed"));
   CHECK_THROWS_WITH(json::parse(R"({"threads": "two"})").get<core::RunConfig>(), Catch::Contains("config.threads"));
+  CHECK_THROWS_WITH(json::parse(R"({"compaction": {"adaptive_dt": "yes"}})").get<core::RunConfig>(),
+                    Catch::Contains("compaction.adaptive_dt"));
   CHECK_THROWS_WITH(json::parse(R"({"compaction": {"time_limt": 3}})").get<core::RunConfig>(),
                     Catch::Contains("compaction.time_limt: unknown key"));
   // core keeps its own list of backend names (it cannot see backends/): it must match the factory.
