@@ -101,7 +101,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   // an adaptive one sums its steps until the sum reaches the limit.
   const long maxSteps = static_cast<long>(std::ceil(timeLimit / out.dt));
   const double gravity = system.gravity.norm();
-  double simTime = 0.0;
+  double simTime = 0.0, lastCheckTime = 0.0;
   double dt = out.dt;
 
   std::optional<core::VtkSeries> frames;
@@ -138,11 +138,13 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
 
     const bool frameDue = frames && cfg.compaction.frameInterval > 0 && steps % cfg.compaction.frameInterval == 0;
-    const bool checkDue = steps % cfg.compaction.checkInterval == 0 || lastStep;
+    const bool checkDue = steps % cfg.compaction.checkInterval == 0 || lastStep ||
+                          (adaptive && simTime - lastCheckTime >= kAdaptiveCheckSpacing);
     if (!frameDue && !checkDue) continue;
     const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
     if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
     if (checkDue) {
+      lastCheckTime = simTime;
       eq = analysis::equilibrium(now, backend->states(), system.gravity, system.density, cfg.compaction.forceRatio,
                                  cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
       haveEq = true;

@@ -84,6 +84,10 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
   if (backend == "nscd") REQUIRE(out.reached);
   // The step grew well past the SPEC 4 step once the pile stopped falling.
   CHECK(out.dtLargest > 10.0 * out.dt);
+  // ... and equilibrium was still checked at least every kAdaptiveCheckSpacing of simulated time.
+  REQUIRE(out.history.size() > 2);
+  for (std::size_t k = 1; k < out.history.size(); ++k)
+    CHECK(out.history[k].time - out.history[k - 1].time <= app::kAdaptiveCheckSpacing + out.dtLargest);
   // Frictionless side walls: the floor carries the whole weight (rho = g = 1), through forces
   // computed from the impulses of a step of the last step's own length.
   double weight = 0.0;
