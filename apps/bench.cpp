@@ -52,7 +52,8 @@ nlohmann::json machineInfo() {
     }
   // The kernel's transparent huge page mode (the bracketed word) and glibc's tunables: with
   // "madvise", GLIBC_TUNABLES=glibc.malloc.hugetlb=1 puts the solver's arrays on 2 MiB pages,
-  // which changes the cost of an iteration at 30,000 grains (docs/performance.md).
+  // which may change the cost of an iteration at 30,000 grains (about 5% in a micro-benchmark,
+  // docs/performance.md).
   std::string thp;
   std::ifstream thpIn("/sys/kernel/mm/transparent_hugepage/enabled");
   if (std::getline(thpIn, thp)) {

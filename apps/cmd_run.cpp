@@ -69,8 +69,9 @@ void registerRun(CLI::App& app) {
       ->check(nonNegativeNumber())
       ->capture_default_str();
   sub->add_flag("--adaptive-dt", st->cfg.compaction.adaptiveDt,
-                "Adaptive time step: the largest that keeps every grain within d/100 of motion per step at "
-                "its current speed, never below --dt (or the SPEC 4 step), growing at most 1.25x per step; "
+                "Adaptive time step: the largest that keeps every grain within a hundredth of the smallest "
+                "grain's size of motion per step at its current speed, never below --dt (or the SPEC 4 "
+                "step), growing at most 1.25x per step; "
                 "equilibrium is then also checked every 0.5 t0");
   sub->add_option("--time-limit", st->cfg.compaction.timeLimit,
                   "Simulated time after which the run stops, reported as not equilibrated [t0]")

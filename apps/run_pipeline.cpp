@@ -56,13 +56,13 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 
 double nextTimeStep(double floor, double previous, const std::vector<core::BodyState>& states,
                     const std::vector<core::Grain>& grains, double gravity) {
+  if (grains.empty()) return floor;
   double v = 0.0, smallest = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < grains.size(); ++i) {
     v = std::max(v, states[i].velocity.norm() + states[i].angularVelocity.norm() * grains[i].boundingRadius());
     smallest = std::min(smallest, grains[i].size);
   }
-  if (grains.empty()) return floor;
-  // v dt + g dt^2 / 2 = s, the positive root written without cancellation for small g.
+  // v dt + g dt^2 / 2 = s: the positive root, in the form that does not cancel when v^2 >> 2 g s.
   const double s = 0.01 * smallest;
   const double dt = 2.0 * s / (v + std::sqrt(v * v + 2.0 * gravity * s));
   return std::max(floor, std::min(dt, kAdaptiveGrowth * previous));

@@ -14,9 +14,10 @@ namespace confpack::core {
 /// Compaction under gravity (SPEC 4.3) and its stopping rule (SPEC 6.1).
 struct CompactionDef {
   double dt = 0.0;                  ///< time step [t0]; 0 = SPEC 4 rule from the deposit's drop
-  /// Adaptive time step: each step is the largest that keeps every grain within SPEC 4's d_L/100
-  /// of motion at its current speed (gravity included), never below `dt` (or the SPEC 4 step) and
-  /// at most kAdaptiveGrowth times the step before (apps/run_pipeline.hpp, nextTimeStep).
+  /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
+  /// the smallest grain's size of motion (SPEC 4's d_L/100 for a monodisperse sample) at its
+  /// current speed, gravity included, never below `dt` (or the SPEC 4 step) and at most
+  /// kAdaptiveGrowth times the step before (apps/run_pipeline.hpp, nextTimeStep).
   bool adaptiveDt = false;
   double timeLimit = 400.0;         ///< simulated time after which the run stops unequilibrated [t0]
   int checkInterval = 200;          ///< steps between equilibrium checks [-]

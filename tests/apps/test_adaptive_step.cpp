@@ -80,7 +80,8 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
   REQUIRE(dep.grains.size() > 20);
   const app::CompactionOutcome out = app::compact(cfg, dep);
   INFO(out.equilibrium.dump());
-  // Bullet's contacts are compliant: it may not get below SPEC 6.1's bounds, but it must end at rest.
+  // Bullet's sequential impulses do not meet SPEC 6.1's force bound (README, Known limitations):
+  // only its floor reaction is checked, to its own accuracy.
   if (backend == "nscd") REQUIRE(out.reached);
   // The step grew well past the SPEC 4 step once the pile stopped falling.
   CHECK(out.dtLargest > 10.0 * out.dt);
