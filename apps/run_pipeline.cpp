@@ -54,18 +54,25 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 
 }  // namespace
 
-double nextTimeStep(double floor, double previous, const std::vector<core::BodyState>& states,
-                    const std::vector<core::Grain>& grains, double gravity) {
-  if (grains.empty()) return floor;
-  double v = 0.0, smallest = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < grains.size(); ++i) {
-    v = std::max(v, states[i].velocity.norm() + states[i].angularVelocity.norm() * grains[i].boundingRadius());
-    smallest = std::min(smallest, grains[i].size);
+AdaptiveTimeStep::AdaptiveTimeStep(const std::vector<core::Grain>& grains, double gravity, double floor)
+    : gravity_(gravity), floor_(floor) {
+  radius_.reserve(grains.size());
+  double smallest = std::numeric_limits<double>::infinity();
+  for (const core::Grain& g : grains) {
+    radius_.push_back(g.boundingRadius());
+    smallest = std::min(smallest, g.size);
   }
+  motion_ = 0.01 * smallest;
+}
+
+double AdaptiveTimeStep::next(double previous, const std::vector<core::BodyState>& states) const {
+  if (radius_.empty()) return floor_;
+  double v = 0.0;
+  for (std::size_t i = 0; i < radius_.size(); ++i)
+    v = std::max(v, states[i].velocity.norm() + states[i].angularVelocity.norm() * radius_[i]);
   // v dt + g dt^2 / 2 = s: the positive root, in the form that does not cancel when v^2 >> 2 g s.
-  const double s = 0.01 * smallest;
-  const double dt = 2.0 * s / (v + std::sqrt(v * v + 2.0 * gravity * s));
-  return std::max(floor, std::min(dt, kAdaptiveGrowth * previous));
+  const double dt = 2.0 * motion_ / (v + std::sqrt(v * v + 2.0 * gravity_ * motion_));
+  return std::max(floor_, std::min(dt, kAdaptiveGrowth * previous));
 }
 
 analysis::AnalysisOptions analysisOptions() {
@@ -100,7 +107,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   // A fixed step runs ceil(limit / dt) steps, its time counted as steps x dt (no round-off drift);
   // an adaptive one sums its steps until the sum reaches the limit.
   const long maxSteps = static_cast<long>(std::ceil(timeLimit / out.dt));
-  const double gravity = system.gravity.norm();
+  const AdaptiveTimeStep adaptiveStep(deposit.grains, system.gravity.norm(), out.dt);
   double simTime = 0.0, lastCheckTime = 0.0;
   double dt = out.dt;
 
@@ -121,7 +128,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   double stepCpuSeconds = 0.0;  // the same in CPU time
   while (adaptive ? simTime < timeLimit : steps < maxSteps) {
     if (adaptive && steps > 0) {
-      dt = nextTimeStep(out.dt, dt, backend->states(), deposit.grains, gravity);
+      dt = adaptiveStep.next(dt, backend->states());
       out.dtLargest = std::max(out.dtLargest, dt);
     }
     const Clock::time_point stepStart = Clock::now();

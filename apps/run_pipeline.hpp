@@ -33,8 +33,8 @@ inline constexpr double kAdaptiveGrowth = 1.25;
 /// (200 steps of 2.3e-3 t0 on msp-w10).
 inline constexpr double kAdaptiveCheckSpacing = 0.5;
 
-/// The next step of an adaptive compaction (compaction.adaptive_dt). SPEC 4 asks that no grain
-/// move more than d_L/100 per step; its formula meets that at the worst speed of the compaction,
+/// The step of an adaptive compaction (compaction.adaptive_dt). SPEC 4 asks that no grain move
+/// more than d_L/100 per step; its formula meets that at the worst speed of the compaction,
 /// sqrt(2 g dh), which the pile reaches only while it falls. This step meets it at the speeds the
 /// grains have now: the largest dt with v dt + g dt^2 / 2 <= s, where v is the fastest surface
 /// point of any grain (|v| + |omega| r_bound) and s is a hundredth of the smallest grain's size
@@ -42,8 +42,19 @@ inline constexpr double kAdaptiveCheckSpacing = 0.5;
 /// nscd's alert distance, a fraction of the smaller grain of a pair, still covers an approach).
 /// Clamped to [floor, kAdaptiveGrowth x previous]: never below the fixed step, and growing only
 /// gradually, so that a grain set moving by a contact within a step is caught a step later.
-double nextTimeStep(double floor, double previous, const std::vector<core::BodyState>& states,
-                    const std::vector<core::Grain>& grains, double gravity);
+/// The grains' radii and the bound s are fixed for a compaction: they are read once, here.
+class AdaptiveTimeStep {
+ public:
+  AdaptiveTimeStep(const std::vector<core::Grain>& grains, double gravity, double floor);
+  /// The step after one of length `previous`, from the grains' states now.
+  double next(double previous, const std::vector<core::BodyState>& states) const;
+
+ private:
+  std::vector<double> radius_;  ///< bounding radius of each grain [d_L]
+  double motion_ = 0.0;         ///< s: the largest motion per step [d_L]
+  double gravity_ = 0.0;        ///< |g|
+  double floor_ = 0.0;          ///< the fixed step [t0]
+};
 
 /// The state of a compaction at one equilibrium check.
 struct CheckPoint {

@@ -17,7 +17,7 @@ struct CompactionDef {
   /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
   /// the smallest grain's size of motion (SPEC 4's d_L/100 for a monodisperse sample) at its
   /// current speed, gravity included, never below `dt` (or the SPEC 4 step) and at most
-  /// kAdaptiveGrowth times the step before (apps/run_pipeline.hpp, nextTimeStep).
+  /// kAdaptiveGrowth times the step before (apps/run_pipeline.hpp, AdaptiveTimeStep).
   bool adaptiveDt = false;
   double timeLimit = 400.0;         ///< simulated time after which the run stops unequilibrated [t0]
   int checkInterval = 200;          ///< steps between equilibrium checks [-]

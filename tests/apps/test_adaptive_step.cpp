@@ -11,16 +11,13 @@
 #include "core/box.hpp"
 #include "core/deposition.hpp"
 #include "core/grain.hpp"
+#include "tests/support/systems.hpp"
 
 using namespace confpack;
 
 namespace {
 
-core::Grain sphereOf(double d) {
-  core::Grain g;
-  g.size = d;
-  return g;
-}
+core::Grain sphereOf(double d) { return testing::sphere(d, core::Vec3::Zero()); }
 
 core::BodyState moving(const core::Vec3& v, const core::Vec3& omega = core::Vec3::Zero()) {
   core::BodyState s;
@@ -37,30 +34,31 @@ TEST_CASE("adaptive step: v dt + g dt^2 / 2 equals a hundredth of the smallest g
 
   SECTION("grains at rest: the free fall from rest covers d/100, dt = sqrt(2 s / g)") {
     const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    const double dt = app::nextTimeStep(floor, previous, rest, mono, g);
+    const double dt = app::AdaptiveTimeStep(mono, g, floor).next(previous, rest);
     CHECK(dt == Approx(std::sqrt(0.02)).epsilon(1e-12));
   }
   SECTION("the fastest grain sets the step: v = 0.5 gives dt = sqrt(v^2 + 2 g s) - v") {
     const std::vector<core::BodyState> states = {moving({0.1, 0, 0}), moving({0, -0.3, -0.4}), moving({0, 0, 0})};
-    const double dt = app::nextTimeStep(floor, previous, states, mono, g);
+    const double dt = app::AdaptiveTimeStep(mono, g, floor).next(previous, states);
     CHECK(dt == Approx(std::sqrt(0.25 + 0.02) - 0.5).epsilon(1e-12));
     CHECK(0.5 * dt + 0.5 * g * dt * dt == Approx(0.01).epsilon(1e-12));
   }
   SECTION("a spinning grain counts with the speed of its surface, omega r") {
     const std::vector<core::BodyState> states = {moving(core::Vec3::Zero(), {0, 0, 1.0}), moving(core::Vec3::Zero()),
                                                  moving(core::Vec3::Zero())};
-    CHECK(app::nextTimeStep(floor, previous, states, mono, g) == Approx(std::sqrt(0.25 + 0.02) - 0.5).epsilon(1e-12));
+    CHECK(app::AdaptiveTimeStep(mono, g, floor).next(previous, states) ==
+          Approx(std::sqrt(0.25 + 0.02) - 0.5).epsilon(1e-12));
   }
   SECTION("a bidisperse sample is bounded by its small grains: s = d_S / 100") {
     const std::vector<core::Grain> bi = {sphereOf(1.0), sphereOf(0.5), sphereOf(1.0)};
     const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    CHECK(app::nextTimeStep(floor, previous, rest, bi, g) == Approx(std::sqrt(0.01)).epsilon(1e-12));
+    CHECK(app::AdaptiveTimeStep(bi, g, floor).next(previous, rest) == Approx(std::sqrt(0.01)).epsilon(1e-12));
   }
   SECTION("clamped: never below the fixed step, never more than kAdaptiveGrowth x the step before") {
     const std::vector<core::BodyState> fast(3, moving({0, 0, -10.0}));
-    CHECK(app::nextTimeStep(2e-3, previous, fast, mono, g) == 2e-3);  // the rule alone gives ~1e-3
+    CHECK(app::AdaptiveTimeStep(mono, g, 2e-3).next(previous, fast) == 2e-3);  // the rule alone gives ~1e-3
     const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    CHECK(app::nextTimeStep(floor, 0.01, rest, mono, g) == Approx(app::kAdaptiveGrowth * 0.01));
+    CHECK(app::AdaptiveTimeStep(mono, g, floor).next(0.01, rest) == Approx(app::kAdaptiveGrowth * 0.01));
   }
 }
 
