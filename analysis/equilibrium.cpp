@@ -93,6 +93,7 @@ EquilibriumReport equilibrium(const core::Packing& packing, const std::vector<co
     }
     r.maxMomentRatio = std::max(r.maxMomentRatio, mr);
     r.maxKineticRatio = std::max(r.maxKineticRatio, kr);
+    r.meanKineticRatio += kr / static_cast<double>(n);
   }
   r.reached = r.pressure > 0.0 && r.maxForceRatio < forceRatio && r.maxMomentRatio < momentRatio &&
               r.maxKineticRatio < kineticRatio;
@@ -105,6 +106,7 @@ void to_json(nlohmann::json& j, const EquilibriumReport& r) {
        {"max_force_ratio", finite(r.maxForceRatio)},
        {"max_moment_ratio", finite(r.maxMomentRatio)},
        {"max_kinetic_ratio", finite(r.maxKineticRatio)},
+       {"mean_kinetic_ratio", finite(r.meanKineticRatio)},
        {"pressure", r.pressure},
        {"worst_grain", r.worstGrain},
        {"pressure_from_bulk", r.pressureFromBulk}};

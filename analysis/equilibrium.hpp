@@ -33,6 +33,7 @@ struct EquilibriumReport {
   double maxForceRatio = 0.0;    ///< max_i |sum F_i| / (d_i^2 P) [-]
   double maxMomentRatio = 0.0;   ///< max_i |sum M_i| / (d_i^3 P) [-]
   double maxKineticRatio = 0.0;  ///< max_i E_k,i / (d_i^3 P) [-]
+  double meanKineticRatio = 0.0; ///< the mean over grains of E_k,i / (d_i^3 P) [-]
   double pressure = 0.0;         ///< P = tr(sigma)/3 [rho g d_L]
   int worstGrain = -1;           ///< grain with the largest force ratio (-1: no grains)
   bool pressureFromBulk = true;  ///< false: the fallback over the whole pile was used

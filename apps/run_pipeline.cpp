@@ -12,6 +12,7 @@
 #include "analysis/interpenetration.hpp"
 #include "backends/backend_factory.hpp"
 #include "core/packing_io.hpp"
+#include "core/quasi_static_finisher.hpp"
 #include "core/vtk_writer.hpp"
 
 namespace confpack::app {
@@ -57,12 +58,8 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 AdaptiveTimeStep::AdaptiveTimeStep(const std::vector<core::Grain>& grains, double gravity, double floor)
     : gravity_(gravity), floor_(floor) {
   radius_.reserve(grains.size());
-  double smallest = std::numeric_limits<double>::infinity();
-  for (const core::Grain& g : grains) {
-    radius_.push_back(g.boundingRadius());
-    smallest = std::min(smallest, g.size);
-  }
-  motion_ = 0.01 * smallest;
+  for (const core::Grain& g : grains) radius_.push_back(g.boundingRadius());
+  motion_ = 0.01 * core::smallestSize(grains);
 }
 
 double AdaptiveTimeStep::next(double previous, const std::vector<core::BodyState>& states) const {
@@ -98,12 +95,16 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   nlohmann::json options = cfg.backendOptions.is_null() ? nlohmann::json::object() : cfg.backendOptions;
   if (options.is_object() && !options.contains("threads")) options["threads"] = cfg.threads;
   auto backend = backends::makeBackend(cfg.backend, system, options);
+  const core::CompactionDef& def = cfg.compaction;
 
   CompactionOutcome out;
-  out.dt = cfg.compaction.dt > 0.0 ? cfg.compaction.dt : defaultTimeStep(cfg, deposit);
+  out.dt = def.dt > 0.0 ? def.dt : defaultTimeStep(cfg, deposit);
   out.dtLargest = out.dt;
-  const bool adaptive = cfg.compaction.adaptiveDt;
-  const double timeLimit = cfg.compaction.timeLimit;
+  const bool adaptive = def.adaptiveDt;
+  const double timeLimit = def.timeLimit;
+  // Bullet has no finisher: its runs stay dynamic, and result.json says which protocol ran.
+  const bool finisher = def.protocol == core::Protocol::QuasiStatic && backend->hasQuasiStaticStep();
+  out.protocol = finisher ? core::Protocol::QuasiStatic : core::Protocol::Dynamic;
   // A fixed step runs ceil(limit / dt) steps, its time counted as steps x dt (no round-off drift);
   // an adaptive one sums its steps until the sum reaches the limit.
   const long maxSteps = static_cast<long>(std::ceil(timeLimit / out.dt));
@@ -124,67 +125,106 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   double rowUpdates = 0.0;  // contact rows x sweeps, for contact updates per second
   analysis::EquilibriumReport eq;
   bool haveEq = false;
-  double stepSeconds = 0.0;  // wall time inside backend->step(), without checks and frames
+  double stepSeconds = 0.0;  // wall time inside the backend's steps, without checks and frames
   double stepCpuSeconds = 0.0;  // the same in CPU time
+  // One step of either stage: time it and add its profile to the totals.
+  auto timed = [&](auto&& stepFn) {
+    const Clock::time_point stepStart = Clock::now();
+    const double cpuStart = processCpuSeconds();
+    stepFn();
+    stepSeconds += secondsSince(stepStart);
+    stepCpuSeconds += processCpuSeconds() - cpuStart;
+    ++steps;
+    const core::StepProfile& prof = backend->profile();
+    for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
+    totalIterations += prof.iterations;
+    rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
+  };
+  // The SPEC 6.1 check of the state now, recorded in the history and reported as progress.
+  auto check = [&](const core::Packing& now, double fraction, const std::string& stage) {
+    eq = analysis::equilibrium(now, backend->states(), system.gravity, system.density, def.forceRatio,
+                               def.momentRatio, def.kineticRatio);
+    haveEq = true;
+    analysis::InterpenetrationDef exactOnly;
+    exactOnly.lattice = false;  // the lattice bounds are for the final state only (costly)
+    const double overlap = analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
+    out.history.push_back({steps, simTime, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
+                           eq.maxKineticRatio, overlap, totalIterations, rowUpdates, totals[core::Phase::Solve],
+                           stepSeconds, stepCpuSeconds});
+    if (progress)
+      progress(fraction, fmt::format("{} {} step {} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
+                                     backend->name(), stage, steps, static_cast<double>(totalIterations) / steps,
+                                     eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio));
+  };
+
+  // Stage 1: time steps, until equilibrium, the time limit, or (quasi-static protocol) the end of
+  // the fall.
+  bool handOver = false;
   while (adaptive ? simTime < timeLimit : steps < maxSteps) {
     if (adaptive && steps > 0) {
       dt = adaptiveStep.next(dt, backend->states());
       out.dtLargest = std::max(out.dtLargest, dt);
     }
-    const Clock::time_point stepStart = Clock::now();
-    const double cpuStart = processCpuSeconds();
-    backend->step(dt);
-    stepSeconds += secondsSince(stepStart);
-    stepCpuSeconds += processCpuSeconds() - cpuStart;
-    ++steps;
+    timed([&] { backend->step(dt); });
     simTime = adaptive ? simTime + dt : static_cast<double>(steps) * out.dt;
     const bool lastStep = adaptive ? simTime >= timeLimit : steps == maxSteps;
-    const core::StepProfile& prof = backend->profile();
-    for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
-    totalIterations += prof.iterations;
-    rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
 
-    const bool frameDue = frames && cfg.compaction.frameInterval > 0 && steps % cfg.compaction.frameInterval == 0;
-    const bool checkDue = steps % cfg.compaction.checkInterval == 0 || lastStep ||
+    const bool frameDue = frames && def.frameInterval > 0 && steps % def.frameInterval == 0;
+    const bool checkDue = steps % def.checkInterval == 0 || lastStep ||
                           (adaptive && simTime - lastCheckTime >= kAdaptiveCheckSpacing);
     if (!frameDue && !checkDue) continue;
     const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
     if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
     if (checkDue) {
       lastCheckTime = simTime;
-      eq = analysis::equilibrium(now, backend->states(), system.gravity, system.density, cfg.compaction.forceRatio,
-                                 cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
-      haveEq = true;
-      analysis::InterpenetrationDef exactOnly;
-      exactOnly.lattice = false;  // the lattice bounds are for the final state only (costly)
-      const double overlap =
-          analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
-      out.history.push_back({steps, simTime, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
-                             eq.maxKineticRatio, overlap, totalIterations, rowUpdates, totals[core::Phase::Solve],
-                             stepSeconds, stepCpuSeconds});
-      if (progress)
-        progress(std::min(1.0, simTime / timeLimit),
-                 fmt::format("{} t={:.1f} step {}{} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
-                             backend->name(), simTime, steps, adaptive ? fmt::format(" dt {:.1e}", dt) : "",
-                             static_cast<double>(totalIterations) / steps, eq.maxForceRatio, eq.maxMomentRatio,
-                             eq.maxKineticRatio));
+      check(now, std::min(1.0, simTime / timeLimit),
+            fmt::format("t={:.1f}{}", simTime, adaptive ? fmt::format(" dt {:.1e}", dt) : ""));
       if (eq.reached) break;
+      if (finisher && eq.meanKineticRatio < def.switchKineticRatio) {
+        handOver = true;
+        break;
+      }
+    }
+  }
+  const long dynamicSteps = steps;
+  const long dynamicIterations = totalIterations;
+  const double dynamicWall = secondsSince(start);
+
+  // Stage 2 (quasi-static protocol): the finisher's steps from rest (core/quasi_static_finisher.hpp).
+  // SPEC 6.1 is checked after each step that moved nothing more than the settle tolerance (and
+  // every 20 steps, for the progress line); the finisher stops once it holds there.
+  core::QuasiStaticFinisher finish(def, core::smallestSize(deposit.grains), dt);
+  if (handOver) {
+    for (long k = 1; k <= def.finisherMaxSteps; ++k) {
+      timed([&] { finish.step(*backend); });
+      const bool last = k == def.finisherMaxSteps;
+      const bool frameDue = frames && def.frameInterval > 0 && steps % def.frameInterval == 0;
+      if (!frameDue && !last && !finish.settled() && k % 20 != 0) continue;
+      const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
+      if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
+      check(now, static_cast<double>(k) / def.finisherMaxSteps,
+            fmt::format("finisher {} h {:.1e} moved {:.1e}", k, finish.lastStepLength(),
+                        finish.lastMove().maxDisplacement));
+      if (eq.reached && finish.settled()) break;
     }
   }
 
   out.packing = snapshot(cfg.box, deposit.grains, *backend);
   out.states = backend->states();
   if (!haveEq)
-    eq = analysis::equilibrium(out.packing, out.states, system.gravity, system.density, cfg.compaction.forceRatio,
-                               cfg.compaction.momentRatio, cfg.compaction.kineticRatio);
+    eq = analysis::equilibrium(out.packing, out.states, system.gravity, system.density, def.forceRatio,
+                               def.momentRatio, def.kineticRatio);
   if (frames) {
     frames->addFrame(simTime, out.packing, velocities(out.states));
     frames->finish();
   }
-  out.reached = eq.reached;
+  // With the finisher, equilibrium also needs its last step to have moved (almost) nothing: its
+  // steps are so long that the force and kinetic ratios of a step say little about motion.
+  out.reached = eq.reached && (!handOver || finish.settled());
   out.equilibrium = eq;
+  out.equilibrium["reached"] = out.reached;
   out.equilibrium["simulated_time"] = simTime;
-  out.equilibrium["time_limit"] = cfg.compaction.timeLimit;
+  out.equilibrium["time_limit"] = def.timeLimit;
 
   nlohmann::json phases = nlohmann::json::object();
   for (int k = 0; k < static_cast<int>(core::Phase::Count); ++k)
@@ -196,8 +236,22 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                        {"max_force_ratio", c.maxForceRatio}, {"max_moment_ratio", c.maxMomentRatio},
                        {"max_kinetic_ratio", c.maxKineticRatio}, {"interpenetration_percent", c.interpenetrationPercent},
                        {"iterations", c.iterations}});
+  nlohmann::json stages = {{"dynamic",
+                            {{"steps", dynamicSteps},
+                             {"simulated_time", simTime},
+                             {"iterations", dynamicIterations},
+                             {"wall_s", dynamicWall}}}};
+  if (handOver)
+    stages["quasi_static"] = {{"steps", finish.steps()},
+                              {"clipped_steps", finish.clippedSteps()},
+                              {"iterations", totalIterations - dynamicIterations},
+                              {"wall_s", secondsSince(start) - dynamicWall},
+                              {"last_step", finish.lastStepLength()},
+                              {"last_displacement", finish.lastMove().maxDisplacement}};
   out.timing = {{"wall_s", secondsSince(start)},
                 {"compaction_s", secondsSince(start)},
+                {"protocol", core::toString(out.protocol)},
+                {"stages", stages},
                 {"steps", steps},
                 {"dt", out.dt},
                 {"dt_largest", out.dtLargest},

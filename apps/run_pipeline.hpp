@@ -81,6 +81,9 @@ struct CompactionOutcome {
   std::vector<CheckPoint> history;        ///< one entry per equilibrium check
   double dt = 0.0;        ///< the fixed step, or the smallest (first) step of an adaptive run [t0]
   double dtLargest = 0.0; ///< the largest step taken [t0] (dt unless adaptive)
+  /// The protocol that ran: the configured one, except that a backend without a finisher
+  /// (Bullet) always runs the dynamic protocol.
+  core::Protocol protocol = core::Protocol::Dynamic;
   bool reached = false;
 };
 

@@ -1,5 +1,8 @@
 #include "core/backend.hpp"
 
+#include <stdexcept>
+#include <string>
+
 namespace confpack::core {
 
 std::string_view toString(Phase p) {
@@ -14,6 +17,10 @@ std::string_view toString(Phase p) {
     case Phase::Count: break;
   }
   return "unknown";
+}
+
+QuasiStaticMove ContactBackend::quasiStaticStep(double, double) {
+  throw std::logic_error(std::string(name()) + ": no quasi-static step");
 }
 
 }  // namespace confpack::core

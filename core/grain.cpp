@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -54,6 +56,12 @@ double totalVolume(const std::vector<Grain>& grains) {
   double v = 0.0;
   for (const Grain& g : grains) v += g.volume();
   return v;
+}
+
+double smallestSize(const std::vector<Grain>& grains) {
+  double s = std::numeric_limits<double>::infinity();
+  for (const Grain& g : grains) s = std::min(s, g.size);
+  return s;
 }
 
 }  // namespace confpack::core

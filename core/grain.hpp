@@ -35,5 +35,7 @@ struct Grain {
 
 /// Solid material volume of all grains.
 double totalVolume(const std::vector<Grain>& grains);
+/// The smallest grain size (diameter or pinacoid length) [d_L]; +infinity for no grains.
+double smallestSize(const std::vector<Grain>& grains);
 
 }  // namespace confpack::core

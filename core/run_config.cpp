@@ -46,6 +46,8 @@ constexpr std::string_view kBackendNames[] = {"nscd", "bullet"};
 
 }  // namespace
 
+std::string toString(Protocol p) { return p == Protocol::QuasiStatic ? "quasi-static" : "dynamic"; }
+
 void to_json(json& j, const CompactionDef& c) {
   j = {{"dt", c.dt},
        {"adaptive_dt", c.adaptiveDt},
@@ -54,14 +56,21 @@ void to_json(json& j, const CompactionDef& c) {
        {"frame_interval", c.frameInterval},
        {"force_ratio", c.forceRatio},
        {"moment_ratio", c.momentRatio},
-       {"kinetic_ratio", c.kineticRatio}};
+       {"kinetic_ratio", c.kineticRatio},
+       {"protocol", toString(c.protocol)},
+       {"switch_kinetic_ratio", c.switchKineticRatio},
+       {"trust_radius", c.trustRadius},
+       {"settle_tolerance", c.settleTolerance},
+       {"finisher_max_step", c.finisherMaxStep},
+       {"finisher_max_steps", c.finisherMaxSteps}};
 }
 
 void from_json(const json& j, CompactionDef& c) {
   constexpr std::string_view w = "compaction";
   onlyKeys(j, w,
            {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
-            "kinetic_ratio"});
+            "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance",
+            "finisher_max_step", "finisher_max_steps"});
   const CompactionDef d;
   c.dt = valueOr(j, w, "dt", d.dt);
   c.adaptiveDt = valueOr(j, w, "adaptive_dt", d.adaptiveDt);
@@ -71,6 +80,19 @@ void from_json(const json& j, CompactionDef& c) {
   c.forceRatio = valueOr(j, w, "force_ratio", d.forceRatio);
   c.momentRatio = valueOr(j, w, "moment_ratio", d.momentRatio);
   c.kineticRatio = valueOr(j, w, "kinetic_ratio", d.kineticRatio);
+  const std::string protocol = valueOr(j, w, "protocol", toString(d.protocol));
+  if (protocol == "dynamic")
+    c.protocol = Protocol::Dynamic;
+  else if (protocol == "quasi-static")
+    c.protocol = Protocol::QuasiStatic;
+  else
+    throw std::invalid_argument(
+        fmt::format("{}.protocol: unknown protocol '{}' (expected dynamic or quasi-static)", w, protocol));
+  c.switchKineticRatio = valueOr(j, w, "switch_kinetic_ratio", d.switchKineticRatio);
+  c.trustRadius = valueOr(j, w, "trust_radius", d.trustRadius);
+  c.settleTolerance = valueOr(j, w, "settle_tolerance", d.settleTolerance);
+  c.finisherMaxStep = valueOr(j, w, "finisher_max_step", d.finisherMaxStep);
+  c.finisherMaxSteps = valueOr(j, w, "finisher_max_steps", d.finisherMaxSteps);
 }
 
 void to_json(json& j, const RunConfig& c) {
@@ -138,6 +160,16 @@ void RunConfig::validate() const {
   positive(k.forceRatio, "force_ratio");
   positive(k.momentRatio, "moment_ratio");
   positive(k.kineticRatio, "kinetic_ratio");
+  positive(k.switchKineticRatio, "switch_kinetic_ratio");
+  positive(k.trustRadius, "trust_radius");
+  positive(k.settleTolerance, "settle_tolerance");
+  positive(k.finisherMaxStep, "finisher_max_step");
+  if (k.trustRadius > 0.5)
+    throw std::invalid_argument(
+        fmt::format("compaction.trust_radius: must be at most 0.5 of the smallest grain (got {})", k.trustRadius));
+  if (k.finisherMaxSteps < 1)
+    throw std::invalid_argument(
+        fmt::format("compaction.finisher_max_steps: must be >= 1 (got {})", k.finisherMaxSteps));
   if (k.checkInterval < 1)
     throw std::invalid_argument(fmt::format("compaction.check_interval: must be >= 1 (got {})", k.checkInterval));
   if (k.frameInterval < 0)

@@ -11,7 +11,15 @@
 
 namespace confpack::core {
 
-/// Compaction under gravity (SPEC 4.3) and its stopping rule (SPEC 6.1).
+/// How a compaction ends (docs/model.md, "Protocols").
+enum class Protocol {
+  Dynamic,      ///< Moreau-Jean (or Bullet) time steps until equilibrium or the time limit
+  QuasiStatic,  ///< the same until the fall is over, then the quasi-static finisher (nscd only)
+};
+
+std::string toString(Protocol p);  ///< "dynamic", "quasi-static"
+
+/// Compaction under gravity and its stopping rule (docs/model.md).
 struct CompactionDef {
   double dt = 0.0;                  ///< time step [t0]; 0 = SPEC 4 rule from the deposit's drop
   /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
@@ -25,6 +33,26 @@ struct CompactionDef {
   double forceRatio = 1e-4;         ///< equilibrium: |sum F| < forceRatio d^2 P [-]
   double momentRatio = 1e-4;        ///< equilibrium: |sum M| < momentRatio d^3 P [-]
   double kineticRatio = 1e-8;       ///< equilibrium: E_k < kineticRatio d^3 P [-]
+  Protocol protocol = Protocol::Dynamic;
+  /// Quasi-static protocol: the dynamic steps hand over to the finisher at the first equilibrium
+  /// check whose mean kinetic ratio E_k / (d^3 P) over the grains is below this [-]. 1e-4 is a
+  /// grain of the bulk moving at about a hundredth of sqrt(g d): the fall is over, the pile
+  /// creeps. The mean, not the largest: a lone grain sliding on the frictionless floor keeps the
+  /// largest ratio up for ever (docs/model.md).
+  double switchKineticRatio = 1e-4;
+  /// Quasi-static protocol: the largest motion of a grain's surface in one finisher step, as a
+  /// fraction of the smallest grain's size [-]. A third of nscd's default alert distance (0.03):
+  /// two grains closing on each other cannot cross the alert band unseen in one step.
+  double trustRadius = 0.01;
+  /// Quasi-static protocol: the finisher has converged when SPEC 6.1 holds and its last step moved
+  /// no grain's surface more than this fraction of the smallest grain's size [-].
+  double settleTolerance = 1e-6;
+  /// Quasi-static protocol: the finisher's longest step [t0]. Its solves lose accuracy like
+  /// h^2 (v_free = h g against dq / h); at 1 t0 a displacement of 1e-6 d already means a force
+  /// imbalance a thousand times below the equilibrium criterion.
+  double finisherMaxStep = 1.0;
+  /// Quasi-static protocol: finisher steps after which the run stops unequilibrated [-].
+  int finisherMaxSteps = 3000;
 };
 
 void to_json(nlohmann::json& j, const CompactionDef& c);

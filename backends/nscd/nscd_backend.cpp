@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "backends/nscd/broad_phase.hpp"
@@ -18,6 +19,9 @@ using core::Quat;
 using core::Vec3;
 
 namespace {
+
+/// MPRGP's relative residual for a finisher step after one the trust radius cut (quasiStaticStep).
+constexpr double kRoughTolerance = 1e-6;
 
 /// Exact rotation of q by the angle |w| h about w (then renormalised against round-off).
 Quat rotate(const Quat& q, const Vec3& w, double h) {
@@ -80,7 +84,14 @@ class NscdBackend final : public core::ContactBackend {
       position_.push_back(box_.wrap(g.position));
       orientation_.push_back(g.orientation.normalized());
       reach_.push_back(narrow_.reach(static_cast<int>(reach_.size())));
+      radius_.push_back(g.boundingRadius());
     }
+    // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
+    // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
+    finisherSettings_ = settings_;
+    finisherSettings_.theta = 1.0;
+    finisherSettings_.gapCorrection = 1.0;
+    finisherSettings_.maxCorrectionVelocity = std::numeric_limits<double>::infinity();
     positionMid_ = position_;
     orientationMid_ = orientation_;
     states_.resize(n_);
@@ -112,13 +123,67 @@ class NscdBackend final : public core::ContactBackend {
     profile_.residual = solver_.residual();
     profile_.contactPoints = solver_.rowCount();
     profile_[Phase::Solve] += clock.lap();
-    correct(dt);
+    correct(dt, settings_.theta);
     profile_[Phase::Integrate] += clock.lap();
-    storeImpulses(dt);
+    storeImpulses(dt, settings_.theta);
     profile_[Phase::StoreImpulses] += clock.lap();
   }
 
- private:
+  bool hasQuasiStaticStep() const override { return true; }
+
+  // The Moreau-Jean step from rest with theta = 1: v_free = h g, the contact law with the gaps
+  // closed exactly (finisherSettings_), then dq = h v_{i+1}, which is the minimiser of
+  // 1/2 dq.M dq / h^2 - F_ext.dq under the linearised non-penetration constraints (the contact
+  // problem's quadratic program written for dq = h v). Side-wall friction stays in the problem:
+  // the Coulomb law on the tangential displacement of the step (docs/model.md).
+  // After a step that the trust radius cut, the next is solved to kRoughTolerance only: such a
+  // step is a descent direction, not an equilibrium, and MPRGP's iterations near jamming grow with
+  // the accuracy asked; an overlap its looser solve leaves is removed whole by the next step.
+  core::QuasiStaticMove quasiStaticStep(double h, double trustRadius) override {
+    if (!(h > 0.0) || !std::isfinite(h)) throw std::invalid_argument("nscd: quasi-static step h must be positive");
+    if (!(trustRadius > 0.0)) throw std::invalid_argument("nscd: quasi-static trust radius must be positive");
+    profile_ = core::StepProfile{};
+    Stopwatch clock;
+    for (int i = 0; i < n_; ++i) velocity_[i] = BodyVelocity{};
+    predict(h);  // from rest: q_m = q_i, v_free = h g
+    profile_[Phase::Integrate] += clock.lap();
+    broad_.findPairs(positionMid_, reach_, pairs_);
+    profile_[Phase::UpdatePairs] += clock.lap();
+    collide();
+    profile_[Phase::Collide] += clock.lap();
+    solver_.prepare(geometry_, positionMid_, inverse_, box_, h, finisherSettings_);
+    profile_[Phase::PrepareContacts] += clock.lap();
+    solver_.warmStart(cache_, geometry_, h, velocity_);
+    profile_[Phase::WarmStart] += clock.lap();
+    NscdSettings solve = finisherSettings_;
+    if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
+    profile_.iterations = solver_.solve(velocity_, solve);
+    profile_.residual = solver_.residual();
+    profile_.contactPoints = solver_.rowCount();
+    profile_[Phase::Solve] += clock.lap();
+    core::QuasiStaticMove move;
+    for (int i = 0; i < n_; ++i)
+      move.maxDisplacement =
+          std::max(move.maxDisplacement, h * (velocity_[i].v.norm() + velocity_[i].w.norm() * radius_[i]));
+    // Scaling the whole step keeps it inside the linearised constraints (they are convex and
+    // dq = 0 satisfies those of the contacts that are not overlapping).
+    if (move.maxDisplacement > trustRadius) {
+      const double s = trustRadius / move.maxDisplacement;
+      for (int i = 0; i < n_; ++i) {
+        velocity_[i].v *= s;
+        velocity_[i].w *= s;
+      }
+      move.maxDisplacement = trustRadius;
+      move.clipped = true;
+    }
+    lastFinisherStepClipped_ = move.clipped;
+    correct(h, 1.0);
+    profile_[Phase::Integrate] += clock.lap();
+    storeImpulses(h, 1.0);
+    profile_[Phase::StoreImpulses] += clock.lap();
+    return move;
+  }
+
   // q_m, the world inverse inertia there, and the free velocities. One thread: the loop is ~8%
   // of a step, and any OpenMP construct in this class (even a region never entered) was
   // measured to make the compiled single-thread loop ~10-20% slower; a gain on 2 threads could
@@ -161,8 +226,8 @@ class NscdBackend final : public core::ContactBackend {
   void collide() { narrow_.collideAll(pairs_, positionMid_, orientationMid_, geometry_, settings_.threads); }
 
   // q_{i+1} = q_m + dt theta v_{i+1}, wrapped into the box.
-  void correct(double dt) {
-    const double h = dt * settings_.theta;
+  void correct(double dt, double theta) {
+    const double h = dt * theta;
     for (int i = 0; i < n_; ++i) {
       const BodyVelocity& v = velocity_[i];
       position_[i] = box_.wrap(positionMid_[i] + h * v.v);
@@ -170,7 +235,7 @@ class NscdBackend final : public core::ContactBackend {
     }
   }
 
-  void storeImpulses(double dt) {
+  void storeImpulses(double dt, double theta) {
     solver_.exportImpulses(geometry_, cacheBuffer_);
     cache_.replace(cacheBuffer_, dt);
     // Contact list: every contact that carries force or is closed. Objects (and their point
@@ -200,7 +265,7 @@ class NscdBackend final : public core::ContactBackend {
       out.points.resize(g.pointCount);
       // Points were computed at q_m near a; move them with a's wrap so they stay near the
       // reported position of a (core/contact.hpp).
-      const Vec3 unwrapped = positionMid_[g.a] + dt * settings_.theta * velocity_[g.a].v;
+      const Vec3 unwrapped = positionMid_[g.a] + dt * theta * velocity_[g.a].v;
       const Vec3 shift = position_[g.a] - unwrapped;
       for (int p = 0; p < g.pointCount; ++p) {
         core::ContactPoint& cp = out.points[p];
@@ -231,6 +296,9 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<double> invMass_;
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
   std::vector<double> reach_;
+  std::vector<double> radius_;  // bounding radius: a grain's surface moves at most |v| + |w| radius
+  NscdSettings finisherSettings_;
+  bool lastFinisherStepClipped_ = false;
   // State q_i (wrapped) and the predicted configuration q_m.
   std::vector<Vec3> position_, positionMid_;
   std::vector<Quat> orientation_, orientationMid_;

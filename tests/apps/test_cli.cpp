@@ -206,6 +206,8 @@ TEST_CASE("the run configuration round-trips through JSON") {
   c.compaction.timeLimit = 123.0;
   c.compaction.checkInterval = 77;
   c.compaction.frameInterval = 5;
+  c.compaction.protocol = core::Protocol::QuasiStatic;
+  c.compaction.trustRadius = 0.02;
   c.compaction.forceRatio = 2e-4;
   c.backend = "bullet";
   c.backendOptions = {{"iterations", 50}};
@@ -220,6 +222,9 @@ TEST_CASE("the run configuration round-trips through JSON") {
   CHECK(d.compaction.dt == c.compaction.dt);
   CHECK(d.compaction.checkInterval == 77);
   CHECK(d.compaction.adaptiveDt);
+  CHECK(d.compaction.protocol == core::Protocol::QuasiStatic);
+  CHECK(j.at("compaction").at("protocol") == "quasi-static");
+  CHECK(d.compaction.trustRadius == 0.02);
   CHECK_NOTHROW(d.validate());
   // snake_case keys, as in the packing file.
   for (const char* k :
@@ -227,7 +232,8 @@ TEST_CASE("the run configuration round-trips through JSON") {
     CHECK(j.contains(k));
   for (const char* k :
        {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
-        "kinetic_ratio"})
+        "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance", "finisher_max_step",
+        "finisher_max_steps"})
     CHECK(j.at("compaction").contains(k));
   // A partial document takes the defaults for the rest (sweeps override a base this way).
   const auto partial = json::parse(R"({"box": {"width": 5}, "seed": 9})").get<core::RunConfig>();
@@ -252,6 +258,14 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   refused([](core::RunConfig& c) { c.compaction.dt = -1e-3; }, "compaction.dt");
   refused([](core::RunConfig& c) { c.compaction.checkInterval = 0; }, "compaction.check_interval");
   refused([](core::RunConfig& c) { c.compaction.kineticRatio = -1; }, "compaction.kinetic_ratio");
+  refused([](core::RunConfig& c) { c.compaction.switchKineticRatio = 0; }, "compaction.switch_kinetic_ratio");
+  refused([](core::RunConfig& c) { c.compaction.trustRadius = 0; }, "compaction.trust_radius");
+  refused([](core::RunConfig& c) { c.compaction.trustRadius = 0.9; }, "compaction.trust_radius");
+  refused([](core::RunConfig& c) { c.compaction.settleTolerance = -1e-6; }, "compaction.settle_tolerance");
+  refused([](core::RunConfig& c) { c.compaction.finisherMaxStep = 0; }, "compaction.finisher_max_step");
+  refused([](core::RunConfig& c) { c.compaction.finisherMaxSteps = 0; }, "compaction.finisher_max_steps");
+  CHECK_THROWS_WITH(json::parse(R"({"compaction": {"protocol": "static"}})").get<core::RunConfig>(),
+                    Catch::Contains("compaction.protocol: unknown protocol 'static'"));
   refused([](core::RunConfig& c) { c.deposition.expectedSolidFraction = 1.2; }, "expected solid fraction");
   refused([](core::RunConfig& c) { c.backendOptions = json::array(); }, "backend_options");
   CHECK_THROWS_WITH(json::parse(R"({"sed": 3})").get<core::RunConfig>(), Catch::Contains("config.sed: unknown key"));

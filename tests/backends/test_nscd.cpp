@@ -27,7 +27,9 @@ using core::Vec3;
 
 namespace {
 
+using confpack::testing::pinacoid;
 using confpack::testing::sphere;
+using confpack::testing::topOf;
 
 core::SystemDef box(double lx, double w, bool periodicY = false) {
   core::SystemDef s;
@@ -85,25 +87,6 @@ struct ColdStep {
     iterations = solver.solve(velocities, settings);
   }
 };
-
-/// A pinacoid (L = G = E = 1, alpha = 60 deg) with its lowest vertex at height zBottom.
-core::Grain pinacoid(const core::Quat& q, double x, double y, double zBottom) {
-  core::Grain g;
-  g.shape = core::ShapeKind::Pinacoid;
-  g.size = 1.0;
-  g.orientation = q;
-  g.position = Vec3(x, y, 0.0);
-  double zMin = 1e300;
-  for (const Vec3& v : g.worldVertices()) zMin = std::min(zMin, v.z());
-  g.position.z() = zBottom - zMin;
-  return g;
-}
-
-double topOf(const core::Grain& g) {
-  double zMax = -1e300;
-  for (const Vec3& v : g.worldVertices()) zMax = std::max(zMax, v.z());
-  return zMax;
-}
 
 }  // namespace
 

@@ -1,5 +1,8 @@
 #pragma once
-// Test helpers shared by the backend tests: a sphere grain and an empty system in a box.
+// Test helpers shared by the backend tests: a sphere grain, a pinacoid placed by its lowest
+// vertex, and an empty system in a box.
+#include <algorithm>
+
 #include "core/backend.hpp"
 
 namespace confpack::testing {
@@ -11,6 +14,27 @@ inline core::Grain sphere(double d, const core::Vec3& p) {
   g.size = d;
   g.position = p;
   return g;
+}
+
+/// A unit pinacoid (G = E = 1, alpha = 60 deg) with orientation q, centred at (x, y), its lowest
+/// vertex at height zBottom.
+inline core::Grain pinacoid(const core::Quat& q, double x, double y, double zBottom) {
+  core::Grain g;
+  g.shape = core::ShapeKind::Pinacoid;
+  g.size = 1.0;
+  g.orientation = q;
+  g.position = core::Vec3(x, y, 0.0);
+  double zMin = 1e300;
+  for (const core::Vec3& v : g.worldVertices()) zMin = std::min(zMin, v.z());
+  g.position.z() = zBottom - zMin;
+  return g;
+}
+
+/// Height of a grain's highest vertex.
+inline double topOf(const core::Grain& g) {
+  double zMax = -1e300;
+  for (const core::Vec3& v : g.worldVertices()) zMax = std::max(zMax, v.z());
+  return zMax;
 }
 
 /// A system with no grains in a box of length lengthX and width W (periodic or walled in y)

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Runs the protocol validation of docs/validation.md: each pile of the list, for each seed, once
+# with the dynamic protocol and once with the quasi-static one, from the same deposit (a run's
+# deposit is a function of its configuration and seed). Usage, from the repository root after a
+# build:
+#   docs/validation/run.sh OUT_DIR [SEEDS] [PILE ...]
+# SEEDS defaults to "1 2 3 4 5 6 7 8 9 10"; PILE to msp-bi6 (the 493-sphere biperiodic pile).
+# A run already present (its result.json) is kept, so the script resumes after an interruption.
+# Then: python3 docs/validation/compare.py OUT_DIR
+set -euo pipefail
+out=${1:?usage: docs/validation/run.sh OUT_DIR [SEEDS] [PILE ...]}
+seeds=${2:-1 2 3 4 5 6 7 8 9 10}
+shift $(( $# >= 2 ? 2 : $# ))
+piles=("$@")
+[[ ${#piles[@]} -gt 0 ]] || piles=(msp-bi6)
+confpack=${CONFPACK:-build/apps/confpack}
+
+flags_of() {
+  case "$1" in
+    msp-bi6) echo "--length-x 6 --width 6 --periodic-y --height 12 --time-limit 60" ;;  # 493 spheres
+    msp-w5)  echo "--length-x 10 --width 5 --height 16 --time-limit 100" ;;              # ~912 spheres
+    bsp25-bi6) echo "--length-x 6 --width 6 --periodic-y --height 12 --small-fraction 25 --time-limit 60" ;;
+    mpp-bi4) echo "--shape pinacoid --length-x 4 --width 4 --periodic-y --height 8 --time-limit 60" ;;
+    *) echo "unknown pile '$1' (msp-bi6, msp-w5, bsp25-bi6, mpp-bi4)" >&2; exit 2 ;;
+  esac
+}
+
+for pile in "${piles[@]}"; do
+  flags=$(flags_of "$pile")
+  for seed in $seeds; do
+    for protocol in dynamic quasi-static; do
+      dir="$out/$pile/$protocol/s$seed"
+      [[ -f "$dir/result.json" ]] && continue
+      echo "== $pile $protocol seed $seed" >&2
+      # shellcheck disable=SC2086
+      "$confpack" run $flags --seed "$seed" --protocol "$protocol" --quiet --out "$dir"
+    done
+  done
+done
