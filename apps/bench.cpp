@@ -80,6 +80,7 @@ core::RunConfig baseConfig(const BenchDef& def, core::ShapeKind shape) {
   cfg.threads = def.threads;
   cfg.compaction.timeLimit = def.timeLimit;
   cfg.compaction.adaptiveDt = def.adaptiveDt;
+  cfg.compaction.protocol = def.protocol;
   return cfg;
 }
 
@@ -116,6 +117,8 @@ BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const cor
   run.json = {{"time_to_equilibrium_s", out.reached ? nlohmann::json(wall) : nlohmann::json(nullptr)},
               {"wall_s", wall},
               {"equilibrium_reached", out.reached},
+              {"protocol", out.timing["protocol"]},
+              {"stages", out.timing["stages"]},
               {"equilibrium", out.equilibrium},
               {"interpenetration_percent", inter.exactPercent},
               {"steps", steps},
@@ -195,6 +198,7 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
     for (const std::string backend : {"nscd", "bullet"}) {
       core::RunConfig c = cfg;
       c.backend = backend;
+      c.compaction.protocol = core::Protocol::Dynamic;  // the series times dynamic steps
       const double dt = defaultTimeStep(c, dep);
       c.compaction.dt = dt;
       c.compaction.adaptiveDt = false;  // the window below counts fixed steps

@@ -31,6 +31,8 @@ struct BenchDef {
   /// Both backends of msp-w10 and mpp-w10 on the adaptive time step (compaction.adaptive_dt);
   /// the scaling series always takes fixed steps (it times a step, not a compaction).
   bool adaptiveDt = false;
+  /// The protocol of msp-w10 and mpp-w10 (docs/model.md); Bullet runs dynamic either way.
+  core::Protocol protocol = core::Protocol::Dynamic;
 };
 
 /// Names accepted in BenchDef::cases.

@@ -52,6 +52,20 @@ CLI::Validator unsignedInteger() {
       "UINT");
 }
 
+CLI::Option* addProtocolOption(CLI::App& sub, core::Protocol& protocol) {
+  // A string checked against the names, then converted, as --shape: the help reads the names.
+  return sub
+      .add_option_function<std::string>(
+          "--protocol",
+          [&protocol](const std::string& s) {
+            protocol = s == "quasi-static" ? core::Protocol::QuasiStatic : core::Protocol::Dynamic;
+          },
+          "dynamic: time steps until equilibrium; quasi-static: time steps until the fall is over, then "
+          "contact problems solved from rest until equilibrium (nscd; Bullet stays dynamic)")
+      ->check(CLI::IsMember({"dynamic", "quasi-static"}))
+      ->default_str(core::toString(protocol));
+}
+
 void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired) {
   // A string checked against the names, then converted: the help then reads {sphere,pinacoid}.
   sub.add_option_function<std::string>(

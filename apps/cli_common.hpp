@@ -15,6 +15,7 @@
 
 namespace CLI {
 class App;
+class Option;
 class Validator;
 }  // namespace CLI
 
@@ -37,6 +38,9 @@ struct CommonOptions {
 /// validators so that a bad value is refused by the parser, before any work. The defaults shown
 /// by --help are those of the core definition structs.
 void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opts, bool outRequired = true);
+
+/// `--protocol dynamic|quasi-static` (docs/model.md, "Protocols") into `protocol`.
+CLI::Option* addProtocolOption(CLI::App& sub, core::Protocol& protocol);
 
 /// Validators for real-valued flags with one readable message ("--width: must be a positive number
 /// (got -3)"). CLI11's PositiveNumber/Range print their bounds as 300-digit numbers and accept

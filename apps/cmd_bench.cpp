@@ -103,13 +103,14 @@ void registerBench(CLI::App& app) {
       sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
   auto* adaptive = sub->add_flag("--adaptive-dt", st->def.adaptiveDt,
                                  "msp-w10 and mpp-w10 on the adaptive time step (as run --adaptive-dt), both backends");
+  auto* protocol = addProtocolOption(*sub, st->def.protocol);
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   auto* micro = sub->add_flag("--micro", st->micro,
                               "Run the Google Benchmark micro-benchmarks of the nscd phases instead (broad phase, "
                               "narrow phase per pair type, one Gauss-Seidel sweep)");
   // The whole-run options mean nothing to the micro-benchmarks (which time one core): refuse them
   // rather than ignore them.
-  for (CLI::Option* o : {cases, timeLimit, scale, scalingSteps, scalingFall, scalingSizes, threads, adaptive})
+  for (CLI::Option* o : {cases, timeLimit, scale, scalingSteps, scalingFall, scalingSizes, threads, adaptive, protocol})
     micro->excludes(o);
   sub->add_option("--micro-filter", st->microDef.filter, "Regex selecting micro-benchmarks by name")
       ->needs(micro)

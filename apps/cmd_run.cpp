@@ -9,7 +9,6 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <map>
 #include <memory>
 
 #include "apps/cli_common.hpp"
@@ -74,13 +73,7 @@ void registerRun(CLI::App& app) {
                 "grain's size of motion per step at its current speed, never below --dt (or the SPEC 4 "
                 "step), growing at most 1.25x per step; "
                 "equilibrium is then also checked every 0.5 t0");
-  sub->add_option("--protocol", st->cfg.compaction.protocol,
-                  "dynamic: time steps until equilibrium; quasi-static: time steps until the fall is over, then "
-                  "contact problems solved from rest until equilibrium (nscd; Bullet stays dynamic)")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, core::Protocol>{{"dynamic", core::Protocol::Dynamic},
-                                                {"quasi-static", core::Protocol::QuasiStatic}}))
-      ->default_str(core::toString(st->cfg.compaction.protocol));
+  addProtocolOption(*sub, st->cfg.compaction.protocol);
   sub->add_option("--switch-kinetic-ratio", st->cfg.compaction.switchKineticRatio,
                   "quasi-static: hand over to the finisher at the first check whose mean kinetic ratio "
                   "E_k / (d^3 P) over the grains is below this")

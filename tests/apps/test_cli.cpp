@@ -102,6 +102,8 @@ TEST_CASE("bad input is refused with one line, exit 2 and no output directory") 
       {"deposit " + valid + " --threads 0", "--threads"},
       {"deposit " + valid + " --shape cube", "--shape"},
       {"deposit " + valid + " --pinacoid-alpha 90", "--pinacoid-alpha"},
+      {"run " + valid + " --protocol static", "--protocol"},
+      {"run " + valid + " --switch-kinetic-ratio 0", "--switch-kinetic-ratio"},
       {"deposit --length-x 6", "--out"},                                      // missing --out
       {"deposit " + valid + " --shape pinacoid --pinacoid-E 3", "pinacoid"},  // no ridge: refused by validate()
       {"", "subcommand"},
