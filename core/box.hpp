@@ -48,8 +48,6 @@ struct BoxDef {
   Vec3 wallPoint(WallId w) const;
   /// Friction coefficient of a wall (floor 0, side walls mu_w).
   double wallFrictionOf(WallId w) const { return w == WallId::Floor ? 0.0 : wallFriction; }
-  /// Side walls with friction (a box periodic in y has none).
-  bool hasFrictionalWalls() const { return !periodicY && wallFriction > 0.0; }
   /// Walls present in this box (floor always, side walls unless periodic in y).
   int wallCount() const { return periodicY ? 1 : 3; }
   /// Throws std::invalid_argument with a clear message if a field is not usable.

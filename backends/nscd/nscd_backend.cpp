@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <utility>
 #include <stdexcept>
 
 #include "backends/nscd/broad_phase.hpp"
@@ -11,7 +10,6 @@
 #include "backends/nscd/contact_solver.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
-#include "backends/nscd/quasi_static_solver.hpp"
 
 namespace confpack::nscd {
 
@@ -87,7 +85,6 @@ class NscdBackend final : public core::ContactBackend {
       orientation_.push_back(g.orientation.normalized());
       reach_.push_back(narrow_.reach(static_cast<int>(reach_.size())));
       radius_.push_back(g.boundingRadius());
-      spheres_.push_back(g.shape == core::ShapeKind::Sphere);
     }
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
@@ -135,27 +132,18 @@ class NscdBackend final : public core::ContactBackend {
   bool hasQuasiStaticStep() const override { return true; }
 
   // The Moreau-Jean step from rest with theta = 1: v_free = h g, the contact law with the gaps
-  // closed exactly, then dq = h v_{i+1}: the minimiser of 1/2 dq.D dq / h^2 - F_ext.dq under the
-  // linearised non-penetration constraints (docs/model.md, "Quasi-static compaction").
-  // Frictionless boxes: the direct solver (quasi_static_solver.hpp), with D = diag(mu_i M_i), each
-  // grain's mass scaled by a metric weight mu_i >= 1 (metric_). The fixed point dq = 0,
-  // F_ext + J^T lambda = 0, does not depend on D, only the path there does: a grain that moved
-  // more than half the trust radius (one falling into a cavity, one pushed through a rearranging
-  // cage) is made heavier for the next step in proportion, so that it alone, and not the whole
-  // pile through the trust radius, takes short steps; weights halve again once the grain moves
-  // less than an eighth of it. A factorisation does not mind the spread of the weights; MPRGP
-  // does (its iterations grow with the conditioning), so that path keeps D = M.
-  // Side-wall friction: MPRGP with the tangential impulses (the Coulomb law on the tangential
-  // displacement of the step), the same block Gauss-Seidel as a dynamic step. After a step that
-  // the trust radius cut, that solve stops at kRoughTolerance: such a step is a descent
-  // direction, not an equilibrium; an overlap it leaves is removed whole by the next step.
+  // closed exactly (finisherSettings_), then dq = h v_{i+1}, which is the minimiser of
+  // 1/2 dq.M dq / h^2 - F_ext.dq under the linearised non-penetration constraints (the contact
+  // problem's quadratic program written for dq = h v). Side-wall friction stays in the problem:
+  // the Coulomb law on the tangential displacement of the step (docs/model.md).
+  // After a step that the trust radius cut, the next is solved to kRoughTolerance only: such a
+  // step is a descent direction, not an equilibrium, and MPRGP's iterations near jamming grow with
+  // the accuracy asked; an overlap its looser solve leaves is removed whole by the next step.
   core::QuasiStaticMove quasiStaticStep(double h, double trustRadius) override {
     if (!(h > 0.0) || !std::isfinite(h)) throw std::invalid_argument("nscd: quasi-static step h must be positive");
     if (!(trustRadius > 0.0)) throw std::invalid_argument("nscd: quasi-static trust radius must be positive");
     profile_ = core::StepProfile{};
     Stopwatch clock;
-    const bool direct = !box_.hasFrictionalWalls();
-    metric_.resize(n_, 1.0);
     for (int i = 0; i < n_; ++i) velocity_[i] = BodyVelocity{};
     predict(h);  // from rest: q_m = q_i, v_free = h g
     profile_[Phase::Integrate] += clock.lap();
@@ -163,31 +151,20 @@ class NscdBackend final : public core::ContactBackend {
     profile_[Phase::UpdatePairs] += clock.lap();
     collide();
     profile_[Phase::Collide] += clock.lap();
-    if (direct) {
-      solveFinisherDirect(h);
-    } else {
-      solver_.prepare(geometry_, positionMid_, inverse_, box_, h, finisherSettings_);
-      profile_[Phase::PrepareContacts] += clock.lap();
-      solver_.warmStart(cache_, geometry_, h, velocity_);
-      profile_[Phase::WarmStart] += clock.lap();
-      NscdSettings solve = finisherSettings_;
-      if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
-      profile_.iterations = solver_.solve(velocity_, solve);
-      profile_.residual = solver_.residual();
-      profile_.contactPoints = solver_.rowCount();
-    }
+    solver_.prepare(geometry_, positionMid_, inverse_, box_, h, finisherSettings_);
+    profile_[Phase::PrepareContacts] += clock.lap();
+    solver_.warmStart(cache_, geometry_, h, velocity_);
+    profile_[Phase::WarmStart] += clock.lap();
+    NscdSettings solve = finisherSettings_;
+    if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
+    profile_.iterations = solver_.solve(velocity_, solve);
+    profile_.residual = solver_.residual();
+    profile_.contactPoints = solver_.rowCount();
     profile_[Phase::Solve] += clock.lap();
     core::QuasiStaticMove move;
-    const double target = 0.5 * trustRadius;
-    for (int i = 0; i < n_; ++i) {
-      const double d = h * (velocity_[i].v.norm() + velocity_[i].w.norm() * radius_[i]);
-      move.maxDisplacement = std::max(move.maxDisplacement, d);
-      if (!direct) continue;
-      if (d > target)
-        metric_[i] *= d / target;
-      else if (d < 0.125 * trustRadius)
-        metric_[i] = std::max(1.0, 0.5 * metric_[i]);
-    }
+    for (int i = 0; i < n_; ++i)
+      move.maxDisplacement =
+          std::max(move.maxDisplacement, h * (velocity_[i].v.norm() + velocity_[i].w.norm() * radius_[i]));
     // Scaling the whole step keeps it inside the linearised constraints (they are convex and
     // dq = 0 satisfies those of the contacts that are not overlapping).
     if (move.maxDisplacement > trustRadius) {
@@ -202,61 +179,9 @@ class NscdBackend final : public core::ContactBackend {
     lastFinisherStepClipped_ = move.clipped;
     correct(h, 1.0);
     profile_[Phase::Integrate] += clock.lap();
-    if (direct) {
-      storeContacts(h, 1.0, [&](int c, int p) { return std::pair{finisherImpulse_[rowOf_[c] + p], Vec3(Vec3::Zero())}; });
-      cacheBuffer_.clear();
-      for (std::size_t c = 0; c < geometry_.size(); ++c) {
-        CachedContact e;
-        e.key = ContactKey::of(geometry_[c]);
-        e.pointCount = geometry_[c].pointCount;
-        for (int p = 0; p < e.pointCount; ++p) e.normal[p] = finisherImpulse_[rowOf_[c] + p];
-        cacheBuffer_.push_back(e);
-      }
-      cache_.replace(cacheBuffer_, h);
-    } else {
-      storeImpulses(h, 1.0);
-    }
+    storeImpulses(h, 1.0);
     profile_[Phase::StoreImpulses] += clock.lap();
     return move;
-  }
-
-  // The finisher's frictionless problem by the direct solver; leaves v = dq / h in velocity_ and
-  // the impulses (force x h) per point in finisherImpulse_ (rowOf_[c] + p).
-  void solveFinisherDirect(double h) {
-    bool rotations = false;
-    for (int i = 0; i < n_ && !rotations; ++i) rotations = !spheres_[i];
-    finisherBodies_.resize(n_);
-    for (int i = 0; i < n_; ++i) {
-      QuasiStaticSolver::Body& b = finisherBodies_[i];
-      const double m = 1.0 / invMass_[i];
-      b.mass = metric_[i] * m;
-      b.force = m * gravity_;
-      if (rotations) {
-        const Mat3 r = orientationMid_[i].toRotationMatrix();
-        b.inertia = metric_[i] * (r * inertiaBody_[i] * r.transpose());
-      }
-    }
-    rowOf_.resize(geometry_.size());
-    warmForces_.clear();
-    std::size_t cursor = 0;
-    for (std::size_t c = 0; c < geometry_.size(); ++c) {
-      const ContactGeometry& g = geometry_[c];
-      rowOf_[c] = static_cast<int>(warmForces_.size());
-      const CachedContact* e = cache_.dt() > 0.0 ? cache_.find(ContactKey::of(g), cursor) : nullptr;
-      for (int p = 0; p < g.pointCount; ++p)
-        warmForces_.push_back(e && e->pointCount == g.pointCount ? e->normal[p] / cache_.dt() : 0.0);
-    }
-    const QuasiStaticSolver::Outcome o = finisherSolver_.solve(geometry_, positionMid_, finisherBodies_, box_, rotations,
-                                                               h, warmForces_, finisherMove_, finisherTurn_,
-                                                               finisherImpulse_);
-    for (double& r : finisherImpulse_) r *= h;
-    for (int i = 0; i < n_; ++i) {
-      velocity_[i].v = finisherMove_[i] / h;
-      velocity_[i].w = finisherTurn_[i] / h;
-    }
-    profile_.iterations = o.newtonIterations;
-    profile_.residual = o.infeasibility;
-    profile_.contactPoints = static_cast<int>(warmForces_.size());
   }
 
   // q_m, the world inverse inertia there, and the free velocities. One thread: the loop is ~8%
@@ -313,14 +238,6 @@ class NscdBackend final : public core::ContactBackend {
   void storeImpulses(double dt, double theta) {
     solver_.exportImpulses(geometry_, cacheBuffer_);
     cache_.replace(cacheBuffer_, dt);
-    storeContacts(dt, theta, [this](int c, int p) {
-      return std::pair{solver_.normalImpulse(c, p), solver_.tangentImpulse(c, p)};
-    });
-  }
-
-  // The contact list of the step from the impulses impulse(c, p) = {normal, tangential vector}.
-  template <class Impulse>
-  void storeContacts(double dt, double theta, const Impulse& impulse) {
     // Contact list: every contact that carries force or is closed. Objects (and their point
     // vectors) are reused from step to step, so the list costs no allocation in steady state.
     // The same pass records which grains carried an impulse, for damp() in the next step.
@@ -331,7 +248,7 @@ class NscdBackend final : public core::ContactBackend {
       const ContactGeometry& g = geometry_[c];
       bool loaded = false, closed = false;
       for (int p = 0; p < g.pointCount; ++p) {
-        loaded |= impulse(static_cast<int>(c), p).first > 0.0;
+        loaded |= solver_.normalImpulse(static_cast<int>(c), p) > 0.0;
         closed |= g.gaps[p] <= 0.0;
       }
       if (damping && loaded) {
@@ -353,9 +270,8 @@ class NscdBackend final : public core::ContactBackend {
       for (int p = 0; p < g.pointCount; ++p) {
         core::ContactPoint& cp = out.points[p];
         cp.position = g.points[p] + shift;
-        const auto [normal, tangent] = impulse(static_cast<int>(c), p);
-        cp.normalForce = normal / dt;
-        cp.tangentForce = tangent / dt;
+        cp.normalForce = solver_.normalImpulse(static_cast<int>(c), p) / dt;
+        cp.tangentForce = solver_.tangentImpulse(static_cast<int>(c), p) / dt;
         cp.gap = g.gaps[p];
       }
     }
@@ -383,14 +299,6 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<double> radius_;  // bounding radius: a grain's surface moves at most |v| + |w| radius
   NscdSettings finisherSettings_;
   bool lastFinisherStepClipped_ = false;
-  // The finisher's direct path (quasiStaticStep, solveFinisherDirect).
-  std::vector<double> metric_;  // mu_i, the metric weights
-  std::vector<char> spheres_;   // grain i is a sphere
-  QuasiStaticSolver finisherSolver_;
-  std::vector<QuasiStaticSolver::Body> finisherBodies_;
-  std::vector<int> rowOf_;
-  std::vector<double> warmForces_, finisherImpulse_;
-  std::vector<Vec3> finisherMove_, finisherTurn_;
   // State q_i (wrapped) and the predicted configuration q_m.
   std::vector<Vec3> position_, positionMid_;
   std::vector<Quat> orientation_, orientationMid_;
