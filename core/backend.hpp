@@ -64,7 +64,7 @@ struct StepProfile {
 /// What one quasi-static step did (ContactBackend::quasiStaticStep).
 struct QuasiStaticMove {
   double maxDisplacement = 0.0;  ///< largest displacement of a grain's surface in the step taken [d_L]
-  bool clipped = false;          ///< the step was shortened to the trust radius
+  bool clipped = false;          ///< the trust radius shortened some grain's displacement
 };
 
 class ContactBackend {
@@ -88,8 +88,8 @@ class ContactBackend {
   /// One step of the quasi-static finisher: every velocity set to zero, then the implicit Euler
   /// step of length h [t0] from rest, i.e. the displacement dq solving
   ///     min 1/2 dq.M dq / h^2 - F_ext.dq   subject to  gap + J dq >= 0  (contacts re-detected),
-  /// whose multipliers are the contact forces; if a grain's surface would move more than
-  /// `trustRadius` [d_L], the whole step is scaled down to it. States and contacts are then those
+  /// whose multipliers are the contact forces; a grain whose surface would move more than
+  /// `trustRadius` [d_L] has its displacement scaled down to it. States and contacts are then those
   /// of a step (velocities dq / h, forces = impulse / h). Only backends with
   /// hasQuasiStaticStep() implement it; the others throw std::logic_error.
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);

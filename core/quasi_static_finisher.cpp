@@ -17,10 +17,8 @@ QuasiStaticMove QuasiStaticFinisher::step(ContactBackend& backend) {
   lastMove_ = backend.quasiStaticStep(h_, trustRadius_);
   lastStep_ = h_;
   ++steps_;
-  if (lastMove_.clipped)
-    ++clipped_;
-  else
-    h_ = std::min(2.0 * h_, maxStep_);
+  if (lastMove_.clipped) ++clipped_;
+  h_ = std::min(2.0 * h_, maxStep_);
   return lastMove_;
 }
 

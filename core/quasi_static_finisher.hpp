@@ -12,9 +12,9 @@
 // jamming, for rigid grains with the dynamics' own contact solver. At a fixed point dq = 0, so
 // F_ext + J^T lambda = 0 with lambda >= 0 on closed contacts: static equilibrium.
 //
-// Step length: h starts at the dynamic step, doubles after every step the trust radius did not
-// shorten and stays put after one it did, up to finisher_max_step. The trust radius (a fraction of
-// the smallest grain) bounds the motion of any grain's surface in one step, so that the linearised
+// Step length: h starts at the dynamic step and doubles after every step, up to finisher_max_step
+// (a long step is what makes the iteration converge in few steps). The trust radius (a fraction of
+// the smallest grain) caps the motion of each grain's surface in one step, so that the linearised
 // gaps stay accurate and no contact can cross the alert band unseen.
 #include "core/backend.hpp"
 #include "core/run_config.hpp"

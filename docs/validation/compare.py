@@ -57,7 +57,7 @@ def quantities(run_dir):
     fs = force_stats(run_dir / "packing.json")
     if fs:
         q.update(fs)
-    wl = wall_layer_phi(run_dir)
+    wl = None if r["config"]["box"]["periodic_y"] else wall_layer_phi(run_dir)
     if wl is not None:
         q["phi(y < 1) near walls"] = wl
     return r, q
