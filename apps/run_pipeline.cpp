@@ -186,6 +186,13 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       }
     }
   }
+  // The quasi-static protocol's dynamic stage ends at the time limit too: the finisher takes over
+  // from there, bounded by its own step count. `handOverAt` says which ended the fall.
+  const char* handOverAt = handOver ? "switch_kinetic_ratio" : nullptr;
+  if (finisher && !handOver && !eq.reached) {
+    handOver = true;
+    handOverAt = "time_limit";
+  }
   const long dynamicSteps = steps;
   const long dynamicIterations = totalIterations;
   const double dynamicWall = secondsSince(start);
@@ -242,7 +249,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                              {"iterations", dynamicIterations},
                              {"wall_s", dynamicWall}}}};
   if (handOver)
-    stages["quasi_static"] = {{"steps", finish.steps()},
+    stages["quasi_static"] = {{"handed_over_at", handOverAt},
+                              {"steps", finish.steps()},
                               {"clipped_steps", finish.clippedSteps()},
                               {"iterations", totalIterations - dynamicIterations},
                               {"wall_s", secondsSince(start) - dynamicWall},

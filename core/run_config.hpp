@@ -27,7 +27,9 @@ struct CompactionDef {
   /// current speed, gravity included, never below `dt` (or the SPEC 4 step) and at most
   /// kAdaptiveGrowth times the step before (apps/run_pipeline.hpp, AdaptiveTimeStep).
   bool adaptiveDt = false;
-  double timeLimit = 400.0;         ///< simulated time after which the run stops unequilibrated [t0]
+  /// Simulated time after which the run stops unequilibrated [t0]; with the quasi-static
+  /// protocol, after which the finisher takes over if the fall has not ended before.
+  double timeLimit = 400.0;
   int checkInterval = 200;          ///< steps between equilibrium checks [-]
   int frameInterval = 0;            ///< steps between ParaView frames; 0 = first and last only [-]
   double forceRatio = 1e-4;         ///< equilibrium: |sum F| < forceRatio d^2 P [-]

@@ -52,6 +52,7 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
   CHECK(stages["quasi_static"]["last_displacement"].get<double>() <= cfg.compaction.settleTolerance);
   // It handed over before the time limit, at a check whose kinetic ratio was below the switch.
   CHECK(stages["dynamic"]["simulated_time"].get<double>() < cfg.compaction.timeLimit);
+  CHECK(stages["quasi_static"]["handed_over_at"] == "switch_kinetic_ratio");
   // Frictionless side walls: the floor carries the whole weight (rho = g = 1). With friction the
   // walls may carry part of it, never more than all of it.
   const double weight = core::totalVolume(dep.grains);
@@ -59,6 +60,19 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
     CHECK(floorReaction(out.packing) == Approx(weight).epsilon(1e-8));
   else
     CHECK(floorReaction(out.packing) <= weight * (1.0 + 1e-8));
+}
+
+TEST_CASE("quasi-static protocol: at the time limit the finisher takes over and still ends at rest") {
+  core::RunConfig cfg = smallBox("nscd", 0.0);
+  cfg.compaction.timeLimit = 3.0;  // the grains are still falling onto the pile
+  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const app::CompactionOutcome out = app::compact(cfg, dep);
+  const auto& stages = out.timing["stages"];
+  INFO(stages.dump());
+  REQUIRE(stages.contains("quasi_static"));
+  CHECK(stages["quasi_static"]["handed_over_at"] == "time_limit");
+  REQUIRE(out.reached);
+  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-8));
 }
 
 TEST_CASE("quasi-static protocol: Bullet has no finisher, runs dynamic and records it") {
