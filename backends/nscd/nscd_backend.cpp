@@ -111,18 +111,7 @@ class NscdBackend final : public core::ContactBackend {
     if (settings_.damping > 0.0) damp(std::exp(-settings_.damping * dt));
     predict(dt);
     profile_[Phase::Integrate] += clock.lap();
-    broad_.findPairs(positionMid_, reach_, pairs_);
-    profile_[Phase::UpdatePairs] += clock.lap();
-    collide();
-    profile_[Phase::Collide] += clock.lap();
-    solver_.prepare(geometry_, positionMid_, inverse_, box_, dt, settings_);
-    profile_[Phase::PrepareContacts] += clock.lap();
-    solver_.warmStart(cache_, geometry_, dt, velocity_);
-    profile_[Phase::WarmStart] += clock.lap();
-    profile_.iterations = solver_.solve(velocity_, settings_);
-    profile_.residual = solver_.residual();
-    profile_.contactPoints = solver_.rowCount();
-    profile_[Phase::Solve] += clock.lap();
+    solveContacts(dt, settings_, settings_, clock);
     correct(dt, settings_.theta);
     profile_[Phase::Integrate] += clock.lap();
     storeImpulses(dt, settings_.theta);
@@ -157,20 +146,9 @@ class NscdBackend final : public core::ContactBackend {
       velocity_[i].v /= metricWeight_[i];
     }
     profile_[Phase::Integrate] += clock.lap();
-    broad_.findPairs(positionMid_, reach_, pairs_);
-    profile_[Phase::UpdatePairs] += clock.lap();
-    collide();
-    profile_[Phase::Collide] += clock.lap();
-    solver_.prepare(geometry_, positionMid_, inverse_, box_, h, finisherSettings_);
-    profile_[Phase::PrepareContacts] += clock.lap();
-    solver_.warmStart(cache_, geometry_, h, velocity_);
-    profile_[Phase::WarmStart] += clock.lap();
     NscdSettings solve = finisherSettings_;
     if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
-    profile_.iterations = solver_.solve(velocity_, solve);
-    profile_.residual = solver_.residual();
-    profile_.contactPoints = solver_.rowCount();
-    profile_[Phase::Solve] += clock.lap();
+    solveContacts(h, finisherSettings_, solve, clock);
     // The trust radius caps each grain's move on its own. Scaling the whole step instead (which
     // keeps it inside the convex linearised constraints) made the whole pile advance at the pace
     // of its fastest grain: on msp-w10 every one of 740 steps was cut (docs/performance.md).
@@ -195,6 +173,24 @@ class NscdBackend final : public core::ContactBackend {
     storeImpulses(h, 1.0);
     profile_[Phase::StoreImpulses] += clock.lap();
     return move;
+  }
+
+  // The contact problem of a step from q_m and the free velocities: pairs, contact points, rows
+  // (with `law`'s contact law), warm start, then the solve to `solve`'s tolerance, each phase
+  // timed into profile_.
+  void solveContacts(double dt, const NscdSettings& law, const NscdSettings& solve, Stopwatch& clock) {
+    broad_.findPairs(positionMid_, reach_, pairs_);
+    profile_[Phase::UpdatePairs] += clock.lap();
+    collide();
+    profile_[Phase::Collide] += clock.lap();
+    solver_.prepare(geometry_, positionMid_, inverse_, box_, dt, law);
+    profile_[Phase::PrepareContacts] += clock.lap();
+    solver_.warmStart(cache_, geometry_, dt, velocity_);
+    profile_[Phase::WarmStart] += clock.lap();
+    profile_.iterations = solver_.solve(velocity_, solve);
+    profile_.residual = solver_.residual();
+    profile_.contactPoints = solver_.rowCount();
+    profile_[Phase::Solve] += clock.lap();
   }
 
   // Per-grain metric weights of the finisher (docs/model.md). The finisher's fixed point dq = 0 is
