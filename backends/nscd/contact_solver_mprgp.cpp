@@ -1,12 +1,12 @@
-// MPRGP solver of the nscd contact problem (see contact_solver.hpp for the problem and the choice).
+// MPRGP solver of the nscd contact problem (see contact_rows.hpp for the problem, contact_solver.hpp for the choice).
 //
 // Unknowns: the normal impulses of every contact point, k < nN the frictionless rows
-// (normalRows_[k]), k >= nN the normal part of the side-wall friction rows (frictionRows_[k - nN],
+// (normalRows()[k]), k >= nN the normal part of the side-wall friction rows (frictionRows()[k - nN],
 // whose body b is the static world). In the scaled variables y = r / s with s = W_kk^-1/2 (Jacobi
 // scaling keeps the bounds y >= 0 and gives A = S W S a unit diagonal) the step's problem is
 //     minimise f(y) = 1/2 y.A y - y.b   subject to y >= 0,
 //     gradient g = A y - b = S (u + c),  u = H^T v the relative normal velocities, c the gap term,
-// whose optimality conditions are exactly the velocity Signorini law of contact_solver.hpp.
+// whose optimality conditions are exactly the velocity Signorini law of contact_rows.hpp.
 // A p is applied without forming W: impulses to body velocities (M^-1 H S p), then back to the rows
 // (S H^T), two passes over the contact data.
 //
@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include <omp.h>
 
@@ -62,19 +63,21 @@ template <class Body>
 
 }  // namespace
 
-void ContactSolver::buildMprgpRows(std::size_t bodyCount) {
+void ContactSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount) {
+  const std::span<const NormalRow> normalRows = rows.normalRows();
+  const std::span<const FrictionRow> frictionRows = rows.frictionRows();
   // Gather rows: the scaled Jacobian of every unknown. Friction rows' normal parts act on the
   // static world (last body) as b, with zero lever arm there.
   const int world = static_cast<int>(bodyCount) - 1;
-  const std::size_t nN = normalRows_.size(), m = nN + frictionRows_.size();
+  const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
   gatherRows_.resize(m);
   for (std::size_t k = 0; k < nN; ++k) {
-    const NormalRow& row = normalRows_[k];
+    const NormalRow& row = normalRows[k];
     const double s = scale_[k];
     gatherRows_[k] = {s * row.n, s * row.axn, s * row.bxn, s * row.bias, row.a, row.b};
   }
-  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
-    const FrictionRow& row = frictionRows_[f];
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
+    const FrictionRow& row = frictionRows[f];
     const double s = scale_[nN + f];
     gatherRows_[nN + f] = {s * row.n, s * row.axn, Vec3::Zero(), s * row.bias, row.a, world};
   }
@@ -102,25 +105,25 @@ void ContactSolver::buildMprgpRows(std::size_t bodyCount) {
   bodyEntries_.resize(bodyEntryStart_[bodyCount]);
   bodyCursor_.assign(bodyEntryStart_.begin(), bodyEntryStart_.end() - 1);
   for (std::size_t k = 0; k < nN; ++k) {
-    const NormalRow& row = normalRows_[k];
+    const NormalRow& row = normalRows[k];
     const double s = scale_[k];
     bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(k)};
     if (row.b != world) bodyEntries_[bodyCursor_[row.b]++] = {(s * row.invMb) * row.n, s * row.ibBxn, static_cast<int>(k)};
   }
-  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
-    const FrictionRow& row = frictionRows_[f];
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
+    const FrictionRow& row = frictionRows[f];
     const double s = scale_[nN + f];
     bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(nN + f)};
   }
   sweepMass_.resize(m);
-  for (std::size_t k = 0; k < nN; ++k) sweepMass_[k] = {normalRows_[k].invMa, normalRows_[k].invMb};
-  for (std::size_t f = 0; f < frictionRows_.size(); ++f) sweepMass_[nN + f] = {frictionRows_[f].invMa, 0.0};
+  for (std::size_t k = 0; k < nN; ++k) sweepMass_[k] = {normalRows[k].invMa, normalRows[k].invMb};
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) sweepMass_[nN + f] = {frictionRows[f].invMa, 0.0};
   if (!linearOnly_) {
     sweepAngular_.resize(m);
     for (std::size_t k = 0; k < nN; ++k)
-      sweepAngular_[k] = {scale_[k] * normalRows_[k].iaAxn, scale_[k] * normalRows_[k].ibBxn};
-    for (std::size_t f = 0; f < frictionRows_.size(); ++f)
-      sweepAngular_[nN + f] = {scale_[nN + f] * frictionRows_[f].iaAxn, Vec3::Zero()};
+      sweepAngular_[k] = {scale_[k] * normalRows[k].iaAxn, scale_[k] * normalRows[k].ibBxn};
+    for (std::size_t f = 0; f < frictionRows.size(); ++f)
+      sweepAngular_[nN + f] = {scale_[nN + f] * frictionRows[f].iaAxn, Vec3::Zero()};
   }
   if (linearOnly_) {
     linearEntries_.resize(bodyEntries_.size());
@@ -253,11 +256,12 @@ double ContactSolver::scaledOperatorBound(std::size_t bodyCount) {
   return m > 0 ? *std::max_element(rowSum_.begin(), rowSum_.end()) : 0.0;
 }
 
-double ContactSolver::frictionTangentPass(std::vector<BodyVelocity>& vel) {
+double ContactSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& vel) {
   double sumDelta2 = 0.0, sumR2 = 0.0;
-  const std::size_t nN = normalRows_.size();
-  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
-    FrictionRow& row = frictionRows_[f];
+  const std::size_t nN = rows.normalRows().size();
+  const std::span<FrictionRow> frictionRows = rows.frictionRows();
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
+    FrictionRow& row = frictionRows[f];
     row.rn = scale_[nN + f] * y_[nN + f];
     const auto [d1, d2] = updateTangent(row, vel[row.a]);
     sumDelta2 += d1 * d1 + d2 * d2;
@@ -303,8 +307,9 @@ bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int t
 // the projection, matrix-free through the body velocity changes of z. M_F is symmetric positive
 // definite for any free set, so conjugate gradients stay conjugate gradients on the face, and it
 // follows the free set with no factorisation to redo. A sweep's order is its point, so the
-// rows come in blocks that share no grain (prepare()), and only those run on two threads.
-double ContactSolver::precondition(std::size_t bodyCount, int threads, std::optional<double> alphaCg) {
+// rows come in blocks that share no grain (ContactRows::build()), and only those run on two threads.
+double ContactSolver::precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
+                                   std::optional<double> alphaCg) {
   const std::size_t m = y_.size();
   // Raw pointers: with the vectors as members, the compiler reloaded their data pointers after
   // every store of a double.
@@ -322,12 +327,12 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads, std::opti
   const bool step = alphaCg.has_value();
   const double alpha = alphaCg.value_or(0.0);
   // Both sweeps over the free rows; `visit(k)` updates unknown k. The rows of the two blocks
-  // (prepare(): the halves of the box along x, less a strip at their edges) share no grain, so
+  // (ContactRows::build(): the halves of the box along x, less a strip at their edges) share no grain, so
   // the two threads sweep one each; the strip rows and the wall friction rows follow, serial.
   // Backward, the same in reverse. Either block may run first or both at once: the same bits.
   // Range b is rows [first[b], last[b]): the two blocks, then (b = 2) the serial rows.
-  const std::size_t first[3] = {0, static_cast<std::size_t>(sweepBlockEnd_[0]),
-                                static_cast<std::size_t>(sweepBlockEnd_[1])};
+  const std::size_t first[3] = {0, static_cast<std::size_t>(rows.sweepBlockEnd(0)),
+                                static_cast<std::size_t>(rows.sweepBlockEnd(1))};
   const std::size_t last[3] = {first[1], first[2], m};
   const bool team = threads > 1 && last[1] > 0;
   // z . A p of each range, summed in the backward sweep, where each z_k takes its final value.
@@ -446,8 +451,10 @@ double ContactSolver::precondition(std::size_t bodyCount, int threads, std::opti
 //   A deflated iteration streams 2k more numbers per row (k modes), which for k = 10 to 40 costs,
 //   by byte count, about what the saved iterations save: the gain would have to come from a
 //   cheaper projection.
-int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
-  const std::size_t nN = normalRows_.size(), m = nN + frictionRows_.size();
+int ContactSolver::solveMprgp(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
+  const std::span<const NormalRow> normalRows = rows.normalRows();
+  const std::span<FrictionRow> frictionRows = rows.frictionRows();
+  const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
   // The team is timed against one thread and kept only while it is faster (ThreadChoice): on this
   // shared 2-core machine at load ~6, two threads made an 8,000-sphere solve 25-40x slower (every
   // pass ends at a barrier, and a descheduled thread stalls it); results are the same bits either way.
@@ -456,17 +463,17 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   const auto start = std::chrono::steady_clock::now();
   for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_, &z_}) v->resize(m);
   for (std::size_t k = 0; k < nN; ++k) {
-    scale_[k] = std::sqrt(normalRows_[k].invW);
-    y_[k] = normalRows_[k].r / scale_[k];
+    scale_[k] = std::sqrt(normalRows[k].invW);
+    y_[k] = normalRows[k].r / scale_[k];
   }
-  for (std::size_t f = 0; f < frictionRows_.size(); ++f) {
-    scale_[nN + f] = std::sqrt(frictionRows_[f].invWnn);
-    y_[nN + f] = frictionRows_[f].rn / scale_[nN + f];
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
+    scale_[nN + f] = std::sqrt(frictionRows[f].invWnn);
+    y_[nN + f] = frictionRows[f].rn / scale_[nN + f];
   }
-  buildMprgpRows(vel.size());
+  buildMprgpRows(rows, vel.size());
   // warmStart() left the velocities without the normal impulses of the warm start y: applied
   // here, body by body over the scatter entries (on the team, the same bits for any team).
-  if (warmNormalsInSolve_) addImpulses(y_, vel, threads);
+  if (rows.warmNormalsInSolve()) addImpulses(y_, vel, threads);
   y0_ = y_;  // `vel` holds the velocities of y0_; iterations move y only (see syncVelocities)
   const double bound = operatorBound_ = scaledOperatorBound(vel.size());
   const double alphaBar = bound > 0.0 ? 1.95 / bound : 1.0;  // safe: bound >= ||A||
@@ -492,7 +499,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   double pApReady = 0.0;
   auto freeGradientToP = [&] {  // p = M_F^-1 phi (or phi): restart of the conjugate gradients
     if (preconditioned) {
-      precondition(vel.size(), threads);
+      precondition(rows, vel.size(), threads);
       conjugate = 0.0;  // p = z, made by the next measure()
     } else {
       for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
@@ -577,11 +584,11 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   steps_ = MprgpSteps{};
   int iterations = 0;
   double tangentChange = 0.0;
-  const int outerCap = frictionRows_.empty() ? 1 : settings.maxIterations;
+  const int outerCap = frictionRows.empty() ? 1 : settings.maxIterations;
   // With wall friction the normal solves inside the block iteration are inexact (Dembo-Eisenstat-
   // Steihaug style): each one to a tenth of the last tangential change, down to the tolerance, so
   // early blocks cost little.
-  double innerTolerance = frictionRows_.empty() ? settings.tolerance : std::max(settings.tolerance, 1e-4);
+  double innerTolerance = frictionRows.empty() ? settings.tolerance : std::max(settings.tolerance, 1e-4);
   for (int outer = 0; outer < outerCap; ++outer) {
     if (outer > 0) contactVelocities(vel, g_, threads);  // the tangential pass moved vel
     freeGradientToP();
@@ -603,7 +610,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
           // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure(); preconditioned,
           // the step itself is made by the forward sweep.
           if (preconditioned) {
-            conjugate = precondition(vel.size(), threads, alphaCg) / pAp;
+            conjugate = precondition(rows, vel.size(), threads, alphaCg) / pAp;
           } else {
             const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
               y_[k] -= alphaCg * p_[k];
@@ -615,7 +622,7 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
           ++steps_.conjugate;
         } else if (double phiAp = 0.0; projectedCg && projectedCgStep(alphaCg, vel.size(), threads, phiAp)) {
           ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
-          conjugate = (preconditioned ? precondition(vel.size(), threads) : phiAp) / pAp;
+          conjugate = (preconditioned ? precondition(rows, vel.size(), threads) : phiAp) / pAp;
           checkDescent = true;
         } else {  // expansion: to the first bound, then a projected gradient step of length alpha_bar
           ++steps_.gradient;
@@ -645,12 +652,12 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
       }
     }
     syncVelocities();
-    if (frictionRows_.empty()) break;
+    if (frictionRows.empty()) break;
     // Block Gauss-Seidel with the tangential impulses of the wall points (their discs use the new
     // normal impulses), until a pass changes them by less than the tolerance after a normal solve
     // to the tolerance.
     const bool normalsConverged = innerTolerance <= settings.tolerance;
-    tangentChange = frictionTangentPass(vel);
+    tangentChange = frictionTangentPass(rows, vel);
     ++iterations;
     if ((tangentChange < settings.tolerance && normalsConverged) || iterations >= settings.maxIterations) break;
     innerTolerance = std::max(settings.tolerance, std::min(innerTolerance, 0.1 * tangentChange));
@@ -658,9 +665,8 @@ int ContactSolver::solveMprgp(std::vector<BodyVelocity>& vel, const NscdSettings
   residual_ = std::max(residual_, tangentChange);
   // The impulses in contact order, for exportImpulses() and normalImpulse(), which read every
   // contact's points: through the rows in sweep order, each read missed the cache.
-  impulseOfRow_.resize(nN);
-  for (std::size_t k = 0; k < nN; ++k) impulseOfRow_[static_cast<std::size_t>(sortKeys_[k].index)] = scale_[k] * y_[k];
-  for (std::size_t f = 0; f < frictionRows_.size(); ++f) frictionRows_[f].rn = scale_[nN + f] * y_[nN + f];
+  rows.storeNormalImpulses([&](std::size_t k) { return scale_[k] * y_[k]; });
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) frictionRows[f].rn = scale_[nN + f] * y_[nN + f];
   if (m >= kParallelMin)  // time per iteration: the iteration count changes from step to step
     threadChoice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
                          std::max(1, iterations));
