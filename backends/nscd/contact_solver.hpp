@@ -4,24 +4,8 @@
 // The problem it solves (unknowns, Delassus operator, Signorini and Coulomb laws) and the rows
 // that state it, with their sweep order and blocks, are in contact_rows.hpp.
 //
-// Gauss-Seidel update of one row (a few dozen flops, Jacobian pieces precomputed):
-//     r_n <- max(0, r_n - omega (u_n + c) / W_nn)      (omega = 1: plain Gauss-Seidel; option)
-// and for a friction point, after its normal update, in the same visit,
-//     r_t <- proj_{||r_t|| <= mu r_n} ( r_t - u_t / w_t ),   w_t = largest eigenvalue of W_tt.
-// A scalar w_t (not W_tt^-1) keeps the fixed point exactly Coulomb's law: on the disc boundary,
-// u_t = -(lambda - 1) w_t r_t is anti-parallel to r_t; inside, u_t = 0.
-//
-// Convergence ("Quad"-type relative norm over one sweep k):
-//     eps_k = sqrt( sum_rows ||r^k - r^(k-1)||^2 / sum_rows ||r^k||^2 ),
-// stop when eps_k < tolerance (after min_iterations) or after max_iterations sweeps.
-// The stopping rule stays the impulse norm above: a rule on the largest velocity error per row
-// (|u_n + c| below 3e-4 g dt) stopped earlier (1270 versus 1900 sweeps per step) but left
-// max |sum F| / (d^2 P) at 1e-3 to 3e-3 instead of 2e-4 to 1.5e-3 (both at omega = 1.85, same pile
-// restarted at rest, t + 8 to t + 27): near jamming W is ill-conditioned,
-// so a small H^T dv does not bound the impulse (force) error.
-//
 // Two solvers of the same problem (NscdSettings::solver).
-// - "nlgs", the Gauss-Seidel above (SPEC 5.1, LMGC90's NLGS). Cheap per sweep and robust, but its
+// - "nlgs" (nlgs_solver.hpp), the Gauss-Seidel of its title (SPEC 5.1, LMGC90's NLGS). Cheap per sweep and robust, but its
 //   error near jamming shrinks by a factor close to 1 per sweep (the Delassus matrix of a jammed,
 //   nearly isostatic pile is ill-conditioned): it stops on a small change per sweep while the
 //   impulses are still far from the solution, and that error is a force imbalance on every grain.
@@ -48,6 +32,7 @@
 #include "backends/nscd/contact_cache.hpp"
 #include "backends/nscd/contact_rows.hpp"
 #include "backends/nscd/narrow_phase.hpp"
+#include "backends/nscd/nlgs_solver.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "backends/nscd/thread_choice.hpp"
 
@@ -103,7 +88,7 @@ class ContactSolver {
 
  private:
   ContactRows rows_;
-  int solveNlgs(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
+  NlgsSolver nlgs_;
   int solveMprgp(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
   // MPRGP building blocks (contact_solver_mprgp.cpp) over the normal unknowns (frictionless rows,
   // then the normal part of the friction rows), in the scaled variables y = r / s (s = W_nn^-1/2).
