@@ -1,54 +1,53 @@
 #pragma once
-// Contact solver of the nscd backend: nonlinear Gauss-Seidel on contact impulses
+// Contact solver of the nscd backend: nonlinear Gauss-Seidel or MPRGP on contact impulses
 // (Moreau 1994; Jean 1999 "The non-smooth contact dynamics method", CMAME 177; LMGC90's NLGS).
 // The problem it solves (unknowns, Delassus operator, Signorini and Coulomb laws) and the rows
 // that state it, with their sweep order and blocks, are in contact_rows.hpp.
 //
+// Parts with fixed verbs, after Jolt's constraint parts:
+//   ContactRows  (contact_rows.hpp)  the step's rows: build, warmStart, exportImpulses, and the
+//                                    impulses, row count and sweep blocks they hold;
+//   NlgsSolver   (nlgs_solver.hpp)   nonlinear Gauss-Seidel over the rows: solve;
+//   MprgpSolver  (mprgp_solver.hpp)  MPRGP over the rows: solve.
+// ContactSolver holds the rows and both solvers, and its solve() dispatches on
+// NscdSettings::solver.
+//
 // Two solvers of the same problem (NscdSettings::solver).
-// - "nlgs" (nlgs_solver.hpp), the Gauss-Seidel of its title (SPEC 5.1, LMGC90's NLGS). Cheap per sweep and robust, but its
-//   error near jamming shrinks by a factor close to 1 per sweep (the Delassus matrix of a jammed,
-//   nearly isostatic pile is ill-conditioned): it stops on a small change per sweep while the
-//   impulses are still far from the solution, and that error is a force imbalance on every grain.
-// - "mprgp" (default; contact_solver_mprgp.cpp): the frictionless part is the convex quadratic
-//   program  min 1/2 r.W r + r.(u_free + c)  over r >= 0, whose optimality conditions are exactly
-//   the Signorini law (contact_rows.hpp); it is solved by Dostal's MPRGP, conjugate gradients with gradient
-//   projections for the bounds (after LMGC90's conjugate-gradient solvers, Renouf & Alart 2004).
-//   Iterations grow like the square root of the condition number instead of linearly, and the
-//   stopping rule is the true residual of the law. Its conjugate gradients are preconditioned on
-//   the free set by a forward and a backward Gauss-Seidel sweep (NscdSettings::preconditioner):
-//   the sweeps of nlgs serve inside MPRGP, where they cut the iterations 2.5 to 3.5 times.
-//   For two threads they run over blocks of rows that share no grain (contact_rows.hpp).
-//   Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
-//   every normal impulse with the tangential ones fixed, then one projected pass over the
-//   tangential impulses, until both have converged.
+// - "nlgs" (nlgs_solver.hpp), nonlinear Gauss-Seidel (SPEC 5.1, LMGC90's NLGS). Cheap per sweep
+//   and robust, but its error near jamming shrinks by a factor close to 1 per sweep (the Delassus
+//   matrix of a jammed, nearly isostatic pile is ill-conditioned): it stops on a small change per
+//   sweep while the impulses are still far from the solution, and that error is a force imbalance
+//   on every grain.
+// - "mprgp" (default; mprgp_solver.hpp): the frictionless part as a convex quadratic program over
+//   r >= 0, solved by Dostal's MPRGP. Iterations grow like the square root of the condition number
+//   instead of linearly, and the stopping rule is the true residual of the law.
 //   Measured on the same 493-sphere biperiodic pile (seed 1): with nlgs at its default tolerance
 //   1e-6, the largest |sum F| / (d^2 P) stays at 2.5e-3 after 40 t0 and ~1,000 sweeps per step;
 //   with mprgp at 1e-10, SPEC 6.1 holds from t = 39.8 with ~400 iterations per step.
 #include <array>
-#include <optional>
-#include <span>
 #include <vector>
 
 #include "backends/nscd/contact_cache.hpp"
 #include "backends/nscd/contact_rows.hpp"
+#include "backends/nscd/mprgp_solver.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nlgs_solver.hpp"
 #include "backends/nscd/nscd_settings.hpp"
-#include "backends/nscd/thread_choice.hpp"
 
 namespace confpack::nscd {
 
+/// The contact solve of one step: the rows (ContactRows) and the two solvers of them (NlgsSolver,
+/// MprgpSolver). Owns one of each and the residual of the last solve. Verbs, in step order:
+/// prepare, warmStart, solve, exportImpulses; the accessors read the rows or the last MPRGP solve.
 class ContactSolver {
  public:
-  /// Builds the rows of every contact point: lever arms from `positions` (q_m), Delassus diagonal,
-  /// gap-correction bias. `bodies` has one entry per grain plus a last, static one (zero inverse
-  /// mass) standing for the walls. `wallFriction` is mu_w (applies to side walls only).
+  /// Builds the rows of every contact point for settings.solver (ContactRows::build).
   void prepare(const std::vector<ContactGeometry>& contacts, const std::vector<core::Vec3>& positions,
                const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
                const NscdSettings& settings) {
     rows_.build(contacts, positions, bodies, box, dt, settings);
   }
-  /// Sets the impulses from the cache (scaled to this dt) and applies them to the velocities;
+  /// Sets the impulses from the cache and applies them to the velocities (ContactRows::warmStart);
   /// with mprgp (the solver of the last prepare()), only the tangential ones: solve() applies the
   /// normal impulses in its own pass over the bodies.
   void warmStart(const ContactCache& cache, const std::vector<ContactGeometry>& contacts, double dt,
@@ -60,22 +59,14 @@ class ContactSolver {
   /// sweeps (nlgs) or operator applications W p (mprgp, each about two sweeps of work).
   int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
   double residual() const { return residual_; }
-  /// The grains touched by the rows of each of the two sweep blocks of the last prepare(), sorted,
-  /// without `world` (the static body); both empty when the rows are not split. The blocks are
-  /// swept at once by two threads, so they must share none.
+  /// The grains touched by the rows of each of the two sweep blocks of the last prepare()
+  /// (ContactRows::sweepBlockBodies).
   std::array<std::vector<int>, 2> sweepBlockBodies(int world) const { return rows_.sweepBlockBodies(world); }
-  /// What the MPRGP iterations of the last solve were (their sum is its iteration count, less the
-  /// tangential passes with wall friction).
-  struct MprgpSteps {
-    int conjugate = 0;      ///< conjugate gradient steps
-    int projected = 0;      ///< expansions by a projected conjugate gradient step
-    int gradient = 0;       ///< expansions by Dostal's step (first bound, then projected gradient)
-    int proportioning = 0;  ///< proportioning steps (release of bound unknowns)
-  };
-  const MprgpSteps& mprgpSteps() const { return steps_; }
-  /// The upper bound of ||S W S|| (S = diag(W_kk^-1/2)) that set the expansion step of the last
-  /// MPRGP solve (alpha_bar = 1.95 / bound); 0 before any.
-  double operatorBound() const { return operatorBound_; }
+  using MprgpSteps = nscd::MprgpSteps;
+  /// What the MPRGP iterations of the last MPRGP solve were.
+  const MprgpSteps& mprgpSteps() const { return mprgp_.steps(); }
+  /// The upper bound of ||S W S|| of the last MPRGP solve (MprgpSolver::operatorBound); 0 before any.
+  double operatorBound() const { return mprgp_.operatorBound(); }
   int rowCount() const { return rows_.rowCount(); }
 
   /// Impulses of contact c, point p, after solve(): normal and tangential (world vector).
@@ -89,88 +80,8 @@ class ContactSolver {
  private:
   ContactRows rows_;
   NlgsSolver nlgs_;
-  int solveMprgp(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
-  // MPRGP building blocks (contact_solver_mprgp.cpp) over the normal unknowns (frictionless rows,
-  // then the normal part of the friction rows), in the scaled variables y = r / s (s = W_nn^-1/2).
-  void buildMprgpRows(const ContactRows& rows, std::size_t bodyCount);
-  // Body velocity changes M^-1 H S y: all parts, or linear only (linearOnly_).
-  void applyImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& out, int threads) const;
-  void applyLinearImpulses(const std::vector<double>& y, std::vector<core::Vec3>& out, int threads) const;
-  // vel += M^-1 H S y.
-  void addImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& vel, int threads);
-  // out = S (H^T vel + bias): the scaled gradient of the step's quadratic program at vel.
-  double contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads);
-  // out = A x (A = S W S); returns x . A x.
-  double applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount, int threads);
-  double scaledOperatorBound(std::size_t bodyCount);
-  bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
-  // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel
-  // splitting of A restricted to F, leaving M^-1 H S z in dvLinear_ / dv_; returns z . ap_.
-  // Given alphaCg, the forward sweep first makes the conjugate gradient step y -= alphaCg p,
-  // g -= alphaCg A p on each row as it reaches it, which saves that step its own pass.
-  // With threads > 1 the two sweep blocks (rows.sweepBlockEnd()) run at once, to the same bits.
-  double precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
-                      std::optional<double> alphaCg = std::nullopt);
-  double dvAlongRow(std::size_t k) const;
-  double frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& velocities);
-
-  // MPRGP state per normal unknown and per body (kept to avoid reallocations).
-  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_;
-  std::vector<BodyVelocity> dv_;
-  std::vector<core::Vec3> dvLinear_;
-  std::vector<double> rowSum_, partial_;
-  // Compact copies of the rows for the two passes of A p, scaled by s: the Jacobian of unknown k
-  // (u_k = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a, times s_k), and per body the velocity
-  // change per unit y_k of each of its unknowns, contiguous so the scatter streams.
-  struct GatherRow {
-    core::Vec3 n, axn, bxn;
-    double bias = 0.0;
-    int a = 0, b = 0;
-  };
-  struct BodyEntry {
-    core::Vec3 linear, angular;
-    int k = 0;
-  };
-  std::vector<GatherRow> gatherRows_;
-  std::vector<BodyEntry> bodyEntries_;
-  // The same without angular parts, used when no row has a lever arm across its normal (spheres).
-  struct LinearRow {
-    core::Vec3 n;
-    double bias = 0.0;
-    int a = 0, b = 0;
-  };
-  struct LinearEntry {
-    core::Vec3 linear;
-    int k = 0;
-  };
-  // What the preconditioner's sweeps scatter, per unknown in row order: the inverse masses of a
-  // and b (the linear velocity change per unit y_k is -invMa s n on a, invMb s n on b) and, unless
-  // linearOnly_, s I_a^-1 (l_a x n) and s I_b^-1 (l_b x n) (the angular change on a is minus the
-  // first, on b the second).
-  struct SweepMass {
-    double invMa = 0.0, invMb = 0.0;
-  };
-  struct SweepAngular {
-    core::Vec3 a, b;
-  };
-  std::vector<SweepMass> sweepMass_;
-  std::vector<SweepAngular> sweepAngular_;
-  bool linearOnly_ = false;
-  ThreadChoice threadChoice_;  // MPRGP's team against one thread, timed
-  std::vector<LinearRow> linearRows_;
-  std::vector<LinearEntry> linearEntries_;
-  std::vector<int> bodyEntryStart_, bodyCursor_;
-  // Per-iteration norms of MPRGP: ||g^P||^2, ||beta||^2, phi~.phi, g.p;
-  // with the preconditioner also p.A p of the new direction, and whether restricting it to the
-  // free set zeroed an entry.
-  struct Measures {
-    double projected2 = 0.0, chopped2 = 0.0, reducedFree = 0.0, gDotP = 0.0, pAp = 0.0;
-    bool restricted = false;
-  };
-  std::vector<Measures> measures_;
+  MprgpSolver mprgp_;
   double residual_ = 0.0;
-  double operatorBound_ = 0.0;
-  MprgpSteps steps_;
 };
 
 }  // namespace confpack::nscd

@@ -1,4 +1,5 @@
-// MPRGP solver of the nscd contact problem (see contact_rows.hpp for the problem, contact_solver.hpp for the choice).
+// MPRGP solver of the nscd contact problem (see contact_rows.hpp for the problem, contact_solver.hpp
+// for the choice).
 //
 // Unknowns: the normal impulses of every contact point, k < nN the frictionless rows
 // (normalRows()[k]), k >= nN the normal part of the side-wall friction rows (frictionRows()[k - nN],
@@ -14,6 +15,8 @@
 // fixed list built once per step), the per-row products are independent, and every dot product is
 // summed in fixed blocks of rows, then over blocks in order. The arithmetic therefore does not
 // depend on the number of threads: one thread and two give bitwise identical runs.
+#include "backends/nscd/mprgp_solver.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -21,8 +24,6 @@
 #include <span>
 
 #include <omp.h>
-
-#include "backends/nscd/contact_solver.hpp"
 
 namespace confpack::nscd {
 
@@ -63,7 +64,7 @@ template <class Body>
 
 }  // namespace
 
-void ContactSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount) {
+void MprgpSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount) {
   const std::span<const NormalRow> normalRows = rows.normalRows();
   const std::span<const FrictionRow> frictionRows = rows.frictionRows();
   // Gather rows: the scaled Jacobian of every unknown. Friction rows' normal parts act on the
@@ -131,7 +132,7 @@ void ContactSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCoun
   }
 }
 
-void ContactSolver::applyImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& out, int threads) const {
+void MprgpSolver::applyImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& out, int threads) const {
   const std::ptrdiff_t bodies = static_cast<std::ptrdiff_t>(out.size()) - 1;
   out.back() = BodyVelocity{};
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && y.size() >= kParallelMin)
@@ -146,7 +147,7 @@ void ContactSolver::applyImpulses(const std::vector<double>& y, std::vector<Body
   }
 }
 
-void ContactSolver::applyLinearImpulses(const std::vector<double>& y, std::vector<Vec3>& out, int threads) const {
+void MprgpSolver::applyLinearImpulses(const std::vector<double>& y, std::vector<Vec3>& out, int threads) const {
   const std::ptrdiff_t bodies = static_cast<std::ptrdiff_t>(out.size()) - 1;
   out.back().setZero();
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && y.size() >= kParallelMin)
@@ -157,7 +158,7 @@ void ContactSolver::applyLinearImpulses(const std::vector<double>& y, std::vecto
   }
 }
 
-void ContactSolver::addImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& vel, int threads) {
+void MprgpSolver::addImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& vel, int threads) {
   if (linearOnly_) {
     dvLinear_.resize(vel.size());
     applyLinearImpulses(y, dvLinear_, threads);
@@ -172,7 +173,7 @@ void ContactSolver::addImpulses(const std::vector<double>& y, std::vector<BodyVe
   }
 }
 
-double ContactSolver::contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads) {
+double MprgpSolver::contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads) {
   if (linearOnly_)
     return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
       const LinearRow& row = linearRows_[k];
@@ -190,7 +191,7 @@ double ContactSolver::contactVelocities(const std::vector<BodyVelocity>& vel, st
 
 // Row k's scaled relative normal velocity S H^T dv for the body velocity changes dv in
 // dvLinear_ (spheres) or dv_.
-inline double ContactSolver::dvAlongRow(std::size_t k) const {
+inline double MprgpSolver::dvAlongRow(std::size_t k) const {
   if (linearOnly_) {
     const LinearRow& row = linearRows_[k];
     return row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
@@ -204,8 +205,8 @@ inline double ContactSolver::dvAlongRow(std::size_t k) const {
 // out = A x = S H^T M^-1 H S x, in two passes (impulses to body velocities, then back to rows);
 // returns out . x. Spheres (linearOnly_) move linear velocities only: 24 bytes per body instead of
 // 48 between the passes, and no angular terms.
-double ContactSolver::applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount,
-                                    int threads) {
+double MprgpSolver::applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount,
+                                  int threads) {
   if (linearOnly_) {
     dvLinear_.resize(bodyCount);
     applyLinearImpulses(x, dvLinear_, threads);
@@ -235,7 +236,7 @@ double ContactSolver::applyOperator(const std::vector<double>& x, std::vector<do
 // figures are for Dostal's expansion (`"expansion": "gradient"`). With the default projected CG
 // expansion, alpha_bar only serves when that step is refused: less than 0.05 times per step on
 // the same pile.
-double ContactSolver::scaledOperatorBound(std::size_t bodyCount) {
+double MprgpSolver::scaledOperatorBound(std::size_t bodyCount) {
   const std::size_t m = gatherRows_.size();
   rowSum_.assign(m, 0.0);
   for (std::size_t body = 0; body + 1 < bodyCount; ++body) {  // the world (last) has no entries
@@ -256,7 +257,7 @@ double ContactSolver::scaledOperatorBound(std::size_t bodyCount) {
   return m > 0 ? *std::max_element(rowSum_.begin(), rowSum_.end()) : 0.0;
 }
 
-double ContactSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& vel) {
+double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& vel) {
   double sumDelta2 = 0.0, sumR2 = 0.0;
   const std::size_t nN = rows.normalRows().size();
   const std::span<FrictionRow> frictionRows = rows.frictionRows();
@@ -283,7 +284,7 @@ double ContactSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVel
 // timed steps, every step solved both ways, the run following the new solver): Dostal's expansion
 // 158 iterations per step, this one 116, 22% less solve time; 1,548 steps took fewer iterations,
 // 187 more. Restarting after the projected step instead gave about 134 (10% less time than Dostal's).
-bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp) {
+bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp) {
   const std::size_t m = y_.size();
   const double gDotD = blockedSum(m, threads, partial_, [&](std::size_t k) {
     step_[k] = std::max(0.0, y_[k] - alphaCg * p_[k]) - y_[k];
@@ -308,8 +309,8 @@ bool ContactSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int t
 // definite for any free set, so conjugate gradients stay conjugate gradients on the face, and it
 // follows the free set with no factorisation to redo. A sweep's order is its point, so the
 // rows come in blocks that share no grain (ContactRows::build()), and only those run on two threads.
-double ContactSolver::precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
-                                   std::optional<double> alphaCg) {
+double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
+                                 std::optional<double> alphaCg) {
   const std::size_t m = y_.size();
   // Raw pointers: with the vectors as members, the compiler reloaded their data pointers after
   // every store of a double.
@@ -451,7 +452,9 @@ double ContactSolver::precondition(const ContactRows& rows, std::size_t bodyCoun
 //   A deflated iteration streams 2k more numbers per row (k modes), which for k = 10 to 40 costs,
 //   by byte count, about what the saved iterations save: the gain would have to come from a
 //   cheaper projection.
-int ContactSolver::solveMprgp(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
+int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
+  residual_ = 0.0;
+  if (rows.rowCount() == 0) return 0;
   const std::span<const NormalRow> normalRows = rows.normalRows();
   const std::span<FrictionRow> frictionRows = rows.frictionRows();
   const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
