@@ -39,7 +39,7 @@ struct NscdSettings {
   /// sum_rows |r^k|^2) (a "Quad"-type norm: every row counts with its impulse vector, normal and
   /// tangential); default 1e-6 (at 1e-4 a 536-sphere pile never gets below |sum F| ~ 1e-2 d^2 P).
   /// mprgp: relative projected gradient ||g^P|| / ||b||, the contact velocity residual of the
-  /// Signorini law over that of zero impulses (contact_solver_mprgp.cpp); default 1e-10. Measured
+  /// Signorini law over that of zero impulses (mprgp_solver.cpp); default 1e-10. Measured
   /// on a 493-sphere pile: the largest |sum F| / (d^2 P) settles near 7e-3 at 1e-6 (run from the
   /// deposit to t = 60), and, restarted at rest from t = 30 for 3000 steps, near 2e-4 at 1e-8
   /// (above the SPEC 6.1 bound 1e-4) and at 1e-6 to 4e-6 at 1e-10. A looser 1e-9 is not faster
@@ -47,7 +47,7 @@ struct NscdSettings {
   /// per step (231 s), against 16,600 steps at 419 (151 s) with 1e-10, the two run side by side.
   double tolerance = 1e-10;
   /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
-  /// conjugate gradient step would make an impulse negative (contact_solver_mprgp.cpp).
+  /// conjugate gradient step would make an impulse negative (mprgp_solver.cpp).
   /// "gradient" is Dostal's original: to the first bound, then a projected gradient step of fixed
   /// length 1.95 / ||A||, and conjugate gradients restart. In a loading pile nearly every second
   /// step was one (2,000 spheres, 4 t0 fall and 200 steps: 162k conjugate gradient steps, 139k
@@ -55,10 +55,10 @@ struct NscdSettings {
   /// the whole conjugate gradient step projected on r >= 0 when that lowers the energy, else
   /// Dostal's step (after Kruzik et al. 2020), and goes on conjugating from it instead of
   /// restarting. It saves most while contacts open and close (22% of the solve time on that
-  /// pile) and nothing near jamming; measurements in contact_solver_mprgp.cpp and docs/performance.md.
+  /// pile) and nothing near jamming; measurements in mprgp_solver.cpp and docs/performance.md.
   ExpansionKind expansion = ExpansionKind::ProjectedCg;
   /// ["preconditioner"] (mprgp) "sgs" (default) or "none": how conjugate gradients are
-  /// preconditioned on the free set (contact_solver_mprgp.cpp). "sgs" applies one forward and one
+  /// preconditioned on the free set (mprgp_solver.cpp). "sgs" applies one forward and one
   /// backward Gauss-Seidel sweep over the free rows per iteration, which about doubles the cost of
   /// an iteration and cuts the iterations 2.5 to 3.5 times. Measured, the two side by side on the
   /// 493-sphere biperiodic pile (6 x 6, h = 12), seeds 1 to 10, up to 60 t0: 139 to 179 iterations

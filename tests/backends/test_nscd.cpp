@@ -360,7 +360,7 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
 TEST_CASE("nscd mprgp: two threads give the bits of one on a pile large enough for its parallel passes", "[nscd]") {
   // 1,500 spheres of a geometric deposit, each given its placeholder's diameter so that they touch
   // at once (seated on three supports each): more than the 4,096 unknowns from which the solver's
-  // passes run in parallel (contact_solver_mprgp.cpp).
+  // passes run in parallel (mprgp_solver.cpp).
   const core::SystemDef s = touchingSpheres(14.0, 14.0, true, 1500, 5);
   auto one = nscd::makeNscdBackend(s, {{"threads", 1}, {"max_iterations", 30}});
   auto two = nscd::makeNscdBackend(s, {{"threads", 2}, {"max_iterations", 30}});
