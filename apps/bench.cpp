@@ -13,8 +13,8 @@
 
 #include "analysis/bulk_region.hpp"
 #include "analysis/interpenetration.hpp"
-#include "apps/run_pipeline.hpp"
 #include "core/deposition.hpp"
+#include "study/run_pipeline.hpp"
 
 namespace confpack::app {
 

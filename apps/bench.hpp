@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "apps/run_pipeline.hpp"
+#include "study/run_pipeline.hpp"
 
 namespace confpack::app {
 

@@ -6,7 +6,7 @@
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
-#include "apps/report.hpp"
+#include "study/report.hpp"
 
 namespace confpack::app {
 

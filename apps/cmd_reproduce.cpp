@@ -1,4 +1,4 @@
-// `confpack reproduce --scale tiny|quick|paper --out DIR`: runs the study of SPEC 7 (apps/reproduce.hpp)
+// `confpack reproduce --scale tiny|quick|paper --out DIR`: runs the study of SPEC 7 (study/reproduce.hpp)
 // into DIR (a resumable sweep folder) and writes its report into DIR/report/.
 #include <fmt/format.h>
 #include <unistd.h>
@@ -10,11 +10,11 @@
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
-#include "apps/report.hpp"
-#include "apps/reproduce.hpp"
-#include "apps/sweep.hpp"
-#include "apps/sweep_runner.hpp"
 #include "core/packing_io.hpp"
+#include "study/report.hpp"
+#include "study/reproduce.hpp"
+#include "study/sweep.hpp"
+#include "study/sweep_runner.hpp"
 
 namespace confpack::app {
 

@@ -14,7 +14,7 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
-#include "apps/run_pipeline.hpp"
+#include "study/run_pipeline.hpp"
 
 namespace confpack::app {
 

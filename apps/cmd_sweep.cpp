@@ -10,8 +10,8 @@
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
-#include "apps/sweep.hpp"
-#include "apps/sweep_runner.hpp"
+#include "study/sweep.hpp"
+#include "study/sweep_runner.hpp"
 
 namespace confpack::app {
 

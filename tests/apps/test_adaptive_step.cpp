@@ -1,4 +1,4 @@
-// The adaptive time step of a compaction (compaction.adaptive_dt, apps/run_pipeline.hpp): the
+// The adaptive time step of a compaction (compaction.adaptive_dt, study/run_pipeline.hpp): the
 // step keeps every grain within a hundredth of the smallest grain size per step at its current
 // speed, and a pile compacted with it ends in a true static equilibrium (forces are impulses over
 // the step that made them, whatever its length).
@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "apps/run_pipeline.hpp"
 #include "core/box.hpp"
 #include "core/deposition.hpp"
 #include "core/grain.hpp"
+#include "study/run_pipeline.hpp"
 #include "tests/support/systems.hpp"
 
 using namespace confpack;

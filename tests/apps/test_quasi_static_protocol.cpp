@@ -1,13 +1,13 @@
-// The quasi-static protocol of a compaction (compaction.protocol, apps/run_pipeline.hpp): nscd
+// The quasi-static protocol of a compaction (compaction.protocol, study/run_pipeline.hpp): nscd
 // falls with time steps, hands over to the finisher and ends in a static equilibrium whose floor
 // reaction is the weight; Bullet, which has no finisher, runs the dynamic protocol and says so.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <string>
 
-#include "apps/run_pipeline.hpp"
 #include "core/deposition.hpp"
 #include "core/grain.hpp"
+#include "study/run_pipeline.hpp"
 
 using namespace confpack;
 

@@ -7,8 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "apps/report.hpp"
-#include "apps/sweep.hpp"
+#include "study/report.hpp"
+#include "study/sweep.hpp"
 #include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;

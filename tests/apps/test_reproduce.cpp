@@ -14,8 +14,8 @@
 #include <sstream>
 #include <thread>
 
-#include "apps/reproduce.hpp"
-#include "apps/sweep.hpp"
+#include "study/reproduce.hpp"
+#include "study/sweep.hpp"
 #include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;

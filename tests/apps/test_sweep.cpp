@@ -11,9 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "apps/deposit_store.hpp"
-#include "apps/sweep.hpp"
 #include "core/packing_io.hpp"
+#include "study/deposit_store.hpp"
+#include "study/sweep.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;

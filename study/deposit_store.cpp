@@ -1,4 +1,4 @@
-#include "apps/deposit_store.hpp"
+#include "study/deposit_store.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "apps/report.hpp"
+#include "study/report.hpp"
 
 #include <fmt/format.h>
 

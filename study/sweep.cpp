@@ -1,4 +1,4 @@
-#include "apps/sweep.hpp"
+#include "study/sweep.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -17,9 +17,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "apps/deposit_store.hpp"
 #include "backends/backend_factory.hpp"
 #include "core/packing_io.hpp"
+#include "study/deposit_store.hpp"
 
 namespace confpack::app {
 

@@ -1,7 +1,7 @@
-#include "apps/sweep_runner.hpp"
+#include "study/sweep_runner.hpp"
 
-#include "apps/run_pipeline.hpp"
 #include "core/deposition.hpp"
+#include "study/run_pipeline.hpp"
 
 namespace confpack::app {
 

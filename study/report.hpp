@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "apps/sweep.hpp"
+#include "study/sweep.hpp"
 
 namespace confpack::app {
 

@@ -2,7 +2,7 @@
 // The real physics behind a sweep: core::deposit for the deposits and runAndWrite (deposit given,
 // compact, analyse, write) for the runs. Kept apart from the sweep engine so that the engine and
 // its tests do not depend on the backends.
-#include "apps/sweep.hpp"
+#include "study/sweep.hpp"
 
 namespace confpack::app {
 

@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "apps/run_pipeline.hpp"
 #include "core/deposition.hpp"
 #include "core/run_config.hpp"
+#include "study/run_pipeline.hpp"
 
 namespace confpack::app {
 

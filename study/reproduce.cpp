@@ -1,4 +1,4 @@
-#include "apps/reproduce.hpp"
+#include "study/reproduce.hpp"
 
 #include <fmt/format.h>
 

@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "apps/sweep.hpp"
+#include "study/sweep.hpp"
 
 namespace confpack::app {
 

@@ -1,4 +1,4 @@
-#include "apps/run_pipeline.hpp"
+#include "study/run_pipeline.hpp"
 
 #include <fmt/format.h>
 
