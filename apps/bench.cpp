@@ -87,12 +87,12 @@ core::RunConfig baseConfig(const BenchDef& def, core::ShapeKind shape) {
 struct BackendRun {
   nlohmann::json json;
   double finalInterpenetration = 0.0;
-  CompactionOutcome outcome;
+  study::CompactionOutcome outcome;
 };
 
 /// `progress` with every status led by `what` (the case: a compaction's own status starts with
 /// its backend).
-RunProgressFn labelled(const RunProgressFn& progress, std::string what) {
+study::RunProgressFn labelled(const study::RunProgressFn& progress, std::string what) {
   if (!progress) return {};
   return [progress, what = std::move(what)](double fraction, const std::string& status) {
     progress(fraction, what + " " + status);
@@ -100,12 +100,12 @@ RunProgressFn labelled(const RunProgressFn& progress, std::string what) {
 }
 
 BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const core::Deposit& dep,
-                      const RunProgressFn& progress) {
+                      const study::RunProgressFn& progress) {
   cfg.backend = backend;
   resetPeakRss();
   BackendRun run;
-  run.outcome = compact(cfg, dep, {}, progress);
-  const CompactionOutcome& out = run.outcome;
+  run.outcome = study::compact(cfg, dep, {}, progress);
+  const study::CompactionOutcome& out = run.outcome;
   const analysis::Interpenetration inter =
       analysis::interpenetration(out.packing, analysis::bulkRegion(out.packing), analysis::InterpenetrationDef{});
   run.finalInterpenetration = inter.exactPercent;
@@ -135,7 +135,7 @@ BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const cor
 }
 
 nlohmann::json compareCase(const BenchDef& def, const std::string& name, core::ShapeKind shape,
-                           const std::function<void(const std::string&)>& log, const RunProgressFn& progress) {
+                           const std::function<void(const std::string&)>& log, const study::RunProgressFn& progress) {
   const core::RunConfig cfg = baseConfig(def, shape);
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   nlohmann::json c = {{"n_grains", dep.grains.size()},
@@ -180,7 +180,7 @@ double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
 }
 
 nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
-                             const std::function<void(const std::string&)>& log, const RunProgressFn& progress) {
+                             const std::function<void(const std::string&)>& log, const study::RunProgressFn& progress) {
   nlohmann::json points = nlohmann::json::array();
   std::map<std::string, std::vector<double>> logN, logT, logTPerSweep, logCpu;
   for (int n : def.scalingSizes) {
@@ -199,20 +199,20 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
       core::RunConfig c = cfg;
       c.backend = backend;
       c.compaction.protocol = core::Protocol::Dynamic;  // the series times dynamic steps
-      const double dt = defaultTimeStep(c, dep);
+      const double dt = study::defaultTimeStep(c, dep);
       c.compaction.dt = dt;
       c.compaction.adaptiveDt = false;  // the window below counts fixed steps
       const long fallWindows = static_cast<long>(std::ceil(def.scalingFall / (def.scalingSteps * dt) - 1e-9));
       c.compaction.checkInterval = def.scalingSteps;
       c.compaction.timeLimit = static_cast<double>((fallWindows + 1) * def.scalingSteps) * dt;
-      const CompactionOutcome out =
-          compact(c, dep, {}, labelled(progress, fmt::format("scaling n={}", dep.grains.size())));
+      const study::CompactionOutcome out =
+          study::compact(c, dep, {}, labelled(progress, fmt::format("scaling n={}", dep.grains.size())));
       // Over the timed window (between the two checks): time per step, solver iterations per
       // step, and the solve time per contact update (rows x iterations), which separates the
       // cost of one iteration from the number of them.
       const auto& h = out.history;
       if (h.empty()) throw std::runtime_error(fmt::format("bench scaling: {} stopped before its first check", backend));
-      const CheckPoint first = h.size() >= 2 ? h[h.size() - 2] : CheckPoint{}, last = h.back();
+      const study::CheckPoint first = h.size() >= 2 ? h[h.size() - 2] : study::CheckPoint{}, last = h.back();
       const double steps = static_cast<double>(last.steps - first.steps);
       const double perStep = (last.stepSeconds - first.stepSeconds) / steps;
       const double cpuPerStep = (last.stepCpuSeconds - first.stepCpuSeconds) / steps;
@@ -263,7 +263,7 @@ const std::vector<std::string>& benchCaseNames() {
 }
 
 nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log,
-                        const RunProgressFn& progress) {
+                        const study::RunProgressFn& progress) {
   nlohmann::json cases = nlohmann::json::object();
   for (const std::string& name : def.cases) {
     if (log) log(fmt::format("case {}", name));

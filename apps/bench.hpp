@@ -42,6 +42,6 @@ const std::vector<std::string>& benchCaseNames();
 /// per case and per finished compaction; `progress` the progress of each compaction, its status
 /// led by the case ("msp-w10 nscd t=12.0 step ...").
 nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log = {},
-                        const RunProgressFn& progress = {});
+                        const study::RunProgressFn& progress = {});
 
 }  // namespace confpack::app

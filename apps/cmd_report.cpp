@@ -22,13 +22,13 @@ struct ReportState {
 void runReportCommand(const ReportState& st) {
   const std::filesystem::path out = st.out.empty() ? st.sweepDir / "report" : st.out;
   checkInput("report", [&] {
-    readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
+    study::readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
     checkOutputTarget(out);
   });
   runWork("report", [&] {
-    ReportOptions o;
+    study::ReportOptions o;
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
-    const ReportSummary s = writeReport(st.sweepDir, out, o);
+    const study::ReportSummary s = study::writeReport(st.sweepDir, out, o);
     fmt::print("report: {} runs ({} done, {} failed, {} missing, {} not equilibrated), {} figures{}\n  {}\n  {}\n",
                s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures,
                s.gnuplotUsed ? "" : " (not drawn: gnuplot unavailable)", s.html.string(), s.markdown.string());

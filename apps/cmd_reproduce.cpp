@@ -29,31 +29,32 @@ struct ReproduceState {
 };
 
 void runReproduceCommand(const ReproduceState& st) {
-  SweepSpec spec;
-  std::vector<SweepRun> runs;
+  study::SweepSpec spec;
+  std::vector<study::SweepRun> runs;
   checkInput("reproduce", [&] {
-    spec = parseSweepSpec(reproductionSweep(st.scale), st.scale);
-    runs = expandRuns(spec);
+    spec = study::parseSweepSpec(study::reproductionSweep(st.scale), st.scale);
+    runs = study::expandRuns(spec);
     checkOutputTarget(st.out);
   });
   if (st.list) {
-    std::fputs(formatRunTable(runs, std::filesystem::exists(st.out / kSweepTable) ? st.out : std::filesystem::path{})
+    std::fputs(study::formatRunTable(
+                   runs, std::filesystem::exists(st.out / study::kSweepTable) ? st.out : std::filesystem::path{})
                    .c_str(),
                stdout);
     return;
   }
-  SweepSummary summary;
-  ReportSummary report;
+  study::SweepSummary summary;
+  study::ReportSummary report;
   runWork("reproduce", [&] {
-    SweepOptions opt;
+    study::SweepOptions opt;
     opt.jobs = st.jobs;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
     std::filesystem::create_directories(st.out);
     // The study's definition next to its results, as a sweep file a user can edit and rerun.
-    core::writeFileAtomically(st.out / "study.json", reproductionSweep(st.scale).dump(2));
-    summary = runSweep(spec, st.out, opt, pipelineRunner(1), pipelineDepositor());
-    report = writeReport(st.out, st.out / "report");
+    core::writeFileAtomically(st.out / "study.json", study::reproductionSweep(st.scale).dump(2));
+    summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1), study::pipelineDepositor());
+    report = study::writeReport(st.out, st.out / "report");
   });
   fmt::print("reproduce {}: {} runs ({} finished now, {} earlier, {} failed) in {:.0f} s\nreport: {}\n        {}\n",
              st.scale, summary.total, summary.ran, summary.alreadyDone, summary.failed, summary.wallSeconds,

@@ -42,9 +42,8 @@ void runRun(RunState& st) {
     applyThreads(cfg.threads);
     StagedOutput output(st.opts.out);
     Progress progress("run", !st.opts.quiet, 10.0);
-    const nlohmann::json result = runAndWrite(cfg, output.dir(), [&](double fraction, const std::string& status) {
-      progress.update(fraction, status);
-    });
+    const nlohmann::json result = study::runAndWrite(
+        cfg, output.dir(), [&](double fraction, const std::string& status) { progress.update(fraction, status); });
     progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
     writeJson(output.dir() / "config.json", result["config"]);
     output.commit();

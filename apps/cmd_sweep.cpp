@@ -29,33 +29,34 @@ struct SweepState {
 };
 
 void runSweepCommand(const SweepState& st) {
-  SweepSpec spec;
-  std::vector<SweepRun> runs;
+  study::SweepSpec spec;
+  std::vector<study::SweepRun> runs;
   std::filesystem::path out = st.out.empty() ? std::filesystem::path(st.file.stem()) : st.out;
   checkInput("sweep", [&] {
-    spec = readSweepSpec(st.file);
-    runs = expandRuns(spec);
-    sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
+    spec = study::readSweepSpec(st.file);
+    runs = study::expandRuns(spec);
+    study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
     checkOutputTarget(out);
   });
   if (st.list) {
     const bool sliced = st.taskCount > 1;
-    std::fputs(formatRunTable(runs, std::filesystem::exists(out / kSweepTable) ? out : std::filesystem::path{},
+    std::fputs(
+        study::formatRunTable(runs, std::filesystem::exists(out / study::kSweepTable) ? out : std::filesystem::path{},
                               sliced ? std::optional<std::size_t>(st.taskIndex) : std::nullopt, st.taskCount)
-                   .c_str(),
-               stdout);
+            .c_str(),
+        stdout);
     return;
   }
-  SweepSummary summary;
+  study::SweepSummary summary;
   runWork("sweep", [&] {
-    SweepOptions opt;
+    study::SweepOptions opt;
     opt.jobs = st.jobs;
     opt.taskIndex = st.taskIndex;
     opt.taskCount = st.taskCount;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
-    summary = runSweep(spec, out, opt, pipelineRunner(st.threads), pipelineDepositor());
+    summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads), study::pipelineDepositor());
   });
   if (summary.failed > 0) {
     fmt::print(stderr, "confpack sweep: error: {} run(s) failed (see runs/*/failed.json); run the same command again to retry them\n",

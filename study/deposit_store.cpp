@@ -7,7 +7,7 @@
 
 #include "core/packing_io.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 namespace {
 
@@ -83,4 +83,4 @@ core::Deposit readDeposit(const std::filesystem::path& path) {
   return depositFromJson(j, path.string());
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -16,7 +16,7 @@
 #include "core/box.hpp"
 #include "core/deposition.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 /// The deposit as a JSON document (see the format above). `box` is the box it was made for.
 nlohmann::json depositToJson(const core::Deposit& deposit, const core::BoxDef& box);
@@ -30,4 +30,4 @@ void writeDeposit(const core::Deposit& deposit, const core::BoxDef& box, const s
 /// Reads a deposit file written by writeDeposit.
 core::Deposit readDeposit(const std::filesystem::path& path);
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -14,7 +14,7 @@
 #include "analysis/geometric_model.hpp"
 #include "core/packing_io.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -874,4 +874,4 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   return summary;
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -18,7 +18,7 @@
 
 #include "study/sweep.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 /// Mean and sample standard deviation of replicas.
 struct ReplicaStat {
@@ -71,4 +71,4 @@ struct ReportSummary {
 ReportSummary writeReport(const std::filesystem::path& sweepDir, const std::filesystem::path& outDir,
                           const ReportOptions& options = {});
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -4,7 +4,7 @@
 
 #include <stdexcept>
 
-namespace confpack::app {
+namespace confpack::study {
 
 using nlohmann::json;
 
@@ -87,4 +87,4 @@ json reproductionSweep(std::string_view scale) {
   throw std::invalid_argument(fmt::format("--scale: expected tiny, quick or paper (got '{}')", scale));
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::study

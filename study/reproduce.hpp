@@ -14,7 +14,7 @@
 
 #include "study/sweep.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 /// Names accepted by reproductionSweep, in order: tiny, quick, paper.
 const std::vector<std::string_view>& reproductionScales();
@@ -23,4 +23,4 @@ const std::vector<std::string_view>& reproductionScales();
 /// Throws std::invalid_argument for an unknown scale.
 nlohmann::json reproductionSweep(std::string_view scale);
 
-}  // namespace confpack::app
+}  // namespace confpack::study

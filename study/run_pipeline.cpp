@@ -15,7 +15,7 @@
 #include "core/quasi_static_finisher.hpp"
 #include "core/vtk_writer.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 namespace {
 
@@ -305,4 +305,4 @@ nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::pa
   return result;
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::study

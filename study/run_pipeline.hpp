@@ -13,7 +13,7 @@
 #include "core/packing.hpp"
 #include "core/run_config.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 /// Progress of a long run: fraction done in [0, 1] (of the time limit) and a short status line.
 using RunProgressFn = std::function<void(double fraction, const std::string& status)>;
@@ -107,4 +107,4 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
 nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
                            const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr);
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -21,7 +21,7 @@
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -582,4 +582,4 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
   return summary;
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -23,7 +23,7 @@
 #include "core/run_config.hpp"
 #include "study/run_pipeline.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 /// Value of the "format" key of a sweep file.
 inline constexpr std::string_view kSweepFormat = "confpack-sweep";
@@ -140,4 +140,4 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const std::filesys
 /// Reads the run table back from SWEEPDIR/sweep.json (for the report).
 std::vector<SweepRun> readRunTable(const std::filesystem::path& dir, SweepSpec* spec = nullptr);
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -3,7 +3,7 @@
 #include "core/deposition.hpp"
 #include "study/run_pipeline.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 SweepRunFn pipelineRunner(int threads) {
   return [threads](const core::RunConfig& cfg, const std::filesystem::path& runDir, const core::Deposit& deposit,
@@ -18,4 +18,4 @@ SweepDepositFn pipelineDepositor() {
   return [](const core::RunConfig& cfg) { return core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed); };
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::study

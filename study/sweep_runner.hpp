@@ -4,7 +4,7 @@
 // its tests do not depend on the backends.
 #include "study/sweep.hpp"
 
-namespace confpack::app {
+namespace confpack::study {
 
 /// Runs one sweep run with runAndWrite on the shared deposit. `threads` > 0 overrides the run's
 /// thread count at run time (it is not part of the run's identity in the table).
@@ -13,4 +13,4 @@ SweepRunFn pipelineRunner(int threads = 0);
 /// Makes a run's deposit with core::deposit (box, population, deposition settings and seed).
 SweepDepositFn pipelineDepositor();
 
-}  // namespace confpack::app
+}  // namespace confpack::study

@@ -34,31 +34,31 @@ TEST_CASE("adaptive step: v dt + g dt^2 / 2 equals a hundredth of the smallest g
 
   SECTION("grains at rest: the free fall from rest covers d/100, dt = sqrt(2 s / g)") {
     const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    const double dt = app::AdaptiveTimeStep(mono, g, floor).next(previous, rest);
+    const double dt = study::AdaptiveTimeStep(mono, g, floor).next(previous, rest);
     CHECK(dt == Approx(std::sqrt(0.02)).epsilon(1e-12));
   }
   SECTION("the fastest grain sets the step: v = 0.5 gives dt = sqrt(v^2 + 2 g s) - v") {
     const std::vector<core::BodyState> states = {moving({0.1, 0, 0}), moving({0, -0.3, -0.4}), moving({0, 0, 0})};
-    const double dt = app::AdaptiveTimeStep(mono, g, floor).next(previous, states);
+    const double dt = study::AdaptiveTimeStep(mono, g, floor).next(previous, states);
     CHECK(dt == Approx(std::sqrt(0.25 + 0.02) - 0.5).epsilon(1e-12));
     CHECK(0.5 * dt + 0.5 * g * dt * dt == Approx(0.01).epsilon(1e-12));
   }
   SECTION("a spinning grain counts with the speed of its surface, omega r") {
     const std::vector<core::BodyState> states = {moving(core::Vec3::Zero(), {0, 0, 1.0}), moving(core::Vec3::Zero()),
                                                  moving(core::Vec3::Zero())};
-    CHECK(app::AdaptiveTimeStep(mono, g, floor).next(previous, states) ==
+    CHECK(study::AdaptiveTimeStep(mono, g, floor).next(previous, states) ==
           Approx(std::sqrt(0.25 + 0.02) - 0.5).epsilon(1e-12));
   }
   SECTION("a bidisperse sample is bounded by its small grains: s = d_S / 100") {
     const std::vector<core::Grain> bi = {sphereOf(1.0), sphereOf(0.5), sphereOf(1.0)};
     const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    CHECK(app::AdaptiveTimeStep(bi, g, floor).next(previous, rest) == Approx(std::sqrt(0.01)).epsilon(1e-12));
+    CHECK(study::AdaptiveTimeStep(bi, g, floor).next(previous, rest) == Approx(std::sqrt(0.01)).epsilon(1e-12));
   }
   SECTION("clamped: never below the fixed step, never more than kAdaptiveGrowth x the step before") {
     const std::vector<core::BodyState> fast(3, moving({0, 0, -10.0}));
-    CHECK(app::AdaptiveTimeStep(mono, g, 2e-3).next(previous, fast) == 2e-3);  // the rule alone gives ~1e-3
+    CHECK(study::AdaptiveTimeStep(mono, g, 2e-3).next(previous, fast) == 2e-3);  // the rule alone gives ~1e-3
     const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    CHECK(app::AdaptiveTimeStep(mono, g, floor).next(0.01, rest) == Approx(app::kAdaptiveGrowth * 0.01));
+    CHECK(study::AdaptiveTimeStep(mono, g, floor).next(0.01, rest) == Approx(study::kAdaptiveGrowth * 0.01));
   }
 }
 
@@ -76,7 +76,7 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
   cfg.compaction.checkInterval = 50;
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   REQUIRE(dep.grains.size() > 20);
-  const app::CompactionOutcome out = app::compact(cfg, dep);
+  const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.equilibrium.dump());
   // Bullet's sequential impulses do not meet SPEC 6.1's force bound (README, Known limitations):
   // only its floor reaction is checked, to its own accuracy.
@@ -86,7 +86,7 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
   // ... and equilibrium was still checked at least every kAdaptiveCheckSpacing of simulated time.
   REQUIRE(out.history.size() > 2);
   for (std::size_t k = 1; k < out.history.size(); ++k)
-    CHECK(out.history[k].time - out.history[k - 1].time <= app::kAdaptiveCheckSpacing + out.dtLargest);
+    CHECK(out.history[k].time - out.history[k - 1].time <= study::kAdaptiveCheckSpacing + out.dtLargest);
   // Frictionless side walls: the floor carries the whole weight (rho = g = 1), through forces
   // computed from the impulses of a step of the last step's own length.
   double weight = 0.0;

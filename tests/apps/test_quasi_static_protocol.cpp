@@ -42,7 +42,7 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
   const core::RunConfig cfg = smallBox("nscd", mu);
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   REQUIRE(dep.grains.size() > 20);
-  const app::CompactionOutcome out = app::compact(cfg, dep);
+  const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.timing["stages"].dump());
   REQUIRE(out.reached);
   CHECK(out.protocol == core::Protocol::QuasiStatic);
@@ -67,7 +67,7 @@ TEST_CASE("quasi-static protocol: at the time limit the finisher takes over and 
   core::RunConfig cfg = smallBox("nscd", 0.0);
   cfg.compaction.timeLimit = 3.0;  // the grains are still falling onto the pile
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const app::CompactionOutcome out = app::compact(cfg, dep);
+  const study::CompactionOutcome out = study::compact(cfg, dep);
   const auto& stages = out.timing["stages"];
   INFO(stages.dump());
   REQUIRE(stages.contains("quasi_static"));
@@ -87,7 +87,7 @@ TEST_CASE("quasi-static protocol: a pinacoid pile handed over early still ends a
   cfg.compaction.switchKineticRatio = 1.0;  // hand over at the first check after the fall has begun
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   REQUIRE(dep.grains.size() > 40);
-  const app::CompactionOutcome out = app::compact(cfg, dep);
+  const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.timing["stages"].dump());
   REQUIRE(out.timing["stages"].contains("quasi_static"));
   CHECK(out.timing["stages"]["quasi_static"]["clipped_steps"].get<long>() > 0);
@@ -103,7 +103,7 @@ TEST_CASE("quasi-static protocol: Bullet has no finisher, runs dynamic and recor
   core::RunConfig cfg = smallBox("bullet", 0.0);
   cfg.compaction.timeLimit = 2.0;
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const app::CompactionOutcome out = app::compact(cfg, dep);
+  const study::CompactionOutcome out = study::compact(cfg, dep);
   CHECK(out.protocol == core::Protocol::Dynamic);
   CHECK(out.timing["protocol"] == "dynamic");
   CHECK_FALSE(out.timing["stages"].contains("quasi_static"));

@@ -55,9 +55,9 @@ fs::path makeStudy(const std::string& name, bool withFailures) {
     "biperiodic_width": 12,
     "vary": { "width": [4, 5, 10, 20, "biperiodic"], "replicas": 3, "backend": ["nscd", "bullet"] }
   })");
-  const app::SweepSpec spec = app::parseSweepSpec(doc);
+  const study::SweepSpec spec = study::parseSweepSpec(doc);
   auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
-                    const app::RunProgressFn&) {
+                    const study::RunProgressFn&) {
     // bullet at W = 20 fails for every seed: its cell must read "missing", not vanish.
     if (withFailures && cfg.backend == "bullet" && cfg.box.width == 20.0 && !cfg.box.periodicY)
       throw std::runtime_error("solver diverged");
@@ -76,12 +76,12 @@ fs::path makeStudy(const std::string& name, bool withFailures) {
     d.placeholders.push_back(g.position);
     return d;
   };
-  app::SweepOptions o;
+  study::SweepOptions o;
   o.quiet = true;
-  app::runSweep(spec, dir, o, runner, depositor);
+  study::runSweep(spec, dir, o, runner, depositor);
   if (withFailures) {
     // One run interrupted: its folder exists without a done marker.
-    fs::remove(dir / "runs" / "r0000" / app::kDoneMarker);
+    fs::remove(dir / "runs" / "r0000" / study::kDoneMarker);
   }
   return dir;
 }
@@ -89,19 +89,19 @@ fs::path makeStudy(const std::string& name, bool withFailures) {
 }  // namespace
 
 TEST_CASE("replica statistics and backend differences") {
-  const app::ReplicaStat s = app::replicaStat({1.0, 2.0, 3.0});
+  const study::ReplicaStat s = study::replicaStat({1.0, 2.0, 3.0});
   CHECK(s.n == 3);
   CHECK(s.mean == Approx(2.0));
   CHECK(s.std == Approx(1.0));  // sample std, n - 1 in the denominator
-  const app::ReplicaStat one = app::replicaStat({0.5});
+  const study::ReplicaStat one = study::replicaStat({0.5});
   CHECK(one.n == 1);
   CHECK(one.std == 0.0);
-  const app::ReplicaStat b = app::replicaStat({-1.0, 1.0, 3.0, 1.0});  // mean 1, var 8/3
-  const app::BackendDifference d = app::backendDifference(s, b);
+  const study::ReplicaStat b = study::replicaStat({-1.0, 1.0, 3.0, 1.0});  // mean 1, var 8/3
+  const study::BackendDifference d = study::backendDifference(s, b);
   CHECK(d.value == Approx(1.0));
   REQUIRE(d.uncertainty);
   CHECK(*d.uncertainty == Approx(std::sqrt(1.0 / 3.0 + (8.0 / 3.0) / 4.0)));
-  CHECK_FALSE(app::backendDifference(s, one).uncertainty);
+  CHECK_FALSE(study::backendDifference(s, one).uncertainty);
 }
 
 TEST_CASE("flattened result: numbers and booleans kept, nulls kept as not applicable, config skipped") {
@@ -110,7 +110,7 @@ TEST_CASE("flattened result: numbers and booleans kept, nulls kept as not applic
                   {"nematic", {{"bulk", nullptr}}},
                   {"backend", "nscd"},
                   {"config", {{"box", {{"width", 5}}}}}};
-  const auto v = app::flattenResult(r);
+  const auto v = study::flattenResult(r);
   CHECK(v.at("solid_fraction") == Approx(0.6));
   CHECK(*v.at("equilibrium/reached") == 0.0);
   CHECK_FALSE(v.at("nematic/bulk").has_value());
@@ -120,7 +120,7 @@ TEST_CASE("flattened result: numbers and booleans kept, nulls kept as not applic
 
 TEST_CASE("report of a synthetic study: fits recover phi_bulk and C, tables side by side") {
   const fs::path dir = makeStudy("complete", false);
-  const app::ReportSummary s = app::writeReport(dir, dir / "report");
+  const study::ReportSummary s = study::writeReport(dir, dir / "report");
   CHECK(s.runs == 30);
   CHECK(s.done == 30);
   CHECK(s.failed == 0);
@@ -165,7 +165,7 @@ TEST_CASE("report of a synthetic study: fits recover phi_bulk and C, tables side
 
 TEST_CASE("report shows failed and missing runs as such") {
   const fs::path dir = makeStudy("failures", true);
-  const app::ReportSummary s = app::writeReport(dir, dir / "report");
+  const study::ReportSummary s = study::writeReport(dir, dir / "report");
   CHECK(s.failed == 3);
   CHECK(s.missing == 1);
   CHECK(s.done == 26);
@@ -184,9 +184,9 @@ TEST_CASE("report shows failed and missing runs as such") {
 
 TEST_CASE("report without gnuplot keeps the data and says so") {
   const fs::path dir = makeStudy("nognuplot", false);
-  app::ReportOptions o;
+  study::ReportOptions o;
   o.gnuplot = "/nonexistent/gnuplot";
-  const app::ReportSummary s = app::writeReport(dir, dir / "report", o);
+  const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
   CHECK_FALSE(s.gnuplotUsed);
   const std::string md = slurp(s.markdown);
   CHECK(md.find("was not found") != std::string::npos);

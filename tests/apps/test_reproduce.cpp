@@ -42,7 +42,7 @@ int runConfpack(const fs::path& dir, const std::string& args) {
 }  // namespace
 
 TEST_CASE("reproduce: the paper scale is the SPEC 7 study") {
-  const auto runs = app::expandRuns(app::parseSweepSpec(app::reproductionSweep("paper")));
+  const auto runs = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("paper")));
   // Spheres x_S x {5, 10, 20, bi}: 4 x 4; MSP wall friction {0.3, 0.5, 1} x {5, 10, 20}: 9;
   // pinacoids x {5, 10, 20, bi}: 4. Each with 3 seeds and 2 backends.
   CHECK(runs.size() == (16 + 9 + 4) * 3 * 2);
@@ -69,12 +69,12 @@ TEST_CASE("reproduce: the paper scale is the SPEC 7 study") {
   CHECK(frictions == std::set<double>{0.0, 0.3, 0.5, 1.0});
   for (const auto& [d, b] : backendsOfDeposit) CHECK(b == std::set<std::string>{"nscd", "bullet"});
   // quick and tiny are smaller studies of the same kinds; an unknown scale is refused.
-  const auto quick = app::expandRuns(app::parseSweepSpec(app::reproductionSweep("quick")));
+  const auto quick = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("quick")));
   CHECK(quick.size() < runs.size());
   // The quick study brings its nscd runs to rest with the finisher (docs/model.md).
-  for (const app::SweepRun& r : quick) CHECK(r.config.compaction.protocol == core::Protocol::QuasiStatic);
-  CHECK(app::expandRuns(app::parseSweepSpec(app::reproductionSweep("tiny"))).size() == 6);
-  CHECK_THROWS_AS(app::reproductionSweep("huge"), std::invalid_argument);
+  for (const study::SweepRun& r : quick) CHECK(r.config.compaction.protocol == core::Protocol::QuasiStatic);
+  CHECK(study::expandRuns(study::parseSweepSpec(study::reproductionSweep("tiny"))).size() == 6);
+  CHECK_THROWS_AS(study::reproductionSweep("huge"), std::invalid_argument);
 }
 
 TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost or redone") {
@@ -96,17 +96,17 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
   }
   // Kill as soon as the first run is finished (the second is then in progress or about to be).
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (!fs::exists(dir / "sw" / "runs" / "r0000" / app::kDoneMarker) && std::chrono::steady_clock::now() < deadline)
+  while (!fs::exists(dir / "sw" / "runs" / "r0000" / study::kDoneMarker) && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ::kill(pid, SIGKILL);
   int status = 0;
   ::waitpid(pid, &status, 0);
-  REQUIRE(fs::exists(dir / "sw" / "runs" / "r0000" / app::kDoneMarker));
+  REQUIRE(fs::exists(dir / "sw" / "runs" / "r0000" / study::kDoneMarker));
 
   std::map<std::string, std::string> markers;  // finished before the kill: content must not change
   for (const auto& e : fs::directory_iterator(dir / "sw" / "runs"))
-    if (fs::exists(e.path() / app::kDoneMarker))
-      markers[e.path().filename().string()] = slurp(e.path() / app::kDoneMarker);
+    if (fs::exists(e.path() / study::kDoneMarker))
+      markers[e.path().filename().string()] = slurp(e.path() / study::kDoneMarker);
   INFO("finished before the kill: " << markers.size());
   CHECK(markers.size() < 4);
 
@@ -115,10 +115,10 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
   CHECK(out.find(std::to_string(markers.size()) + " earlier") != std::string::npos);
   for (const char* r : {"r0000", "r0001", "r0002", "r0003"}) {
     INFO(r);
-    CHECK(app::runStatus(dir / "sw" / "runs" / r) == app::RunStatus::Done);
+    CHECK(study::runStatus(dir / "sw" / "runs" / r) == study::RunStatus::Done);
     CHECK(fs::exists(dir / "sw" / "runs" / r / "result.json"));
   }
-  for (const auto& [name, text] : markers) CHECK(slurp(dir / "sw" / "runs" / name / app::kDoneMarker) == text);
+  for (const auto& [name, text] : markers) CHECK(slurp(dir / "sw" / "runs" / name / study::kDoneMarker) == text);
   // Both backends of a pile read the same deposit file.
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0000.json"));
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0001.json"));
@@ -143,7 +143,7 @@ TEST_CASE("reproduce --scale tiny: the whole chain to a report") {
   for (int i = 0; i < 6; ++i) {
     char name[8];
     std::snprintf(name, sizeof name, "r%04d", i);
-    CHECK(app::runStatus(dir / "tiny" / "runs" / name) == app::RunStatus::Done);
+    CHECK(study::runStatus(dir / "tiny" / "runs" / name) == study::RunStatus::Done);
   }
   // Running it again finds everything done and only rewrites the report.
   REQUIRE(runConfpack(dir, "reproduce --scale tiny --out tiny") == 0);

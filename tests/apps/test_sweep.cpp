@@ -68,9 +68,9 @@ struct Recorder {
   int depositCalls = 0;
   std::set<std::string> throwOn;  // run names whose runner throws (an interruption)
 
-  app::SweepRunFn runner() {
+  study::SweepRunFn runner() {
     return [this](const core::RunConfig& cfg, const fs::path& dir, const core::Deposit& dep,
-                  const app::RunProgressFn& progress) {
+                  const study::RunProgressFn& progress) {
       const std::string name = dir.filename().string();
       {
         std::lock_guard lock(mutex);
@@ -88,7 +88,7 @@ struct Recorder {
       return result;
     };
   }
-  app::SweepDepositFn depositor() {
+  study::SweepDepositFn depositor() {
     return [this](const core::RunConfig& cfg) {
       std::lock_guard lock(mutex);
       ++depositCalls;
@@ -97,8 +97,8 @@ struct Recorder {
   }
 };
 
-app::SweepOptions quietOptions(int jobs = 1) {
-  app::SweepOptions o;
+study::SweepOptions quietOptions(int jobs = 1) {
+  study::SweepOptions o;
   o.jobs = jobs;
   o.quiet = true;
   return o;
@@ -107,8 +107,8 @@ app::SweepOptions quietOptions(int jobs = 1) {
 }  // namespace
 
 TEST_CASE("run table: counts, stable names, backend fastest, shared deposits") {
-  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
-  const auto runs = app::expandRuns(spec);
+  const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
+  const auto runs = study::expandRuns(spec);
   REQUIRE(runs.size() == 12);
   for (std::size_t i = 0; i < runs.size(); ++i) {
     CHECK(runs[i].index == i);
@@ -127,7 +127,7 @@ TEST_CASE("run table: counts, stable names, backend fastest, shared deposits") {
   CHECK(runs[11].config.box.lengthX == 6.0);  // base value kept
 
   // Expanding again gives the same table: names never depend on anything but the order.
-  const auto again = app::expandRuns(app::parseSweepSpec(smallSweep()));
+  const auto again = study::expandRuns(study::parseSweepSpec(smallSweep()));
   for (std::size_t i = 0; i < runs.size(); ++i) {
     json a, b;
     core::to_json(a, runs[i].config);
@@ -143,7 +143,7 @@ TEST_CASE("run table: groups are unioned without duplicates, mu_w variants share
       { "width": [5, 10], "small_fraction": [0, 25], "backend": "nscd" },
       { "width": [5], "small_fraction": [0], "wall_friction": [0, 0.5], "backend": "nscd" }
     ]})");
-  const auto runs = app::expandRuns(app::parseSweepSpec(doc));
+  const auto runs = study::expandRuns(study::parseSweepSpec(doc));
   // 4 from the first group; the second adds only mu_w = 0.5 (mu_w = 0 duplicates r0000).
   REQUIRE(runs.size() == 5);
   CHECK(runs[4].config.box.wallFriction == 0.5);
@@ -159,7 +159,7 @@ TEST_CASE("run table: groups are unioned without duplicates, mu_w variants share
 TEST_CASE("sweep file: bad input is refused with a message naming the field") {
   auto message = [](const json& doc) {
     try {
-      app::expandRuns(app::parseSweepSpec(doc, "s.json"));
+      study::expandRuns(study::parseSweepSpec(doc, "s.json"));
     } catch (const std::invalid_argument& e) {
       return std::string(e.what());
     }
@@ -181,12 +181,12 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
 }
 
 TEST_CASE("slicing covers every run exactly once and keeps deposit groups together") {
-  const auto runs = app::expandRuns(app::parseSweepSpec(smallSweep()));
+  const auto runs = study::expandRuns(study::parseSweepSpec(smallSweep()));
   for (std::size_t k = 1; k <= 7; ++k) {
     std::map<std::size_t, int> seen;
     std::map<std::size_t, std::size_t> taskOfDeposit;
     for (std::size_t t = 0; t < k; ++t)
-      for (std::size_t i : app::sliceRuns(runs, t, k)) {
+      for (std::size_t i : study::sliceRuns(runs, t, k)) {
         ++seen[i];
         const auto [it, inserted] = taskOfDeposit.try_emplace(runs[i].depositIndex, t);
         CHECK(it->second == t);
@@ -194,30 +194,30 @@ TEST_CASE("slicing covers every run exactly once and keeps deposit groups togeth
     CHECK(seen.size() == runs.size());
     for (const auto& [i, n] : seen) CHECK(n == 1);
   }
-  CHECK_THROWS_AS(app::sliceRuns(runs, 3, 3), std::invalid_argument);
-  CHECK_THROWS_AS(app::sliceRuns(runs, 0, 0), std::invalid_argument);
+  CHECK_THROWS_AS(study::sliceRuns(runs, 3, 3), std::invalid_argument);
+  CHECK_THROWS_AS(study::sliceRuns(runs, 0, 0), std::invalid_argument);
 }
 
 TEST_CASE("interrupted sweep resumes: finished runs are never redone, unfinished ones are") {
   const fs::path dir = freshDir("resume");
-  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
+  const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
   Recorder rec;
   rec.throwOn = {"r0003", "r0008"};
-  const app::SweepSummary first = app::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
+  const study::SweepSummary first = study::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
   CHECK(first.total == 12);
   CHECK(first.ran == 10);
   CHECK(first.failed == 2);
-  CHECK(app::runStatus(dir / "runs" / "r0003") == app::RunStatus::Failed);
-  CHECK(app::runStatus(dir / "runs" / "r0000") == app::RunStatus::Done);
+  CHECK(study::runStatus(dir / "runs" / "r0003") == study::RunStatus::Failed);
+  CHECK(study::runStatus(dir / "runs" / "r0000") == study::RunStatus::Done);
   // r0003 has a result.json but no done marker: it must not count as finished.
   CHECK(fs::exists(dir / "runs" / "r0003" / "result.json"));
 
   // A kill in the middle of a run leaves a folder with a result but no marker.
-  fs::remove(dir / "runs" / "r0005" / app::kDoneMarker);
-  CHECK(app::runStatus(dir / "runs" / "r0005") == app::RunStatus::Incomplete);
+  fs::remove(dir / "runs" / "r0005" / study::kDoneMarker);
+  CHECK(study::runStatus(dir / "runs" / "r0005") == study::RunStatus::Incomplete);
 
   rec.throwOn.clear();
-  const app::SweepSummary second = app::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
+  const study::SweepSummary second = study::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
   CHECK(second.alreadyDone == 9);
   CHECK(second.ran == 3);
   CHECK(second.failed == 0);
@@ -230,7 +230,7 @@ TEST_CASE("interrupted sweep resumes: finished runs are never redone, unfinished
   CHECK(rec.depositCalls == 6);
 
   // A third invocation finds nothing to do.
-  const app::SweepSummary third = app::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
+  const study::SweepSummary third = study::runSweep(spec, dir, quietOptions(), rec.runner(), rec.depositor());
   CHECK(third.ran == 0);
   CHECK(third.alreadyDone == 12);
   fs::remove_all(dir);
@@ -238,14 +238,14 @@ TEST_CASE("interrupted sweep resumes: finished runs are never redone, unfinished
 
 TEST_CASE("both backends of one (configuration, seed) compact the same deposit, also after a resume") {
   const fs::path dir = freshDir("deposit");
-  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
-  const auto runs = app::expandRuns(spec);
+  const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
+  const auto runs = study::expandRuns(spec);
   Recorder rec;
   rec.throwOn = {"r0001"};  // bullet's run of deposit d0000 fails the first time
-  app::runSweep(spec, dir, quietOptions(2), rec.runner(), rec.depositor());
+  study::runSweep(spec, dir, quietOptions(2), rec.runner(), rec.depositor());
   const std::string firstDigest = rec.deposits.at("r0000");
   rec.throwOn.clear();
-  app::runSweep(spec, dir, quietOptions(2), rec.runner(), rec.depositor());
+  study::runSweep(spec, dir, quietOptions(2), rec.runner(), rec.depositor());
   // Read back from deposits/d0000.json bit for bit.
   CHECK(rec.deposits.at("r0001") == firstDigest);
   for (const auto& r : runs) {
@@ -260,28 +260,28 @@ TEST_CASE("both backends of one (configuration, seed) compact the same deposit, 
 
 TEST_CASE("job-array slices run separately in one folder finish the study, parallel jobs run each once") {
   const fs::path dir = freshDir("slices");
-  const app::SweepSpec spec = app::parseSweepSpec(smallSweep());
+  const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
   Recorder rec;
   std::size_t ran = 0;
   for (std::size_t t = 0; t < 3; ++t) {
-    app::SweepOptions o = quietOptions(2);
+    study::SweepOptions o = quietOptions(2);
     o.taskIndex = t;
     o.taskCount = 3;
-    const auto s = app::runSweep(spec, dir, o, rec.runner(), rec.depositor());
+    const auto s = study::runSweep(spec, dir, o, rec.runner(), rec.depositor());
     CHECK(s.inSlice == 4);
     ran += s.ran;
   }
   CHECK(ran == 12);
   CHECK(rec.calls.size() == 12);
   for (const auto& [name, n] : rec.calls) CHECK(n == 1);
-  const std::string listing = app::formatRunTable(app::readRunTable(dir), dir);
+  const std::string listing = study::formatRunTable(study::readRunTable(dir), dir);
   CHECK(listing.find("pending") == std::string::npos);
   CHECK(listing.find("r0011") != std::string::npos);
 
   // The folder belongs to this sweep: another sweep file is refused there.
   json other = smallSweep();
   other["vary"]["width"] = json::array({4});
-  CHECK_THROWS_AS(app::runSweep(app::parseSweepSpec(other), dir, quietOptions(), rec.runner(), rec.depositor()),
+  CHECK_THROWS_AS(study::runSweep(study::parseSweepSpec(other), dir, quietOptions(), rec.runner(), rec.depositor()),
                   std::invalid_argument);
   fs::remove_all(dir);
 }
@@ -293,9 +293,9 @@ TEST_CASE("progress: one line per finished run in the documented form") {
   doc["vary"]["replicas"] = 1;
   Recorder rec;
   std::ostringstream log;
-  app::SweepOptions o;
+  study::SweepOptions o;
   o.log = &log;
-  app::runSweep(app::parseSweepSpec(doc), dir, o, rec.runner(), rec.depositor());
+  study::runSweep(study::parseSweepSpec(doc), dir, o, rec.runner(), rec.depositor());
   const std::string text = log.str();
   CHECK(text.find("[1/2] r0000 nscd W=5 phi=0.601") != std::string::npos);
   CHECK(text.find("[2/2] r0001 bullet W=5 phi=0.601") != std::string::npos);
