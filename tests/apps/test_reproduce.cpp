@@ -1,5 +1,6 @@
-// `confpack reproduce` and `confpack sweep` with the real binary and real physics: the study
-// definitions of SPEC 7, a sweep killed with SIGKILL and resumed, and the tiny scale end to end.
+// `confpack reproduce` and `confpack sweep` with the real binary and real physics: a sweep killed
+// with SIGKILL and resumed, and the tiny scale end to end. The study definitions of SPEC 7 (the
+// library's reproductionSweep) are tested in tests/study/test_reproduce.cpp.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -10,11 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <set>
 #include <sstream>
 #include <thread>
 
-#include "study/reproduce.hpp"
 #include "study/sweep.hpp"
 #include "tests/support/read_file.hpp"
 
@@ -40,42 +39,6 @@ int runConfpack(const fs::path& dir, const std::string& args) {
 }
 
 }  // namespace
-
-TEST_CASE("reproduce: the paper scale is the SPEC 7 study") {
-  const auto runs = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("paper")));
-  // Spheres x_S x {5, 10, 20, bi}: 4 x 4; MSP wall friction {0.3, 0.5, 1} x {5, 10, 20}: 9;
-  // pinacoids x {5, 10, 20, bi}: 4. Each with 3 seeds and 2 backends.
-  CHECK(runs.size() == (16 + 9 + 4) * 3 * 2);
-  std::set<double> widths, fractions, frictions;
-  std::map<std::size_t, std::set<std::string>> backendsOfDeposit;
-  for (const auto& r : runs) {
-    CHECK(r.config.box.lengthX == 20.0);
-    CHECK(r.config.box.height == 16.0);
-    if (!r.config.box.periodicY)
-      widths.insert(r.config.box.width);
-    else
-      CHECK(r.config.box.width == 20.0);
-    fractions.insert(r.config.population.smallFraction);
-    frictions.insert(r.config.box.wallFriction);
-    if (r.config.box.wallFriction > 0.0) {
-      CHECK(r.config.population.shape == core::ShapeKind::Sphere);
-      CHECK(r.config.population.smallFraction == 0.0);
-    }
-    if (r.config.population.shape == core::ShapeKind::Pinacoid) CHECK(r.config.population.smallFraction == 0.0);
-    backendsOfDeposit[r.depositIndex].insert(r.config.backend);
-  }
-  CHECK(widths == std::set<double>{5.0, 10.0, 20.0});
-  CHECK(fractions == std::set<double>{0.0, 10.0, 25.0, 40.0});
-  CHECK(frictions == std::set<double>{0.0, 0.3, 0.5, 1.0});
-  for (const auto& [d, b] : backendsOfDeposit) CHECK(b == std::set<std::string>{"nscd", "bullet"});
-  // quick and tiny are smaller studies of the same kinds; an unknown scale is refused.
-  const auto quick = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("quick")));
-  CHECK(quick.size() < runs.size());
-  // The quick study brings its nscd runs to rest with the finisher (docs/model.md).
-  for (const study::SweepRun& r : quick) CHECK(r.config.compaction.protocol == core::Protocol::QuasiStatic);
-  CHECK(study::expandRuns(study::parseSweepSpec(study::reproductionSweep("tiny"))).size() == 6);
-  CHECK_THROWS_AS(study::reproductionSweep("huge"), std::invalid_argument);
-}
 
 TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost or redone") {
   const fs::path dir = scratch("kill");

@@ -1,0 +1,48 @@
+// The study of SPEC 7 at its three scales (study/reproduce.hpp), as the run tables they expand to.
+// `confpack reproduce` itself, with the real binary, is tested in tests/apps/test_reproduce.cpp.
+#include <catch2/catch.hpp>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "study/reproduce.hpp"
+#include "study/sweep.hpp"
+
+using namespace confpack;
+
+TEST_CASE("reproduce: the paper scale is the SPEC 7 study") {
+  const auto runs = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("paper")));
+  // Spheres x_S x {5, 10, 20, bi}: 4 x 4; MSP wall friction {0.3, 0.5, 1} x {5, 10, 20}: 9;
+  // pinacoids x {5, 10, 20, bi}: 4. Each with 3 seeds and 2 backends.
+  CHECK(runs.size() == (16 + 9 + 4) * 3 * 2);
+  std::set<double> widths, fractions, frictions;
+  std::map<std::size_t, std::set<std::string>> backendsOfDeposit;
+  for (const auto& r : runs) {
+    CHECK(r.config.box.lengthX == 20.0);
+    CHECK(r.config.box.height == 16.0);
+    if (!r.config.box.periodicY)
+      widths.insert(r.config.box.width);
+    else
+      CHECK(r.config.box.width == 20.0);
+    fractions.insert(r.config.population.smallFraction);
+    frictions.insert(r.config.box.wallFriction);
+    if (r.config.box.wallFriction > 0.0) {
+      CHECK(r.config.population.shape == core::ShapeKind::Sphere);
+      CHECK(r.config.population.smallFraction == 0.0);
+    }
+    if (r.config.population.shape == core::ShapeKind::Pinacoid) CHECK(r.config.population.smallFraction == 0.0);
+    backendsOfDeposit[r.depositIndex].insert(r.config.backend);
+  }
+  CHECK(widths == std::set<double>{5.0, 10.0, 20.0});
+  CHECK(fractions == std::set<double>{0.0, 10.0, 25.0, 40.0});
+  CHECK(frictions == std::set<double>{0.0, 0.3, 0.5, 1.0});
+  for (const auto& [d, b] : backendsOfDeposit) CHECK(b == std::set<std::string>{"nscd", "bullet"});
+  // quick and tiny are smaller studies of the same kinds; an unknown scale is refused.
+  const auto quick = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("quick")));
+  CHECK(quick.size() < runs.size());
+  // The quick study brings its nscd runs to rest with the finisher (docs/model.md).
+  for (const study::SweepRun& r : quick) CHECK(r.config.compaction.protocol == core::Protocol::QuasiStatic);
+  CHECK(study::expandRuns(study::parseSweepSpec(study::reproductionSweep("tiny"))).size() == 6);
+  CHECK_THROWS_AS(study::reproductionSweep("huge"), std::invalid_argument);
+}
