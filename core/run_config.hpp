@@ -25,7 +25,7 @@ struct CompactionDef {
   /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
   /// the smallest grain's size of motion (SPEC 4's d_L/100 for a monodisperse sample) at its
   /// current speed, gravity included, never below `dt` (or the SPEC 4 step) and at most
-  /// kAdaptiveGrowth times the step before (apps/run_pipeline.hpp, AdaptiveTimeStep).
+  /// kAdaptiveGrowth times the step before (study/run_pipeline.hpp, AdaptiveTimeStep).
   bool adaptiveDt = false;
   /// Simulated time after which the run stops unequilibrated [t0]; with the quasi-static
   /// protocol, after which the finisher takes over if the fall has not ended before.
