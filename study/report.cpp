@@ -537,7 +537,11 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
         const auto it = r.values.find("equilibrium/reached");
         if (it != r.values.end() && it->second && *it->second == 0.0) {
           status = "done, NOT equilibrated";
-          note = "stopped at the time limit";
+          // A quasi-static run that is not at rest has used all its finisher steps.
+          const auto finisher = r.values.find("timing/stages/quasi_static/steps");
+          note = finisher != r.values.end() && finisher->second
+                     ? fmt::format("finisher not at rest after {:.0f} steps", *finisher->second)
+                     : "stopped at the time limit";
         }
       }
       if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";

@@ -61,7 +61,12 @@ fs::path makeStudy(const std::string& name, bool withFailures) {
     // bullet at W = 20 fails for every seed: its cell must read "missing", not vanish.
     if (withFailures && cfg.backend == "bullet" && cfg.box.width == 20.0 && !cfg.box.periodicY)
       throw std::runtime_error("solver diverged");
-    const json r = syntheticResult(cfg);
+    json r = syntheticResult(cfg);
+    // Seed 3 at W = 10 is not at rest: nscd's finisher ran out of steps, Bullet hit its time limit.
+    if (withFailures && cfg.box.width == 10.0 && !cfg.box.periodicY && cfg.seed == 3) {
+      r["equilibrium"]["reached"] = false;
+      if (cfg.backend == "nscd") r["timing"]["stages"] = {{"quasi_static", {{"steps", 3000}}}};
+    }
     std::ofstream(runDir / "result.json") << r.dump();
     std::ofstream csv(runDir / "phi_y.csv");
     csv << "# seed " << cfg.seed << "\ny,phi\n";
@@ -173,6 +178,10 @@ TEST_CASE("report shows failed and missing runs as such") {
   CHECK(md.find("solver diverged") != std::string::npos);
   CHECK(md.find("| r0000 |") != std::string::npos);
   CHECK(md.find("missing: not run or interrupted") != std::string::npos);
+  // Each unequilibrated run says what stopped it.
+  CHECK(md.find("nscd | done, NOT equilibrated | 0.5920 | 1.5 | finisher not at rest after 3000 steps |") !=
+        std::string::npos);
+  CHECK(md.find("bullet | done, NOT equilibrated | 0.5920 | 1.5 | stopped at the time limit |") != std::string::npos);
   // bullet at W = 20 has no replica: the cell reads "missing".
   CHECK(md.find("| MSP | 0 | 20 | 0 | 0.615 ± 0.002 (n=3) | missing |") != std::string::npos);
   // nscd at W = 4 lost seed 1 (r0000): n = 2 there, mean of seeds 2 and 3.
