@@ -92,6 +92,8 @@ class NscdBackend final : public core::ContactBackend {
     finisherSettings_.theta = 1.0;
     finisherSettings_.gapCorrection = 1.0;
     finisherSettings_.maxCorrectionVelocity = std::numeric_limits<double>::infinity();
+    metricWeight_.assign(n_, 1.0);
+    lastMove_.assign(n_, BodyVelocity{});
     positionMid_ = position_;
     orientationMid_ = orientation_;
     states_.resize(n_);
@@ -136,10 +138,6 @@ class NscdBackend final : public core::ContactBackend {
     Stopwatch clock;
     for (int i = 0; i < n_; ++i) velocity_[i] = BodyVelocity{};
     predict(h);  // from rest: q_m = q_i, v_free = h g
-    if (metricWeight_.size() != static_cast<std::size_t>(n_)) {
-      metricWeight_.assign(n_, 1.0);
-      lastMove_.assign(n_, BodyVelocity{});
-    }
     for (int i = 0; i < n_; ++i) {  // grain i's mass and inertia times w_i
       inverse_[i].invMass /= metricWeight_[i];
       inverse_[i].invInertia /= metricWeight_[i];
