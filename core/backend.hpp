@@ -6,6 +6,7 @@
 // step(dt), and after every step exposes the poses and velocities, the contact list of that
 // step (forces = impulse / dt, conventions in core/contact.hpp) and a StepProfile.
 #include <array>
+#include <chrono>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string_view>
@@ -59,6 +60,22 @@ struct StepProfile {
     for (double t : seconds) s += t;
     return s;
   }
+};
+
+/// Times the phases of one step into a StepProfile: each charge(p) adds the wall time since the
+/// clock was made or last charged to phase p, so consecutive phases cover the step without gaps.
+class PhaseClock {
+ public:
+  explicit PhaseClock(StepProfile& profile) : profile_(&profile), last_(std::chrono::steady_clock::now()) {}
+  void charge(Phase p) {
+    const auto now = std::chrono::steady_clock::now();
+    (*profile_)[p] += std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+  }
+
+ private:
+  StepProfile* profile_;
+  std::chrono::steady_clock::time_point last_;
 };
 
 /// What one quasi-static step did (ContactBackend::quasiStaticStep).

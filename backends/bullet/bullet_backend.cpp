@@ -27,7 +27,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <set>
@@ -42,7 +41,6 @@ namespace confpack::bullet {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using core::Phase;
 using core::Vec3;
 
@@ -51,10 +49,6 @@ btVector3 toBt(const Vec3& v) {
 }
 Vec3 fromBt(const btVector3& v) {
   return {v.x(), v.y(), v.z()};
-}
-
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
 // ---- Material rule ---------------------------------------------------------------------------
@@ -108,7 +102,7 @@ class Dispatcher final : public btCollisionDispatcher {
 // same (tested), a step of a 163-sphere pile about 1.5 times faster (measured).
 class TimedSolver final : public btSequentialImpulseConstraintSolver {
  public:
-  core::StepProfile* profile = nullptr;
+  core::PhaseClock* clock = nullptr;  ///< the running step's clock (BulletBackend::step)
   bool skipZeroFriction = true;
   /// Largest velocity correction of the last sweep [sqrt(g d_L)]: Bullet's residual is the max
   /// over rows of (delta impulse / jacDiagABInv)^2, a squared velocity.
@@ -157,10 +151,9 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
                                         const btContactSolverInfo& info, btIDebugDraw* debugDrawer) override {
     // Builds solver bodies and rows and applies the warm-start impulses (Bullet does both in
     // one loop, so WarmStart stays inside PrepareContacts).
-    const auto t0 = Clock::now();
     const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlySetup(
         bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info, debugDrawer);
-    (*profile)[Phase::PrepareContacts] += secondsSince(t0);
+    clock->charge(Phase::PrepareContacts);
     return r;
   }
   btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
@@ -168,12 +161,11 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
                                              btTypedConstraint** constraints, int numConstraints,
                                              const btContactSolverInfo& info, btIDebugDraw* debugDrawer) override {
     // Split-impulse (position) sweeps, then velocity sweeps.
-    const auto t0 = Clock::now();
     m_leastSquaresResidual = 0.0;
     m_analyticsData.m_numIterationsUsed = 0;
     const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(
         bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info, debugDrawer);
-    (*profile)[Phase::Solve] += secondsSince(t0);
+    clock->charge(Phase::Solve);
     return r;
   }
   btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
@@ -182,7 +174,6 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
     // then Bullet's own write-back of velocities and split-impulse pushes. Bullet's
     // writeBackContacts would read the friction rows of every contact, which frictionless
     // rows do not have, so the contact part is done here and Bullet's is switched off.
-    const auto t0 = Clock::now();
     const bool twoDirections = (info.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS) != 0;
     for (int j = 0; j < m_tmpSolverContactConstraintPool.size(); ++j) {
       const btSolverConstraint& row = m_tmpSolverContactConstraintPool[j];
@@ -200,7 +191,7 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
     btContactSolverInfo rest = info;
     rest.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
     const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, rest);
-    (*profile)[Phase::StoreImpulses] += secondsSince(t0);
+    clock->charge(Phase::StoreImpulses);
     return r;
   }
 };
@@ -423,7 +414,6 @@ void BulletBackend::buildWorld() {
   dispatcher_->registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &sphereSphere_);
   broadphase_ = std::make_unique<btDbvtBroadphase>();
   solver_ = std::make_unique<TimedSolver>();
-  solver_->profile = &profile_;
   solver_->skipZeroFriction = settings_.skipZeroFrictionRows;
   world_ = std::make_unique<World>(dispatcher_.get(), broadphase_.get(), solver_.get(), config_.get());
   world_->setGravity(toBt(system_.gravity));
@@ -654,37 +644,30 @@ void BulletBackend::step(double dt) {
   // The pieces of btDiscreteDynamicsWorld::stepSimulation + internalSingleStepSimulation for
   // one fixed step, in Bullet's order: forces, collision at the current poses, solve
   // (gravity enters as the solver bodies' external impulse m g dt), integrate.
-  auto t0 = Clock::now();
+  core::PhaseClock clock(profile_);
   world_->applyGravity();
   world_->predict(dt);  // damping (zero) and the interpolation transform; velocities untouched
   world_->updateGrainAabbs(settings_.contactBreakingThreshold);
   world_->computeOverlappingPairs();
   findPeriodicPairs();
-  profile_[Phase::UpdatePairs] = secondsSince(t0);
-
-  t0 = Clock::now();
+  clock.charge(Phase::UpdatePairs);
   dispatcher_->dispatchAllCollisionPairs(broadphase_->getOverlappingPairCache(), dispatch, dispatcher_.get());
   collidePeriodicPairs();
-  profile_[Phase::Collide] = secondsSince(t0);
-
-  solve();  // PrepareContacts, Solve, StoreImpulses timed by TimedSolver
+  clock.charge(Phase::Collide);
+  solver_->clock = &clock;  // the solver's stages charge PrepareContacts, Solve and StoreImpulses
+  solve();
+  solver_->clock = nullptr;
   profile_.iterations = solver_->iterationsUsed();
   profile_.residual = solver_->residual();
-
-  t0 = Clock::now();
   world_->integrate(dt);
   world_->clearForces();
-  profile_[Phase::Integrate] = secondsSince(t0);
-  t0 = Clock::now();
+  clock.charge(Phase::Integrate);
   readContacts(dt);  // before the wrap, which frees the broad-phase manifolds of grains that jump
-  profile_[Phase::StoreImpulses] += secondsSince(t0);
-
-  t0 = Clock::now();
+  clock.charge(Phase::StoreImpulses);
   wrapIntoBox();
-  profile_[Phase::Integrate] += secondsSince(t0);
-  t0 = Clock::now();
+  clock.charge(Phase::Integrate);
   readStates();
-  profile_[Phase::StoreImpulses] += secondsSince(t0);
+  clock.charge(Phase::StoreImpulses);
 }
 
 void BulletBackend::readStates() {

@@ -1,6 +1,5 @@
 #include "backends/nscd/nscd_backend.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -31,20 +30,6 @@ Quat rotate(const Quat& q, const Vec3& w, double h) {
   r.normalize();
   return r;
 }
-
-class Stopwatch {
- public:
-  /// Seconds since the last call (or construction).
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
 
 // Moreau-Jean theta time stepping (SPEC 5.1):
 //   v_free  = v_i + dt g                      (gravity is the only external force)
@@ -109,15 +94,15 @@ class NscdBackend final : public core::ContactBackend {
   void step(double dt) override {
     if (!(dt > 0.0) || !std::isfinite(dt)) throw std::invalid_argument("nscd: time step dt must be positive");
     profile_ = core::StepProfile{};
-    Stopwatch clock;
+    core::PhaseClock clock(profile_);
     if (settings_.damping > 0.0) damp(std::exp(-settings_.damping * dt));
     predict(dt);
-    profile_[Phase::Integrate] += clock.lap();
+    clock.charge(Phase::Integrate);
     solveContacts(dt, settings_, settings_, clock);
     correct(dt, settings_.theta);
-    profile_[Phase::Integrate] += clock.lap();
+    clock.charge(Phase::Integrate);
     storeImpulses(dt, settings_.theta);
-    profile_[Phase::StoreImpulses] += clock.lap();
+    clock.charge(Phase::StoreImpulses);
   }
 
   bool hasQuasiStaticStep() const override { return true; }
@@ -135,7 +120,7 @@ class NscdBackend final : public core::ContactBackend {
     if (!(h > 0.0) || !std::isfinite(h)) throw std::invalid_argument("nscd: quasi-static step h must be positive");
     if (!(trustRadius > 0.0)) throw std::invalid_argument("nscd: quasi-static trust radius must be positive");
     profile_ = core::StepProfile{};
-    Stopwatch clock;
+    core::PhaseClock clock(profile_);
     for (int i = 0; i < n_; ++i) velocity_[i] = BodyVelocity{};
     predict(h);  // from rest: q_m = q_i, v_free = h g
     for (int i = 0; i < n_; ++i) {  // grain i's mass and inertia times w_i
@@ -143,7 +128,7 @@ class NscdBackend final : public core::ContactBackend {
       inverse_[i].invInertia /= metricWeight_[i];
       velocity_[i].v /= metricWeight_[i];
     }
-    profile_[Phase::Integrate] += clock.lap();
+    clock.charge(Phase::Integrate);
     NscdSettings solve = finisherSettings_;
     if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
     solveContacts(h, finisherSettings_, solve, clock);
@@ -167,28 +152,28 @@ class NscdBackend final : public core::ContactBackend {
     }
     lastFinisherStepClipped_ = move.clipped;
     correct(h, 1.0);
-    profile_[Phase::Integrate] += clock.lap();
+    clock.charge(Phase::Integrate);
     storeImpulses(h, 1.0);
-    profile_[Phase::StoreImpulses] += clock.lap();
+    clock.charge(Phase::StoreImpulses);
     return move;
   }
 
   // The contact problem of a step from q_m and the free velocities: pairs, contact points, rows
   // (with `law`'s contact law), warm start, then the solve to `solve`'s tolerance, each phase
   // timed into profile_.
-  void solveContacts(double dt, const NscdSettings& law, const NscdSettings& solve, Stopwatch& clock) {
+  void solveContacts(double dt, const NscdSettings& law, const NscdSettings& solve, core::PhaseClock& clock) {
     broad_.findPairs(positionMid_, reach_, pairs_);
-    profile_[Phase::UpdatePairs] += clock.lap();
+    clock.charge(Phase::UpdatePairs);
     collide();
-    profile_[Phase::Collide] += clock.lap();
+    clock.charge(Phase::Collide);
     solver_.prepare(geometry_, positionMid_, inverse_, box_, dt, law);
-    profile_[Phase::PrepareContacts] += clock.lap();
+    clock.charge(Phase::PrepareContacts);
     solver_.warmStart(cache_, geometry_, dt, velocity_);
-    profile_[Phase::WarmStart] += clock.lap();
+    clock.charge(Phase::WarmStart);
     profile_.iterations = solver_.solve(velocity_, solve);
     profile_.residual = solver_.residual();
     profile_.contactPoints = solver_.rowCount();
-    profile_[Phase::Solve] += clock.lap();
+    clock.charge(Phase::Solve);
   }
 
   // Per-grain metric weights of the finisher (docs/model.md). The finisher's fixed point dq = 0 is
