@@ -1,11 +1,12 @@
 #pragma once
-// All per-run measurements of SPEC 6 on one packing, as the result.json blocks of SPEC 8.3 and
-// the CSV profiles. Read-only over the packing; the same code for both backends.
+// All per-run measurements on one packing, as the result.json blocks and the CSV profiles
+// (docs/model.md, from "Bulk region and free surface" to "Coordination number", and "Results").
+// Read-only over the packing; the same code for both backends.
 //
 // Contacts: the packing's own list when it has one (a run: forces of the last step), otherwise
 // geometric contacts (analysis/geometric_contacts.hpp, all force-carrying).
 // Equilibrium: the run pipeline adds its own block (it has the velocities). Here, when the packing
-// carries contacts with forces and `equilibrium` is on, the SPEC 6.1 test is evaluated with all
+// carries contacts with forces and `equilibrium` is on, the equilibrium test is evaluated with all
 // velocities taken as zero ("velocities": "assumed_zero" in the block): the force and moment
 // balances are then exact, the kinetic ratio is 0 by assumption. Without contacts the block is
 // null (there are no forces to balance).
@@ -41,10 +42,10 @@ struct AnalysisOptions {
   ProfileFitDef profileFit{};                       ///< `bidisperse` is decided from the grains
   double boundaryDistance = 2.0;                    ///< nematic boundary layer thickness [d_L]
   bool voronoi = true;                              ///< radical Voronoi check of sphere packings
-  bool equilibrium = true;                          ///< evaluate SPEC 6.1 (zero velocities) when forces are present
+  bool equilibrium = true;                          ///< equilibrium test (zero velocities) when forces are present
   core::Vec3 gravity = core::Vec3(0.0, 0.0, -1.0);  ///< [g]
   double density = 1.0;                             ///< rho
-  double forceRatio = 1e-4, momentRatio = 1e-4, kineticRatio = 1e-8;  ///< SPEC 6.1 thresholds
+  double forceRatio = 1e-4, momentRatio = 1e-4, kineticRatio = 1e-8;  ///< equilibrium thresholds
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field
 };
@@ -73,9 +74,10 @@ struct Analysis {
 /// with an out-of-range grain, mixed sphere-pinacoid pairs) or bad options.
 Analysis analyze(const core::Packing& packing, const AnalysisOptions& options = {});
 
-/// The SPEC 8.3 blocks: n_grains, free_surface, bulk_region, solid_fraction, coordination,
-/// interpenetration_percent, anisotropy, fabric, nematic, profile_fit, equilibrium (null when not
-/// evaluated). Quantities that do not apply are null, not absent.
+/// The result.json blocks (docs/model.md, "Results"): n_grains, free_surface, bulk_region,
+/// solid_fraction, coordination, interpenetration_percent, anisotropy, fabric, nematic,
+/// profile_fit, equilibrium (null when not evaluated). Quantities that do not apply are null, not
+/// absent.
 nlohmann::json toJson(const Analysis& a);
 
 /// analyze() + toJson().

@@ -1,5 +1,6 @@
 #pragma once
-// The free surface and the bulk region of a gravity deposit (SPEC 6).
+// The free surface and the bulk region of a gravity deposit (docs/model.md, "Bulk region and
+// free surface").
 //
 // Free surface. The top of a pile is rough on the grain scale, so its height is defined as a
 // mean: the horizontal box (x over its period, y over the width) is divided into a grid of

@@ -1,5 +1,6 @@
 #pragma once
-// Coordination numbers of SPEC 6.9 and the force-carrying contact set shared with the fabric.
+// Coordination numbers (docs/model.md, "Coordination number") and the force-carrying contact set
+// shared with the fabric.
 //
 // Force-carrying contacts. Contacts of the same pair reported more than once (several manifolds)
 // are merged first (forces summed). A grain-grain contact carries force when its normal force

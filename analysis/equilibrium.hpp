@@ -1,5 +1,6 @@
 #pragma once
-// Static equilibrium test of SPEC 6.1 and the contact stress tensor it is scaled by.
+// Static equilibrium test (docs/model.md, "Equilibrium") and the contact stress tensor it is
+// scaled by.
 //
 // Per grain i (size d_i, mass m_i = rho V_i):
 //   sum F_i = m_i g + sum of the contact forces on i (normal and, at walls, friction),
@@ -14,7 +15,7 @@
 // V the bulk-slab volume and f_p^i the force on grain i at point p. Summing over grains (rather
 // than over contacts) is the choice documented here: a contact between two bulk grains then
 // contributes exactly (1/V) l (x) f with l = x_b - x_a the minimum-image branch vector and f the
-// force on b (SPEC's sigma = (1/V) sum f (x) l); a contact with one grain outside the slab
+// force on b (the model's sigma = (1/V) sum l (x) f); a contact with one grain outside the slab
 // contributes its in-bulk grain's half; a wall contact contributes with the branch from the
 // centre to the contact point. Only the symmetric part is kept.
 // A pile too low to have a bulk region (tests, small columns) falls back to all grains and the
@@ -43,10 +44,10 @@ struct EquilibriumReport {
 /// and the volume L_x W freeSurface when the region holds none) [rho g d_L]. Requires contacts.
 core::Mat3 contactStress(const core::Packing& packingWithContacts, const BulkRegion& region, bool* usedBulk = nullptr);
 
-/// Equilibrium report of SPEC 6.1. `states` gives velocities (empty = all at rest); positions and
-/// orientations are read from packing.grains. Throws std::invalid_argument if the packing has no
-/// contact list or `states` has the wrong size. When P <= 0 (no forces at all) the ratios are
-/// +infinity and `reached` is false.
+/// Equilibrium report (docs/model.md, "Equilibrium"). `states` gives velocities (empty = all at
+/// rest); positions and orientations are read from packing.grains. Throws std::invalid_argument if
+/// the packing has no contact list or `states` has the wrong size. When P <= 0 (no forces at all)
+/// the ratios are +infinity and `reached` is false.
 EquilibriumReport equilibrium(const core::Packing& packingWithContacts, const std::vector<core::BodyState>& states,
                               const core::Vec3& gravity, double density, double forceRatio = 1e-4,
                               double momentRatio = 1e-4, double kineticRatio = 1e-8,

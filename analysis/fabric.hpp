@@ -1,5 +1,5 @@
 #pragma once
-// Fabric of the contact network (SPEC 6.8).
+// Fabric of the contact network (docs/model.md, "Order").
 //
 // Anisotropy. F = (1/N) sum n (x) n over unit branch vectors (centre to centre, minimum image) of
 // the force-carrying grain-grain contacts, each weighted by the share of its two grains that are

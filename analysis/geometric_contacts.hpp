@@ -1,6 +1,6 @@
 #pragma once
-// Contacts found from the geometry alone, for packings without a contact list (SPEC 8.2: "a file
-// without them is analysed with geometric contacts").
+// Contacts found from the geometry alone, for packings without a contact list (docs/model.md,
+// "Coordination number": a file without them is analysed with geometric contacts).
 //
 // Two grains (or a grain and a wall) are in contact when their gap is below
 //   tol = absTolerance + relTolerance * (mean size of the two grains)   [d_L]

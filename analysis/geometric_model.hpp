@@ -1,5 +1,6 @@
 #pragma once
-// The geometrical model of SPEC 6.5 and the linear fits across a study (SPEC 6.5, 6.6, 6.9).
+// The geometrical model and the linear fits across a study (docs/model.md, "The geometrical
+// model", "Solid-fraction profiles and their fit", "Coordination number").
 //
 //   phi(W) = phi_bulk - C / W,   C = 2 h (phi_bulk - phi_BL)
 // is a straight line in x = 1/W: intercept phi_bulk, slope -C. It is fitted by (weighted) linear

@@ -1,9 +1,9 @@
 #pragma once
-// Homogeneity of a mixture (SPEC 6.3): fractions P_L and P_S of large and small grains in layers
-// of thickness `layer` (d_L) along z (all grains, from the floor) and along y (grains of the bulk
-// region, wall to wall), each the number of grains of that size with their centre in the layer
-// over the number of grains in the layer. A grain is large when its size exceeds
-// `sizeThreshold` (default 0.75 d_L, halfway between d_S = 0.5 and d_L = 1: the 1/30 spread
+// Homogeneity of a mixture (docs/model.md, "Homogeneity"): fractions P_L and P_S of large and small
+// grains in layers of thickness `layer` (d_L) along z (all grains, from the floor) and along y
+// (grains of the bulk region, wall to wall), each the number of grains of that size with their
+// centre in the layer over the number of grains in the layer. A grain is large when its size
+// exceeds `sizeThreshold` (default 0.75 d_L, halfway between d_S = 0.5 and d_L = 1: the 1/30 spread
 // truncated at 3 sigma keeps the two populations apart).
 #include <vector>
 

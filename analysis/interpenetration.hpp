@@ -1,5 +1,6 @@
 #pragma once
-// Interpenetration of the grains in the bulk region (SPEC 6.2), in % of the grain volume.
+// Interpenetration of the grains in the bulk region (docs/model.md, "Interpenetration"), in %
+// of the grain volume.
 //
 // I = (sum over overlapping pairs of the overlap volume lying in the bulk slab) /
 //     (grain volume in the bulk slab, as in solid_fraction) x 100.
@@ -8,7 +9,7 @@
 // the two horizontal planes is negligible and unbiased). Pinacoids: the exact intersection
 // polytope of the pair clipped by the two slab planes.
 //
-// Lattice bounds (pinacoids; SPEC 6.2 (b)). The slab is tiled by cells of side close to `cell`
+// Lattice bounds (pinacoids). The slab is tiled by cells of side close to `cell`
 // (default d_L/20; each axis uses L / round(L / cell) so that the cells tile the period, the
 // width and the slab height exactly). In a cell c with grain volumes v_i = |G_i ∩ c| (exact
 // box clipping), V_sol = sum v_i, and covered volume U = |∪ G_i ∩ c| <= V_cell, the overlap in
@@ -16,14 +17,13 @@
 //   lower: O_c >= V_sol - U >= V_sol - V_cell   (Bonferroni: sum v_i - |∪| <= sum of pairs),
 //   upper: O_c <= sum_{i<j} min(v_i, v_j)        (each pairwise overlap lies in both grains).
 // For two grains in a cell the upper bound is <= V_sol / 2, and a cell with V_sol/2 = V_cell
-// (two grains each filling it) has O_c = V_cell exactly: SPEC's two statements. I_min and I_max
-// sum these bounds over the cells. Only cells inside the bounding box of an overlapping pair's
-// intersection can hold overlap, so only the cells crossed by an intersection polytope are visited
-// (found by cutting the polytope into x slabs, y columns and z cells; other cells contribute 0 to
-// both bounds); a cell's V_sol still counts every grain that reaches it (the pair's grains and
-// their neighbours). Both bounds are
-// rigorous, so I_min <= I <= I_max, and their gap is the cells cut by the overlap boundary: it
-// shrinks linearly with the cell side.
+// (two grains each filling it) has O_c = V_cell exactly: the two statements of docs/model.md. I_min
+// and I_max sum these bounds over the cells. Only cells inside the bounding box of an overlapping
+// pair's intersection can hold overlap, so only the cells crossed by an intersection polytope are
+// visited (found by cutting the polytope into x slabs, y columns and z cells; other cells
+// contribute 0 to both bounds); a cell's V_sol still counts every grain that reaches it (the pair's
+// grains and their neighbours). Both bounds are rigorous, so I_min <= I <= I_max, and their gap is
+// the cells cut by the overlap boundary: it shrinks linearly with the cell side.
 // Spheres have no exact sphere-box volume here, so their lattice bounds are absent (null).
 #include <cstddef>
 #include <optional>
@@ -34,7 +34,7 @@
 namespace confpack::analysis {
 
 struct InterpenetrationDef {
-  double cell = 0.05;                 ///< lattice cell side [d_L] (SPEC: d_L/20), > 0
+  double cell = 0.05;                 ///< lattice cell side [d_L] (d_L/20), > 0
   bool lattice = true;                ///< compute the lattice bounds (pinacoids only)
   std::size_t maxCells = 20'000'000;  ///< cost cap: skip the bounds (null) beyond this many (cell, pair) entries
 

@@ -1,7 +1,8 @@
 #pragma once
 // Candidate grain pairs by a cell list: every pair whose bounding spheres come within `extra`
 // of each other, once, with the minimum-image separation. Linear in the number of grains.
-// (core has no shared spatial grid yet; this one is private to analysis and tiny.)
+// Apart from core/spatial_grid.hpp, which answers one radius query at a time (the deposition's
+// use): this lists every pair once, from one counting sort of the grains into flat arrays.
 #include <vector>
 
 #include "core/packing.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// Nematic order of pinacoids (SPEC 6.8).
+// Nematic order of pinacoids (docs/model.md, "Order").
 //
 // With u, v, w the unit principal axes of a grain (the body x, y, z axes of the pinacoid, which
 // are principal axes by its three mirror planes; world columns of its rotation matrix),

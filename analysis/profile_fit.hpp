@@ -1,5 +1,6 @@
 #pragma once
-// Nonlinear fit of the wall-normal solid-fraction profile (SPEC 6.6):
+// Nonlinear fit of the wall-normal solid-fraction profile (docs/model.md,
+// "Solid-fraction profiles and their fit"):
 //
 //   phi(y) = [1 - exp(-y/alpha)] x [ phi_bulk + sum_{i in {S,L}} beta_i cos(pi (2y - 1)/gamma_i) exp(-y/lambda_i) ]
 //

@@ -1,5 +1,6 @@
 #pragma once
-// Solid fraction of the bulk region (SPEC 6.4) and its wall-normal profile phi(y) (SPEC 6.6).
+// Solid fraction of the bulk region and its wall-normal profile phi(y) (docs/model.md, "Solid
+// fraction" and "Solid-fraction profiles and their fit").
 //
 // phi = (exact volume of grain material inside the bulk slab zLow < z < zHigh) / (slab volume
 // L_x W (zHigh - zLow)). The slab spans the whole period along x and the whole width along y
@@ -15,7 +16,7 @@
 // the mean of the profile differs from the bulk phi only by the few grains straddling the two
 // horizontal planes, whose excess and deficit cancel on average.
 // With side walls the profile is folded: phi(y) = (phi_raw(y) + phi_raw(W - y)) / 2 for
-// 0 <= y <= W/2 (SPEC "averaged over the two walls"); a biperiodic box gives the raw profile.
+// 0 <= y <= W/2 (averaged over the two walls); a biperiodic box gives the raw profile.
 #include <vector>
 
 #include "analysis/bulk_region.hpp"
@@ -32,7 +33,7 @@ struct SolidFraction {
 SolidFraction solidFraction(const core::Packing& packing, const BulkRegion& region);
 
 struct ProfileDef {
-  double slice = 0.02;  ///< target slice thickness [d_L], > 0 (SPEC 6.6: d_L/50)
+  double slice = 0.02;  ///< target slice thickness [d_L], > 0 (d_L/50)
   bool fold = true;     ///< average the two walls (ignored for a biperiodic box)
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field

@@ -1,5 +1,6 @@
 #pragma once
-// Exact volumes of sphere pieces used by the analysis (SPEC 6.2, 6.4, 6.6): spherical segments
+// Exact volumes of sphere pieces used by the analysis (docs/model.md, "Interpenetration",
+// "Solid fraction", "Solid-fraction profiles and their fit"): spherical segments
 // (a sphere cut by two parallel planes) and lenses (the intersection of two spheres).
 //
 // These are closed forms, not sampling. Polyhedra use core/polyhedron_clip.hpp instead.

@@ -1,6 +1,6 @@
 #pragma once
-// Independent check of the sphere solid fraction by a radical Voronoi tessellation (SPEC 6.4,
-// "spheres may additionally be checked"), with voro++ (container_poly: cells weighted by the
+// Independent check of the sphere solid fraction by a radical Voronoi tessellation (docs/model.md,
+// "Solid fraction"), with voro++ (container_poly: cells weighted by the
 // radii, so that a cell holds its whole sphere even in a polydisperse packing).
 //
 //   phi_voronoi = (sum of the volumes of the bulk spheres) / (sum of their radical cells),

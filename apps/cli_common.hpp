@@ -1,6 +1,6 @@
 #pragma once
-// What the subcommands share: the common flags of SPEC 8.1 bound into a core::RunConfig, the
-// exit-code discipline, and all-or-nothing output directories.
+// What the subcommands share: the common flags (README, "Command line") bound into a
+// core::RunConfig, the exit-code discipline, and all-or-nothing output directories.
 //
 // Exit codes: 0 ok, 2 bad input (refused before any work, nothing written), 1 runtime failure
 // (nothing partial left behind). Every failure prints exactly one line on stderr.
@@ -32,7 +32,7 @@ struct CommonOptions {
   int verbosity = 0;          ///< -v (repeatable): more detail on stderr
 };
 
-/// Adds the common flags of SPEC 8.1 to a subcommand: --shape, --length-x, --width, --periodic-y,
+/// Adds the common flags to a subcommand: --shape, --length-x, --width, --periodic-y,
 /// --height, --small-fraction, --wall-friction, --backend, --seed, --out, --threads, --quiet, -v,
 /// plus --pinacoid-G, --pinacoid-E, --pinacoid-alpha. Values land in `cfg` and `opts`, with
 /// validators so that a bad value is refused by the parser, before any work. The defaults shown

@@ -1,7 +1,7 @@
-// `confpack analyze FILE --out DIR`: every measurement of SPEC 6 on a packing file (SPEC 8.2),
-// whoever made it.
+// `confpack analyze FILE --out DIR`: every measurement of docs/model.md on a packing file
+// (docs/packing-format.md), whoever made it.
 //
-//   DIR/result.json   the analysis blocks of SPEC 8.3 (equilibrium with zero velocities when the
+//   DIR/result.json   the analysis blocks (docs/model.md, "Results"; equilibrium with zero velocities when the
 //                     file carries contact forces, else null), the source file and the options
 //   DIR/*.csv         phi_y, z_y, homogeneity_z, homogeneity_y, orientation_cos, orientation_azimuth
 //
@@ -82,8 +82,9 @@ void runAnalyze(AnalyzeState& st) {
 
 void registerAnalyze(CLI::App& app) {
   auto st = std::make_shared<AnalyzeState>();
-  auto* sub =
-      app.add_subcommand("analyze", "Analyse a packing file (SPEC 8.2): writes DIR/result.json and CSV profiles");
+  auto* sub = app.add_subcommand("analyze",
+                                 "Analyse a packing file (docs/packing-format.md): writes DIR/result.json and CSV "
+                                 "profiles");
   sub->add_option("file", st->file, "Packing file (confpack-packing JSON)")->required();
   sub->add_option("--out", st->out, "Output directory (created; written all or nothing)")->required();
   sub->add_flag("--quiet,-q", st->quiet, "No summary line");

@@ -1,5 +1,5 @@
-// `confpack deposit`: the geometric deposition of SPEC 4.1-4.2, written as a packing (no contacts),
-// one ParaView frame and the resolved configuration.
+// `confpack deposit`: the geometric deposition (docs/model.md, "Deposition"), written as a packing
+// (no contacts), one ParaView frame and the resolved configuration.
 //
 //   DIR/packing.json   confpack-packing v1, box + grains after substitution
 //   DIR/config.json    the fully resolved RunConfig (re-running with it gives the same pile)
@@ -65,7 +65,7 @@ void runDeposit(const DepositState& st) {
 void registerDeposit(CLI::App& app) {
   auto st = std::make_shared<DepositState>();
   auto* sub = app.add_subcommand(
-      "deposit", "Geometric deposition (SPEC 4.1-4.2): writes DIR/packing.json, DIR/config.json and DIR/vtk/");
+      "deposit", "Geometric deposition (docs/model.md): writes DIR/packing.json, DIR/config.json and DIR/vtk/");
   addRunConfigOptions(*sub, st->cfg, st->opts);
   sub->callback([st] { runDeposit(*st); });
 }

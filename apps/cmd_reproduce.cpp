@@ -1,4 +1,5 @@
-// `confpack reproduce --scale tiny|quick|paper --out DIR`: runs the study of SPEC 7 (study/reproduce.hpp)
+// `confpack reproduce --scale tiny|quick|paper --out DIR`: runs the confinement study
+// (docs/model.md, "The study and its report"; study/reproduce.hpp)
 // into DIR (a resumable sweep folder) and writes its report into DIR/report/.
 #include <fmt/format.h>
 #include <unistd.h>
@@ -73,10 +74,10 @@ void registerReproduce(CLI::App& app) {
   auto st = std::make_shared<ReproduceState>();
   auto* sub = app.add_subcommand(
       "reproduce",
-      "Run the confinement study of SPEC 7 with both backends and write its report (DIR/report/report.html). "
+      "Run the confinement study (docs/model.md) with both backends and write its report (DIR/report/report.html). "
       "Rerunning the same command resumes an interrupted study.");
   sub->add_option("--scale", st->scale, "tiny (smoke test, minutes), quick (shrunk box, < 20 min on 2 cores) or "
-                                        "paper (SPEC 3 sizes, for a cluster)")
+                                        "paper (the paper's sizes, for a cluster)")
       ->check(CLI::IsMember({"tiny", "quick", "paper"}))
       ->capture_default_str();
   sub->add_option("--out", st->out, "Study folder (sweep runs, deposits, report/)")->required();

@@ -1,8 +1,8 @@
-// `confpack run`: the whole protocol of SPEC 4 for one configuration and one backend: deposit,
-// compact until equilibrium (SPEC 6.1) or the time limit, analyse (SPEC 6), write.
+// `confpack run`: the whole protocol (docs/model.md, "Protocols") for one configuration and one
+// backend: deposit, compact until equilibrium or the time limit, analyse, write.
 //
-//   DIR/result.json    SPEC 8.3 (written last: its presence means the run finished)
-//   DIR/packing.json   final packing with contacts and forces (SPEC 8.2)
+//   DIR/result.json    docs/model.md, "Results" (written last: its presence means the run finished)
+//   DIR/packing.json   final packing with contacts and forces (docs/packing-format.md)
 //   DIR/config.json    the fully resolved RunConfig
 //   DIR/*.csv          profiles
 //   DIR/vtk/           ParaView frames (frame_grains.pvd, frame_contacts.pvd)
@@ -64,12 +64,13 @@ void registerRun(CLI::App& app) {
   auto* sub = app.add_subcommand(
       "run", "Deposit, compact with a backend until equilibrium (or the time limit), analyse, write DIR/result.json");
   addRunConfigOptions(*sub, st->cfg, st->opts);
-  sub->add_option("--dt", st->cfg.compaction.dt, "Time step [t0]; 0 = SPEC 4 rule from the deposit's drop")
+  sub->add_option("--dt", st->cfg.compaction.dt,
+                  "Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md)")
       ->check(nonNegativeNumber())
       ->capture_default_str();
   sub->add_flag("--adaptive-dt", st->cfg.compaction.adaptiveDt,
                 "Adaptive time step: the largest that keeps every grain within a hundredth of the smallest "
-                "grain's size of motion per step at its current speed, never below --dt (or the SPEC 4 "
+                "grain's size of motion per step at its current speed, never below --dt (or the fixed "
                 "step), growing at most 1.25x per step; "
                 "equilibrium is then also checked every 0.5 t0");
   addProtocolOption(*sub, st->cfg.compaction.protocol);

@@ -1,8 +1,9 @@
 #pragma once
-// The subcommands of `confpack` (SPEC 8.1). Each register function adds one subcommand to the
-// root app, with its options bound to state it owns and a callback that does the work. A callback
-// ends with CLI::RuntimeError(code) when it fails (main returns the code; the message has already
-// been printed): 2 for bad input, 1 for a runtime failure. See apps/cli_common.hpp.
+// The subcommands of `confpack` (README, "Command line"). Each register function adds one
+// subcommand to the root app, with its options bound to state it owns and a callback that does the
+// work. A callback ends with CLI::RuntimeError(code) when it fails (main returns the code; the
+// message has already been printed): 2 for bad input, 1 for a runtime failure. See
+// apps/cli_common.hpp.
 namespace CLI {
 class App;
 }
@@ -14,7 +15,7 @@ void registerRun(CLI::App& app);        ///< deposit, compact, analyse (apps/cmd
 void registerAnalyze(CLI::App& app);    ///< analyse a packing file (apps/cmd_analyze.cpp)
 void registerSweep(CLI::App& app);      ///< run a study (apps/cmd_sweep.cpp)
 void registerReport(CLI::App& app);     ///< tables and figures of a study (apps/cmd_report.cpp)
-void registerReproduce(CLI::App& app);  ///< rerun from a written configuration (apps/cmd_reproduce.cpp)
+void registerReproduce(CLI::App& app);  ///< the confinement study at a scale (apps/cmd_reproduce.cpp)
 void registerBench(CLI::App& app);      ///< backend timings (apps/cmd_bench.cpp)
 
 }  // namespace confpack::app

@@ -1,4 +1,5 @@
-// confpack: the command line (SPEC 8.1). Thin: parse, dispatch to a subcommand, return its code.
+// confpack: the command line (README, "Command line"). Thin: parse, dispatch to a subcommand,
+// return its code.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>

@@ -42,7 +42,8 @@ using core::Vec3;
 // calls a benchmark function several times (to size the iteration count, then once per
 // repetition), and a deposit of 30,000 grains takes about a second.
 
-/// Grain counts of the broad-phase and Gauss-Seidel series (SPEC 3: 1,900 to 30,400 spheres).
+/// Grain counts of the broad-phase and Gauss-Seidel series (the paper's piles: 1,900 to 30,400
+/// spheres).
 constexpr int kBroadPhaseSizes[] = {2000, 8000, 30000};
 constexpr int kSweepSizes[] = {2000, 8000, 30000};
 /// Pairs per narrow-phase fixture: enough different poses that the branch predictor cannot learn
@@ -52,7 +53,7 @@ constexpr int kPairsPerType = 512;
 /// (what an unconverged step leaves) to just inside the alert distance (NscdSettings default
 /// 0.03), so that every pair yields a contact, as the pairs that matter in a dense pile do.
 constexpr double kGapMin = -0.005, kGapMax = 0.025;
-/// Time step of the settling run and of the timed sweeps [t0] (SPEC 4: 3e-4 to 1e-3).
+/// Time step of the settling run and of the timed sweeps [t0], of the order of the fixed step.
 constexpr double kDt = 1e-3;
 /// Steps of nscd that settle the touching placeholder pile before the sweep is timed, and the
 /// sweep cap during them: enough for the impulses to spread through the network, cheap enough
@@ -284,7 +285,7 @@ struct SolverFixture {
   }
 };
 
-/// One Gauss-Seidel sweep (SPEC 5.1), whatever the default solver is.
+/// One Gauss-Seidel sweep, whatever the default solver is.
 nscd::NscdSettings oneSweepSettings() {
   nscd::NscdSettings s = nscd::defaultsFor(nscd::SolverKind::Nlgs);
   s.maxIterations = 1;

@@ -12,7 +12,7 @@
 //   MprgpIteration/spheres/N    a contact row in one MPRGP iteration (cold solves of 50
 //                               iterations on the same rows; an iteration is about two sweeps
 //                               of work), the default solver since Gauss-Seidel cannot reach
-//                               the SPEC 6.1 force balance.
+//                               the equilibrium test's force balance.
 // The fixtures (deposits, poses, contact networks) are built once per process, outside the
 // timed loops, and only for the benchmarks that the filter selects.
 #include <cstdint>

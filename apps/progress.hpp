@@ -1,7 +1,7 @@
 #pragma once
-// Progress of long work on stderr (SPEC 8.1): on a terminal one live line rewritten in place
-// (at most 10 times a second); otherwise (a log file, a cluster job) a plain line now and then, so
-// logs stay readable. Silent when disabled (--quiet).
+// Progress of long work on stderr (README, "Command line"): on a terminal one live line rewritten
+// in place (at most 10 times a second); otherwise (a log file, a cluster job) a plain line now and
+// then, so logs stay readable. Silent when disabled (--quiet).
 #include <chrono>
 #include <mutex>
 #include <string>

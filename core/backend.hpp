@@ -1,6 +1,7 @@
 #pragma once
-// The contact backend interface (SPEC 5). Deposition, the run pipeline and analysis only see this;
-// `makeBackend("nscd" | "bullet", ...)` in backends/backend_factory.hpp picks the implementation.
+// The contact backend interface (docs/model.md, "Contact backends"). Deposition, the run
+// pipeline and analysis only see this; `makeBackend("nscd" | "bullet", ...)` in
+// backends/backend_factory.hpp picks the implementation.
 //
 // A backend is built once from a SystemDef (grains at rest, boundaries, gravity), advanced with
 // step(dt), and after every step exposes the poses and velocities, the contact list of that

@@ -1,5 +1,5 @@
 #pragma once
-// The simulation box of SPEC section 3: periodic along x, side walls (or periodic) along y,
+// The simulation box (docs/model.md, "Box"): periodic along x, side walls (or periodic) along y,
 // a frictionless floor at z = 0 and a free top. Every module that needs a distance between two
 // grains goes through minimumImage() so that periodic images are handled in one place.
 #include <cmath>
@@ -9,7 +9,7 @@
 
 namespace confpack::core {
 
-/// Ids given to the fixed boundaries wherever a contact partner is a wall (SPEC 8.2).
+/// Ids given to the fixed boundaries wherever a contact partner is a wall (docs/packing-format.md).
 enum class WallId : int { Floor = -1, SideLow = -2, SideHigh = -3 };
 
 inline constexpr bool isWall(int id) { return id < 0; }

@@ -1,5 +1,6 @@
 #pragma once
-// A contact as backends report it and analysis reads it (SPEC 5 and 8.2).
+// A contact as backends report it and analysis reads it (docs/model.md, "Contact backends";
+// docs/packing-format.md).
 //
 // Conventions, the same everywhere:
 // - `a` is a grain index; `b` is a grain index or a wall id (WallId, negative).
@@ -17,9 +18,9 @@
 
 namespace confpack::core {
 
-/// Geometric type of a contact (SPEC 5.1): vertex-face or edge-edge -> Simple (1 point),
-/// edge-face -> Double (2 points), face-face -> Triple (3+ points from the face intersection).
-/// Sphere contacts are Simple.
+/// Geometric type of a contact (docs/model.md, "Coordination number"): vertex-face or edge-edge ->
+/// Simple (1 point), edge-face -> Double (2 points), face-face -> Triple (3+ points from the face
+/// intersection). Sphere contacts are Simple.
 enum class ContactType { Simple, Double, Triple };
 
 std::string_view toString(ContactType t);

@@ -1,6 +1,6 @@
-// Geometric deposition of SPEC 4.1-4.2: sequential ballistic deposition with rolling to a
-// three-point seat (Visscher & Bolsterli, Nature 239, 504 (1972); Jodrey & Tory, Simulation 32, 1
-// (1979)), computed with closed-form geometry only.
+// Geometric deposition (docs/model.md, "Deposition"): sequential ballistic deposition with rolling
+// to a three-point seat (Visscher & Bolsterli, Nature 239, 504 (1972); Jodrey & Tory, Simulation
+// 32, 1 (1979)), computed with closed-form geometry only.
 //
 // The moving placeholder is a point c (its centre) in the free space
 //     F = { c : |c - c_k| >= D for every placed centre c_k (periodic images included),
@@ -570,7 +570,7 @@ Deposit deposit(const BoxDef& box, const PopulationDef& population, const Deposi
   out.unsettledCount = pile.unsettledCount;
   out.meanMoves = pile.meanMoves;
 
-  // Substitution (SPEC 4.2): Fisher-Yates shuffle of the grains, then grain i takes placeholder i.
+  // Substitution: Fisher-Yates shuffle of the grains, then grain i takes placeholder i.
   Rng order(seed, StreamId::GrainOrder);
   for (std::size_t i = out.grains.size() - 1; i > 0; --i)
     std::swap(out.grains[i], out.grains[static_cast<std::size_t>(order.below(i + 1))]);

@@ -1,9 +1,9 @@
 #pragma once
-// Geometric deposition (SPEC 4.1-4.2). Placeholder spheres, each circumscribing the largest
-// possible grain, are dropped one at a time at a random (x, y); each falls to the free surface of
-// the pile below and is moved to rest on three supports that locally minimise its altitude
-// (placeholders with their periodic images, the floor, the side walls), overlapping nothing.
-// The real grains, in random order, then replace the placeholders (centre on centre).
+// Geometric deposition (docs/model.md, "Deposition"). Placeholder spheres, each circumscribing the
+// largest possible grain, are dropped one at a time at a random (x, y); each falls to the free
+// surface of the pile below and is moved to rest on three supports that locally minimise its
+// altitude (placeholders with their periodic images, the floor, the side walls), overlapping
+// nothing. The real grains, in random order, then replace the placeholders (centre on centre).
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
@@ -45,7 +45,7 @@ struct Deposit {
 /// Called now and then with (placeholders placed, total).
 using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
 
-/// Placeholder pile of SPEC 4.1 alone (no grains): `count` equal spheres of diameter `diameter`
+/// The placeholder pile alone (no grains): `count` equal spheres of diameter `diameter`
 /// [d_L] dropped at random (x, y) drawn from `rng`, each settled by analytic falls and rolls.
 struct PlaceholderPile {
   std::vector<Vec3> centres;        ///< in deposition order, wrapped into the box [d_L]

@@ -1,6 +1,7 @@
 #pragma once
-// A packing: the box, the grains and, optionally, their contacts with forces (SPEC 8.2).
-// This is the snapshot that analysis reads and that `confpack analyze` loads from a file.
+// A packing: the box, the grains and, optionally, their contacts with forces
+// (docs/packing-format.md). This is the snapshot that analysis reads and that `confpack analyze`
+// loads from a file.
 #include <optional>
 #include <string>
 #include <vector>

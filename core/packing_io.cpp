@@ -380,7 +380,8 @@ json toJson(const Packing& p) {
                 {"normal_force", c.normalForce()},
                 {"point_forces", std::move(forces)},
                 {"point_gaps", std::move(gaps)}};
-      // Grain-grain contacts are frictionless (SPEC 1): only wall contacts carry a tangent force.
+      // Grain-grain contacts are frictionless (docs/model.md, "Mixtures"): only wall contacts carry
+      // a tangent force.
       if (isWall(c.b)) {
         e["tangent_force"] = toJsonVec(tangent);
         e["point_tangent_forces"] = std::move(tangents);

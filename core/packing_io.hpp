@@ -1,6 +1,6 @@
 #pragma once
-// The packing file of SPEC 8.2 ("confpack-packing", version 1) and the atomic file writes that
-// every output of the toolkit goes through.
+// The packing file ("confpack-packing", version 1; docs/packing-format.md) and the atomic file
+// writes that every output of the toolkit goes through.
 //
 // The format is documented in full in README.md ("Packing file"). In short:
 //

@@ -60,7 +60,7 @@ ConvexPolyhedron makePinacoid(double length, const PinacoidParams& p) {
 }
 
 MassProperties pinacoidMassProperties(double length, const PinacoidParams& p) {
-  // SPEC 2.2 with A = L/2, B = L/2 - l, g = G/2.
+  // docs/model.md, "Pinacoids", with A = L/2, B = L/2 - l, g = G/2.
   const double L = length;
   const double G = p.widthRatio * L;
   const double E = p.heightRatio * L;

@@ -1,7 +1,7 @@
 #pragma once
-// The pinacoid of SPEC 2.2: 8 vertices, 14 edges, 8 faces (4 isosceles triangles, 4 isosceles
-// trapezoids), three mirror planes. Body frame: centroid at the origin, length L along x, width G
-// along y, height E along z.
+// The pinacoid (docs/model.md, "Pinacoids"): 8 vertices, 14 edges, 8 faces (4 isosceles triangles,
+// 4 isosceles trapezoids), three mirror planes. Body frame: centroid at the origin, length L along
+// x, width G along y, height E along z.
 //
 //   mid-plane rectangle: (+-L/2, +-G/2, 0)
 //   ridge ends:          (+-l, 0, +-E/2),   l = L/2 - (E/2)/tan(alpha)
@@ -32,7 +32,8 @@ void from_json(const nlohmann::json& j, PinacoidParams& p);
 double pinacoidRidgeHalfLength(double length, const PinacoidParams& p);
 /// The pinacoid of length L (size) in its body frame.
 ConvexPolyhedron makePinacoid(double length, const PinacoidParams& p);
-/// Closed-form mass properties of SPEC 2.2 (density rho): volume, centroid 0, second moments.
+/// Closed-form mass properties (docs/model.md, "Pinacoids"; density rho): volume, centroid 0,
+/// second moments.
 MassProperties pinacoidMassProperties(double length, const PinacoidParams& p);
 
 }  // namespace confpack::core

@@ -1,6 +1,6 @@
 #pragma once
-// Exact volumes of convex polyhedra cut by half-spaces (SPEC 6.2 and 6.4): grain-slab,
-// grain-cell and grain-grain intersection volumes, no sampling.
+// Exact volumes of convex polyhedra cut by half-spaces: grain-slab, grain-cell and grain-grain
+// intersection volumes, no sampling (docs/model.md, "Interpenetration" and "Solid fraction").
 //
 // A convex polytope is kept as a list of face loops over a vertex array. Clipping by one plane
 // splits every face loop (Sutherland-Hodgman on the face), shares the new vertex of a cut edge

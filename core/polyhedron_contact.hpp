@@ -1,6 +1,6 @@
 #pragma once
 // Exact narrow phase for convex polyhedra (pinacoids) and the shared geometric contact-type
-// classifier (SPEC 5.1 and 6.9).
+// classifier (docs/model.md, "nscd: Moreau-Jean contact dynamics" and "Coordination number").
 //
 // Method, polyhedron-polyhedron (collidePolyhedra):
 // 1. Separating-axis test over the face normals of both bodies and the cross products of every
@@ -35,7 +35,7 @@
 //    use the closest pair of points of the two features instead: point = their midpoint,
 //    pointGap = normal.(onB - onA). A face-face contact keeps every vertex of the clipped
 //    polygon as a point (up to kMaxPolyhedronContactPoints = 8, the most two quadrilateral
-//    pinacoid faces can give), each with its own gap. SPEC says 3 points; two earlier choices
+//    pinacoid faces can give), each with its own gap, not 3 points: two earlier choices
 //    failed in nscd. 3 points of a rectangle-on-rectangle contact put the centre of mass on an
 //    edge of the support triangle (marginal static support). 4 points (the deepest vertex and
 //    the 3 of largest area with it) let the dropped vertices sink unseen into the other grain
@@ -131,9 +131,10 @@ std::optional<PolyhedronContact> collidePolyhedronPlane(const PlacedPolyhedron& 
 /// normal is closest to dir).
 Feature supportFeature(const PlacedPolyhedron& p, const Vec3& dir, double angleTol = kFeatureAngleTol);
 
-/// Geometric contact type of two touching polyhedra (SPEC 6.9), from their poses only: the
-/// normal is recomputed by the narrow phase above, so the answer does not depend on which backend
-/// produced the contact nor on the number of points it used. Works for any gap (no alert).
+/// Geometric contact type of two touching polyhedra (docs/model.md, "Coordination number"), from
+/// their poses only: the normal is recomputed by the narrow phase above, so the answer does not
+/// depend on which backend produced the contact nor on the number of points it used. Works for any
+/// gap (no alert).
 ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double angleTol = kFeatureAngleTol);
 
 /// Same, with an imposed unit normal (from a towards b), e.g. a backend's normal.

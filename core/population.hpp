@@ -1,6 +1,6 @@
 #pragma once
-// Grain populations of SPEC 2.1 and 2.3: one or two sizes (large d_L, small d_S = d_L/2) of one
-// shape, each size drawn from a Gaussian of standard deviation d/30 truncated at 3 sigma, mixed
+// Grain populations (docs/model.md, "Mixtures"): one or two sizes (large d_L, small d_S = d_L/2) of
+// one shape, each size drawn from a Gaussian of standard deviation d/30 truncated at 3 sigma, mixed
 // so that small grains make x_S percent of the solid volume.
 #include <nlohmann/json_fwd.hpp>
 #include <vector>

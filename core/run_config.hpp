@@ -21,10 +21,11 @@ std::string toString(Protocol p);  ///< "dynamic", "quasi-static"
 
 /// Compaction under gravity and its stopping rule (docs/model.md).
 struct CompactionDef {
-  double dt = 0.0;                  ///< time step [t0]; 0 = SPEC 4 rule from the deposit's drop
+  /// Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md, "Time step").
+  double dt = 0.0;
   /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
-  /// the smallest grain's size of motion (SPEC 4's d_L/100 for a monodisperse sample) at its
-  /// current speed, gravity included, never below `dt` (or the SPEC 4 step) and at most
+  /// the smallest grain's size of motion (d_L/100 for a monodisperse sample, as the fixed step)
+  /// at its current speed, gravity included, never below `dt` (or the fixed step) and at most
   /// kAdaptiveGrowth times the step before (study/run_pipeline.hpp, AdaptiveTimeStep).
   bool adaptiveDt = false;
   /// Simulated time after which the run stops unequilibrated [t0]; with the quasi-static
@@ -46,8 +47,8 @@ struct CompactionDef {
   /// fraction of the smallest grain's size [-]. A third of nscd's default alert distance (0.03):
   /// two grains closing on each other cannot cross the alert band unseen in one step.
   double trustRadius = 0.01;
-  /// Quasi-static protocol: the finisher has converged when SPEC 6.1 holds and its last step moved
-  /// no grain's surface more than this fraction of the smallest grain's size [-].
+  /// Quasi-static protocol: the finisher has converged when the equilibrium test holds and its last
+  /// step moved no grain's surface more than this fraction of the smallest grain's size [-].
   double settleTolerance = 1e-6;
   /// Quasi-static protocol: the finisher's longest step [t0]. Its solves lose accuracy like
   /// h^2 (v_free = h g against dq / h); at 1 t0 a displacement of 1e-6 d already means a force

@@ -1,5 +1,5 @@
 #pragma once
-// A uniform cell grid over the box of SPEC section 3 for neighbour queries of points (grain
+// A uniform cell grid over the box (docs/model.md, "Box") for neighbour queries of points (grain
 // centres, placeholder centres). Cells are at least `minCellSize` on every side, so a query of
 // radius r visits about (2 r / cell + 1)^3 cells whatever the number of points: a deposit or a
 // contact search built on it is linear in n.

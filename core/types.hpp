@@ -1,6 +1,6 @@
 #pragma once
 // Shared small types. Eigen supplies the linear algebra; everything is double precision and
-// dimensionless (d_L = 1, g = 1, rho = 1; see SPEC section 1).
+// dimensionless (d_L = 1, g = 1, rho = 1; docs/model.md, "Units").
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 

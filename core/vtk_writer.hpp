@@ -1,5 +1,6 @@
 #pragma once
-// ParaView output (SPEC 8.4): VTK XML PolyData (.vtp) frames and .pvd time collections.
+// ParaView output (docs/model.md, "ParaView"; README, "ParaView"): VTK XML PolyData (.vtp)
+// frames and .pvd time collections.
 //
 // Hand-written rather than through libvtk: Debian's libvtk9-dev pulls in hundreds of packages
 // (Qt, MPI, ...) for what is a few hundred lines of well-specified XML. The files are ASCII

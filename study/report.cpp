@@ -408,7 +408,7 @@ CsvTable averageProfiles(const std::vector<CsvTable>& tables) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Sections: which result keys go where (SPEC 6 order)
+// Sections: which result keys go where (in the order of docs/model.md's measurements)
 
 struct Section {
   std::string title;
@@ -417,13 +417,13 @@ struct Section {
 
 const std::vector<Section>& sections() {
   static const std::vector<Section> s = {
-      {"Solid fraction (SPEC 6.4)", {"solid_fraction", "bulk_region", "free_surface"}},
-      {"Profile fit phi(y) (SPEC 6.6)", {"profile_fit"}},
-      {"Coordination (SPEC 6.9)", {"coordination", "hyperstaticity", "wall_contacts"}},
-      {"Interpenetration, % by volume (SPEC 6.2)", {"interpenetration"}},
-      {"Homogeneity (SPEC 6.3)", {"homogeneity"}},
-      {"Order: anisotropy and nematic order (SPEC 6.8)", {"anisotropy", "fabric", "nematic", "orientation"}},
-      {"Equilibrium (SPEC 6.1)", {"equilibrium"}},
+      {"Solid fraction", {"solid_fraction", "bulk_region", "free_surface"}},
+      {"Profile fit phi(y)", {"profile_fit"}},
+      {"Coordination", {"coordination", "hyperstaticity", "wall_contacts"}},
+      {"Interpenetration, % by volume", {"interpenetration"}},
+      {"Homogeneity", {"homogeneity"}},
+      {"Order: anisotropy and nematic order", {"anisotropy", "fabric", "nematic", "orientation"}},
+      {"Equilibrium", {"equilibrium"}},
       {"Cost (wall time, steps, solver iterations)", {"timing", "deposit"}},
   };
   return s;
@@ -776,7 +776,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
       doc.heading(3, "lambda_L against x_S and against C");
       if (!byXs.series.empty()) doc.figure(byXs.stem, byXs.caption, figures.draw(byXs));
       if (!originRows.empty()) {
-        doc.para("Linear fit through the origin lambda_L = k C per backend (SPEC 6.6):");
+        doc.para("Linear fit through the origin lambda_L = k C per backend:");
         doc.table({"backend", "points", "k = lambda_L / C", "weights"}, originRows);
         doc.figure(byC.stem, byC.caption, figures.draw(byC));
       }
@@ -862,7 +862,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
       "run's fully resolved configuration is in runs/<name>/config.json and its result.json.",
       "Mean and standard deviation are over the replicas (seeds) that finished; missing runs are listed above and "
       "excluded from the means.",
-      "Geometrical model (SPEC 6.5): linear least squares in 1/W over the confined widths (GSL); weighted by the "
+      "Geometrical model (docs/model.md): linear least squares in 1/W over the confined widths (GSL); weighted by the "
       "replicas' standard error of the mean when every width has at least two differing replicas, unweighted "
       "otherwise (its errors are then estimated from the scatter). The biperiodic value is shown next to the "
       "fitted bulk value as a check.",

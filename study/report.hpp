@@ -1,11 +1,12 @@
 #pragma once
-// The study report (SPEC 7): reads a sweep folder and writes one self-contained HTML file (figures
-// inlined as SVG) and the same content as Markdown (figures linked), with every quantity of
-// result.json tabulated per configuration (shape, x_S, W, mu_w), the two backends side by side as
-// mean +- standard deviation over the replicas, their difference with its uncertainty, the
-// geometrical-model fits phi(W) = phi_bulk - C/W and Z(W) = Z_bulk - C_Z/W per backend, lambda_L
-// against x_S and against C, the profiles of the runs, and the cost of every run. Runs that are
-// missing, failed or did not reach equilibrium are listed as such, never dropped silently.
+// The study report (docs/model.md, "The study and its report"): reads a sweep folder and writes one
+// self-contained HTML file (figures inlined as SVG) and the same content as Markdown (figures
+// linked), with every quantity of result.json tabulated per configuration (shape, x_S, W, mu_w),
+// the two backends side by side as mean +- standard deviation over the replicas, their difference
+// with its uncertainty, the geometrical-model fits phi(W) = phi_bulk - C/W and Z(W) = Z_bulk -
+// C_Z/W per backend, lambda_L against x_S and against C, the profiles of the runs, and the cost of
+// every run. Runs that are missing, failed or did not reach equilibrium are listed as such, never
+// dropped silently.
 //
 // Figures: for each one a CSV with its data, a gnuplot script and, when gnuplot is installed, the
 // SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts.

@@ -15,8 +15,9 @@ const std::vector<std::string_view>& reproductionScales() {
 
 namespace {
 
-// The three families of SPEC 7 as groups of one sweep file. Values that do not vary within a
-// group are given as one-element lists so that the file reads as the study's definition.
+// The three families of the confinement study (docs/model.md, "The study and its report") as groups
+// of one sweep file. Values that do not vary within a group are given as one-element lists so that
+// the file reads as the study's definition.
 json studyGroups(const json& widths, const json& fractions, const json& frictions, int replicas,
                  bool pinacoids) {
   const json backends = {"nscd", "bullet"};
@@ -24,7 +25,8 @@ json studyGroups(const json& widths, const json& fractions, const json& friction
   // Spheres, mono- and bidisperse, frictionless walls: phi(W), Z(W), profiles, lambda_L(x_S).
   groups.push_back({{"shape", {"sphere"}}, {"small_fraction", fractions}, {"width", widths},
                     {"wall_friction", {0.0}}, {"replicas", replicas}, {"backend", backends}});
-  // Wall friction (SPEC 6.7), monodisperse spheres, confined widths only (biperiodic has no wall).
+  // Wall friction (docs/model.md, "Wall friction"), monodisperse spheres, confined widths only
+  // (biperiodic has no wall).
   json confined = json::array();
   for (const json& w : widths)
     if (w.is_number()) confined.push_back(w);
@@ -42,11 +44,11 @@ json studyGroups(const json& widths, const json& fractions, const json& friction
 
 json reproductionSweep(std::string_view scale) {
   if (scale == "paper") {
-    // SPEC 3 sizes: L_x = 20 d_L, h = 16 d_L, biperiodic period 20 d_L; SPEC 7 study in full.
+    // The paper's sizes: L_x = 20 d_L, h = 16 d_L, biperiodic period 20 d_L; the study in full.
     return {{"format", kSweepFormat},
             {"version", kSweepVersion},
             {"name", "paper"},
-            {"description", "SPEC 7 confinement study at the sizes of SPEC 3"},
+            {"description", "the confinement study at the paper's sizes"},
             {"base", {{"box", {{"length_x", 20.0}, {"height", 16.0}}}}},
             {"biperiodic_width", 20.0},
             {"groups", studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3,
@@ -65,7 +67,7 @@ json reproductionSweep(std::string_view scale) {
     return {{"format", kSweepFormat},
             {"version", kSweepVersion},
             {"name", "quick"},
-            {"description", "SPEC 7 study shrunk to run in minutes on 2 cores"},
+            {"description", "the confinement study shrunk to run in minutes on 2 cores"},
             {"base", {{"box", {{"length_x", 4.0}, {"height", 7.0}}},
                       {"compaction", {{"time_limit", 8.0}, {"protocol", "quasi-static"}}}}},
             {"biperiodic_width", 6.0},

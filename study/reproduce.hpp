@@ -1,8 +1,9 @@
 #pragma once
-// The study of SPEC 7 at three scales, as sweep files, for `confpack reproduce`:
+// The confinement study (docs/model.md, "The study and its report") at three scales, as sweep
+// files, for `confpack reproduce`:
 //   spheres with x_S in {0, 10, 25, 40} and monodisperse pinacoids, W in {5, 10, 20} and
 //   biperiodic, mu_w in {0, 0.3, 0.5, 1} for monodisperse spheres, 3 seeds, both backends.
-// - paper: the sizes of SPEC 3 (L_x = 20 d_L, h = 16 d_L, biperiodic period 20 d_L), the full
+// - paper: the paper's sizes (L_x = 20 d_L, h = 16 d_L, biperiodic period 20 d_L), the full
 //   study above (174 runs). Hours to days on a workstation: meant for a cluster (docs/sweeps.md).
 // - quick: the same families in a shrunken box and fewer combinations, so that it finishes in
 //   under 20 minutes on 2 cores (see the note in docs/sweeps.md for the measured time).

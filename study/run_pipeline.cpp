@@ -140,7 +140,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     totalIterations += prof.iterations;
     rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
   };
-  // The SPEC 6.1 check of the state now, recorded in the history and reported as progress.
+  // The equilibrium test (docs/model.md, "Equilibrium") of the state now, recorded in the history
+  // and reported as progress.
   auto check = [&](const core::Packing& now, double fraction, const std::string& stage) {
     eq = analysis::equilibrium(now, backend->states(), system.gravity, system.density, def.forceRatio,
                                def.momentRatio, def.kineticRatio);
@@ -197,9 +198,10 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   const long dynamicIterations = totalIterations;
   const double dynamicWall = secondsSince(start);
 
-  // Stage 2 (quasi-static protocol): the finisher's steps from rest (core/quasi_static_finisher.hpp).
-  // SPEC 6.1 is checked after each step that moved nothing more than the settle tolerance (and
-  // every 20 steps, for the progress line); the finisher stops once it holds there.
+  // Stage 2 (quasi-static protocol): the finisher's steps from rest
+  // (core/quasi_static_finisher.hpp). The equilibrium test is checked after each step that moved
+  // nothing more than the settle tolerance (and every 20 steps, for the progress line); the
+  // finisher stops once it holds there.
   core::QuasiStaticFinisher finish(def, core::smallestSize(deposit.grains), dt);
   if (handOver) {
     for (long k = 1; k <= def.finisherMaxSteps; ++k) {

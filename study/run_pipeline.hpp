@@ -1,6 +1,6 @@
 #pragma once
-// One run of the protocol of SPEC section 4: deposit, compact with a backend until equilibrium
-// (SPEC 6.1) or the time limit, analyse, write. The CLI's `run`, the sweeps and the benchmark all
+// One run of the protocol (docs/model.md, "Protocols"): deposit, compact with a backend until
+// equilibrium or the time limit, analyse, write. The CLI's `run`, the sweeps and the benchmark all
 // call this; none of them knows which backend runs.
 #include <filesystem>
 #include <functional>
@@ -18,8 +18,8 @@ namespace confpack::study {
 /// Progress of a long run: fraction done in [0, 1] (of the time limit) and a short status line.
 using RunProgressFn = std::function<void(double fraction, const std::string& status)>;
 
-/// SPEC 4 time step: a grain should not move more than d_L/100 per step with
-/// v_max = sqrt(2 g dh), dh the expected drop of the free surface:
+/// The fixed time step (docs/model.md, "Time step"): a grain should not move more than d_L/100 per
+/// step with v_max = sqrt(2 g dh), dh the expected drop of the free surface:
 ///   dt = (1/100) sqrt(d_L / (2 dh)) sqrt(d_L / g).
 /// dh = pile height - (grain volume / (L_x W phi_expected)), floored at one grain size.
 double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit);
@@ -33,8 +33,8 @@ inline constexpr double kAdaptiveGrowth = 1.25;
 /// (200 steps of 2.3e-3 t0 on msp-w10).
 inline constexpr double kAdaptiveCheckSpacing = 0.5;
 
-/// The step of an adaptive compaction (compaction.adaptive_dt). SPEC 4 asks that no grain move
-/// more than d_L/100 per step; its formula meets that at the worst speed of the compaction,
+/// The step of an adaptive compaction (compaction.adaptive_dt). No grain should move more than
+/// d_L/100 per step; the fixed step meets that at the worst speed of the compaction,
 /// sqrt(2 g dh), which the pile reaches only while it falls. This step meets it at the speeds the
 /// grains have now: the largest dt with v dt + g dt^2 / 2 <= s, where v is the fastest surface
 /// point of any grain (|v| + |omega| r_bound) and s is a hundredth of the smallest grain's size
@@ -61,7 +61,7 @@ struct CheckPoint {
   long steps = 0;
   double time = 0.0;              ///< simulated time [t0]
   double wallSeconds = 0.0;       ///< since the start of the compaction [s]
-  double maxForceRatio = 0.0;     ///< SPEC 6.1 ratios at this check
+  double maxForceRatio = 0.0;     ///< equilibrium ratios at this check
   double maxMomentRatio = 0.0;
   double maxKineticRatio = 0.0;
   double interpenetrationPercent = 0.0;  ///< exact bulk interpenetration [%] (no lattice)
@@ -75,7 +75,7 @@ struct CheckPoint {
 struct CompactionOutcome {
   core::Packing packing;                  ///< final poses with the last step's contacts and forces
   std::vector<core::BodyState> states;    ///< final velocities
-  nlohmann::json equilibrium;             ///< SPEC 8.3 equilibrium block
+  nlohmann::json equilibrium;             ///< result.json's equilibrium block
   nlohmann::json timing;                  ///< wall_s, steps, iterations, phases, ...
   nlohmann::json backendSettings;         ///< resolved backend settings
   std::vector<CheckPoint> history;        ///< one entry per equilibrium check
@@ -95,8 +95,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
 /// block (the pipeline writes the real one, with velocities).
 analysis::AnalysisOptions analysisOptions();
 
-/// The result.json of a run (SPEC 8.3): the measurements of the final packing, the equilibrium
-/// block, timing, backend, seed and the resolved configuration.
+/// The result.json of a run (docs/model.md, "Results"): the measurements of the final packing, the
+/// equilibrium block, timing, backend, seed and the resolved configuration.
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
                           const analysis::Analysis& measured);
 

@@ -1,8 +1,9 @@
 #pragma once
-// Sweeps (SPEC 7): a base run configuration and lists of values to combine (width W or
-// biperiodic, shape, x_S, mu_w, seeds, backends), expanded into a table of runs with stable names
-// r0000, r0001, ... that are run locally in parallel or sliced over the tasks of a cluster job
-// array, and that resume after an interruption without redoing a finished run.
+// Sweeps (docs/model.md, "The study and its report"): a base run configuration and lists of values
+// to combine (width W or biperiodic, shape, x_S, mu_w, seeds, backends), expanded into a table of
+// runs with stable names r0000, r0001, ... that are run locally in parallel or sliced over the
+// tasks of a cluster job array, and that resume after an interruption without redoing a finished
+// run.
 //
 // Folder layout of a sweep (docs/sweeps.md has the full description):
 //   SWEEPDIR/sweep.json            the sweep file as given + the expanded run table
@@ -78,7 +79,7 @@ SweepSpec readSweepSpec(const std::filesystem::path& path);
 /// Each resolved configuration is validated (std::invalid_argument names the run).
 std::vector<SweepRun> expandRuns(const SweepSpec& spec);
 
-/// Short name of a configuration's family: MSP, BSP, MPP, BPP (SPEC 2.3).
+/// Short name of a configuration's family: MSP, BSP, MPP, BPP (docs/model.md, "Mixtures").
 std::string familyName(const core::RunConfig& cfg);
 
 /// Runs of one task of a job array: deposit groups are dealt round-robin over the tasks (group g

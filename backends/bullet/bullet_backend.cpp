@@ -1,5 +1,6 @@
-// The bullet backend (SPEC 5.2): Bullet's btDiscreteDynamicsWorld and
-// btSequentialImpulseConstraintSolver (double precision) behind core::ContactBackend.
+// The bullet backend (docs/model.md, "Bullet: sequential impulses"): Bullet's
+// btDiscreteDynamicsWorld and btSequentialImpulseConstraintSolver (double precision) behind
+// core::ContactBackend.
 //
 // What Bullet supplies: shapes (btSphereShape, btConvexHullShape of the pinacoid's 8 vertices,
 // btStaticPlaneShape walls), the broad phase (btDbvtBroadphase), the narrow phase (GJK/EPA,
@@ -17,7 +18,7 @@
 // - One solve over everything. A settling pile is one island, so instead of Bullet's island
 //   manager we hand the solver all manifolds (broad-phase and periodic) in one group, sorted by
 //   grain pair so that the Gauss-Seidel row order does not depend on where a contact came from.
-// - The material rule of SPEC 1: grain-grain friction 0, side walls mu_w, floor 0, restitution 0
+// - The material rule of the model: grain-grain friction 0, side walls mu_w, floor 0, restitution 0
 //   (Bullet would multiply the two bodies' coefficients), installed as gContactAddedCallback.
 // - The step as named phases (STYLE), timed around Bullet's own pieces.
 #include "backends/bullet/bullet_backend.hpp"
@@ -53,7 +54,7 @@ Vec3 fromBt(const btVector3& v) {
 
 // ---- Material rule ---------------------------------------------------------------------------
 // Grains carry their index as user index (>= 0), walls their negative WallId and their own
-// friction coefficient in m_friction. SPEC 1: grain-grain frictionless, side walls mu_w, floor
+// friction coefficient in m_friction. The model: grain-grain frictionless, side walls mu_w, floor
 // frictionless (its m_friction is 0), restitution 0 everywhere, no rolling or spinning friction.
 double combinedFrictionOf(const btCollisionObject* o0, const btCollisionObject* o1) {
   const bool wall0 = o0->getUserIndex() < 0, wall1 = o1->getUserIndex() < 0;
@@ -439,7 +440,7 @@ void BulletBackend::buildWorld() {
 
   btDispatcherInfo& dispatch = world_->getDispatchInfo();
   dispatch.m_enableSatConvex = settings_.satConvex;
-  dispatch.m_useContinuous = false;  // no CCD: a grain moves < d/100 per step (SPEC 4)
+  dispatch.m_useContinuous = false;  // no CCD: a grain moves < d/100 per step (docs/model.md, "Time step")
 
   gContactAddedCallback = &applyMaterialRule;
 

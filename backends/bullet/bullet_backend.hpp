@@ -9,7 +9,8 @@
 
 namespace confpack::bullet {
 
-/// Bullet's sequential-impulse solver behind the backend interface (SPEC 5.2).
+/// Bullet's sequential-impulse solver behind the backend interface (docs/model.md, "Bullet:
+/// sequential impulses").
 /// `options`: the keys of BulletSettings (backends/bullet/bullet_settings.hpp); unknown keys and
 /// out-of-range values throw std::invalid_argument, as does a system Bullet cannot represent
 /// (a box shorter than one grain along a periodic direction, a non-positive size).

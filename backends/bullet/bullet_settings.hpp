@@ -1,8 +1,9 @@
 #pragma once
-// Settings of the Bullet backend (SPEC 5.2), with their JSON round trip. No Bullet header here:
-// the values are plain numbers that bullet_backend.cpp copies into btContactSolverInfo,
-// btDispatcherInfo and the persistent manifolds. Every key of the options JSON is a field below;
-// unknown keys are refused so that a typo never silently runs with a default.
+// Settings of the Bullet backend (docs/model.md, "Bullet: sequential impulses"), with their JSON
+// round trip. No Bullet header here: the values are plain numbers that bullet_backend.cpp copies
+// into btContactSolverInfo, btDispatcherInfo and the persistent manifolds. Every key of the options
+// JSON is a field below; unknown keys are refused so that a typo never silently runs with a
+// default.
 //
 // The defaults aim at low interpenetration in dense piles under gravity with dt ~ 1e-3 t0.
 // Measured with them (tests/backends, the conformance suite, small piles):

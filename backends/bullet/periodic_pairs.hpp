@@ -1,5 +1,6 @@
 #pragma once
-// Pairs of grains that touch across a periodic face (SPEC 3, 5.2). Bullet has no periodic
+// Pairs of grains that touch across a periodic face (docs/model.md, "Bullet:
+// sequential impulses"). Bullet has no periodic
 // boundaries: its broad phase sees the grains where they are, so it finds every pair whose two
 // grains touch inside the box, and this finder supplies the others: grain a touching the image
 // of grain b displaced by a whole number of periods. No Bullet types here, so it is testable and

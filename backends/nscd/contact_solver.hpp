@@ -13,7 +13,7 @@
 // NscdSettings::solver.
 //
 // Two solvers of the same problem (NscdSettings::solver).
-// - "nlgs" (nlgs_solver.hpp), nonlinear Gauss-Seidel (SPEC 5.1, LMGC90's NLGS). Cheap per sweep
+// - "nlgs" (nlgs_solver.hpp), nonlinear Gauss-Seidel (LMGC90's NLGS). Cheap per sweep
 //   and robust, but its error near jamming shrinks by a factor close to 1 per sweep (the Delassus
 //   matrix of a jammed, nearly isostatic pile is ill-conditioned): it stops on a small change per
 //   sweep while the impulses are still far from the solution, and that error is a force imbalance
@@ -23,7 +23,7 @@
 //   instead of linearly, and the stopping rule is the true residual of the law.
 //   Measured on the same 493-sphere biperiodic pile (seed 1): with nlgs at its default tolerance
 //   1e-6, the largest |sum F| / (d^2 P) stays at 2.5e-3 after 40 t0 and ~1,000 sweeps per step;
-//   with mprgp at 1e-10, SPEC 6.1 holds from t = 39.8 with ~400 iterations per step.
+//   with mprgp at 1e-10, the equilibrium test holds from t = 39.8 with ~400 iterations per step.
 #include <array>
 #include <vector>
 

@@ -6,7 +6,8 @@
 
 namespace confpack::nscd {
 
-/// The native Moreau-Jean / nonlinear Gauss-Seidel backend (SPEC 5.1).
+/// The native Moreau-Jean contact dynamics backend (docs/model.md, "nscd: Moreau-Jean contact
+/// dynamics").
 std::unique_ptr<core::ContactBackend> makeNscdBackend(const core::SystemDef& system, const nlohmann::json& options);
 
 }  // namespace confpack::nscd

@@ -1,4 +1,4 @@
-// The aggregate analysis (result.json blocks of SPEC 8.3) and its CSV profiles.
+// The aggregate analysis (result.json blocks, docs/model.md "Results") and its CSV profiles.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>

@@ -1,4 +1,5 @@
-// Free surface, bulk region and the equilibrium test of SPEC 6.1 against exact static forces.
+// Free surface, bulk region and the equilibrium test (docs/model.md, "Equilibrium") against exact
+// static forces.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
@@ -74,7 +75,7 @@ TEST_CASE("free surface and bulk region of a flat lattice", "[analysis][bulk]") 
 
 namespace {
 // A column of n beads on the floor with the exact static forces: the k-th contact from the top
-// carries k m g (SPEC 5.1 rigid chain).
+// carries k m g (the rigid chain: no elastic give).
 core::Packing loadedColumn(int n, double d = 1.0) {
   core::Packing p;
   p.box.lengthX = 5.0;

@@ -1,5 +1,6 @@
 // Coordination, geometric contacts, contact types, fabric, nematic order and homogeneity
-// (SPEC 6.3, 6.8, 6.9) against exact lattice values and known distributions.
+// (docs/model.md, "Homogeneity", "Order", "Coordination number") against exact lattice values and
+// known distributions.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>

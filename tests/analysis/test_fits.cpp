@@ -1,5 +1,6 @@
-// GSL fits: phi(W) = phi_bulk - C/W, proportional fits, and the nonlinear phi(y) law of SPEC 6.6
-// recovering known parameters with honest uncertainties.
+// GSL fits: phi(W) = phi_bulk - C/W, proportional fits, and the nonlinear phi(y) law
+// (docs/model.md, "Solid-fraction profiles and their fit") recovering known parameters with honest
+// uncertainties.
 #include <catch2/catch.hpp>
 #include <cmath>
 

@@ -1,4 +1,5 @@
-// Solid fraction, phi(y) profiles and interpenetration against exact answers (SPEC 6.2, 6.4, 6.6).
+// Solid fraction, phi(y) profiles and interpenetration against exact answers
+// (docs/model.md, "Interpenetration", "Solid fraction", "Solid-fraction profiles and their fit").
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>

@@ -1,5 +1,5 @@
 // `confpack reproduce` and `confpack sweep` with the real binary and real physics: a sweep killed
-// with SIGKILL and resumed, and the tiny scale end to end. The study definitions of SPEC 7 (the
+// with SIGKILL and resumed, and the tiny scale end to end. The study definitions (the
 // library's reproductionSweep) are tested in tests/study/test_reproduce.cpp.
 #include <fcntl.h>
 #include <signal.h>

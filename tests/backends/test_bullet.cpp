@@ -1,6 +1,7 @@
-// Bullet-specific tests (SPEC 5.2): the simulated shapes are the grains (no margin inflation),
-// the material rule gives 0 / mu_w / 0, periodic contacts equal interior ones, long runs lose no
-// grain. Everything goes through makeBackend("bullet") and the Bullet-free bullet::inspect hooks.
+// Bullet-specific tests (docs/model.md, "Bullet: sequential impulses"): the simulated shapes are
+// the grains (no margin inflation), the material rule gives 0 / mu_w / 0, periodic contacts equal
+// interior ones, long runs lose no grain. Everything goes through makeBackend("bullet") and the
+// Bullet-free bullet::inspect hooks.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -455,7 +456,7 @@ TEST_CASE("bullet long run: a small pile only loses energy, no grain is lost or 
   for (const bool periodicY : {false, true}) {
     auto s = boxSystem(4.0, 4.0, periodicY, 0.3);
     core::Rng rng(11, core::StreamId::Test, periodicY ? 3 : 2);
-    // A loose lattice with jitter, 48 spheres of the SPEC size spread.
+    // A loose lattice with jitter, 48 spheres of the model's size spread.
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 4; ++j)
         for (int i = 0; i < 4; ++i) {

@@ -56,7 +56,7 @@ const Tolerances& tolerancesFor(std::string_view backend) {
     // checks measure the physics, not the stopping rule.
     nscd.tightOptions = {{"tolerance", 1e-11}, {"max_iterations", 20000}};
     t["nscd"] = nscd;
-    // The same backend with SPEC 5.1's Gauss-Seidel instead of its default MPRGP passes the same
+    // The same backend with Gauss-Seidel ("nlgs") instead of its default MPRGP passes the same
     // suite (its defaults: tolerance 1e-6, 2000 sweeps).
     Tolerances nlgs = nscd;
     nlgs.options = {{"solver", "nlgs"}};

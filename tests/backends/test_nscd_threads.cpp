@@ -34,9 +34,9 @@ bool sameBits(const core::Quat& x, const core::Quat& y) {
   return sameBits(x.coeffs(), y.coeffs());
 }
 
-/// A deposited pile (SPEC 4.1-4.2) of n grains between side walls with friction 0.3, every grain
-/// scaled by `grow` (placeholders circumscribe the largest grain, so a plain deposit touches
-/// nowhere; grown grains touch and load each other from the first step).
+/// A deposited pile (docs/model.md, "Deposition") of n grains between side walls with friction 0.3,
+/// every grain scaled by `grow` (placeholders circumscribe the largest grain, so a plain deposit
+/// touches nowhere; grown grains touch and load each other from the first step).
 core::SystemDef pile(core::ShapeKind shape, double lengthX, double width, std::size_t n, double grow = 1.0) {
   core::SystemDef s;
   s.box.lengthX = lengthX;

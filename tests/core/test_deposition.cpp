@@ -1,7 +1,7 @@
-// Geometric deposition (SPEC 4.1-4.2). Analytic seats for hand-built piles, then random piles
-// checked from their final geometry alone by brute force (no code shared with the deposition):
-// overlaps, stability on three earlier supports or the floor, box bounds, reproducibility, and
-// the grain bookkeeping of the substitution.
+// Geometric deposition (docs/model.md, "Deposition"). Analytic seats for hand-built piles, then
+// random piles checked from their final geometry alone by brute force (no code shared with the
+// deposition): overlaps, stability on three earlier supports or the floor, box bounds,
+// reproducibility, and the grain bookkeeping of the substitution.
 #include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
@@ -471,7 +471,7 @@ TEST_CASE("deposition settings: JSON round trip and refusal of bad input", "[cor
 }
 
 TEST_CASE("30,400 placeholders deposit in well under 30 s", "[.perf][core][deposition]") {
-  // The largest sphere sample of SPEC 3 (x_S = 40, h = 16-20), as placeholders of diameter 1.1.
+  // The largest sphere sample of the paper (x_S = 40, h = 16-20), as placeholders of diameter 1.1.
   const BoxDef box = makeBox(20.0, 20.0, false);
   Rng rng(1, StreamId::DepositionXY);
   const auto start = std::chrono::steady_clock::now();

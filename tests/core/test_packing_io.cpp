@@ -1,5 +1,5 @@
-// Packing file (SPEC 8.2): exact round trip of every double, the documented keys, and one clear
-// message naming element and field for each kind of bad input.
+// Packing file (docs/packing-format.md): exact round trip of every double, the documented keys, and
+// one clear message naming element and field for each kind of bad input.
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
@@ -159,7 +159,7 @@ TEST_CASE("a packing without contacts reads back without a contact list") {
   CHECK(packingFromJson(toJson(p)).contacts.has_value());
 }
 
-TEST_CASE("the packing document has exactly the SPEC 8.2 keys") {
+TEST_CASE("the packing document has exactly the documented keys") {
   const json j = toJson(samplePacking());
   CHECK(j.at("format") == "confpack-packing");
   CHECK(j.at("version") == 1);

@@ -1,5 +1,5 @@
-// ParaView output (SPEC 8.4): the files are well-formed XML whose declared counts match both the
-// arrays they contain and the packing they were written from.
+// ParaView output (docs/model.md, "ParaView"): the files are well-formed XML whose declared counts
+// match both the arrays they contain and the packing they were written from.
 #include <unistd.h>
 
 #include <catch2/catch.hpp>

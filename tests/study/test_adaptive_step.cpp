@@ -78,10 +78,10 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
   REQUIRE(dep.grains.size() > 20);
   const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.equilibrium.dump());
-  // Bullet's sequential impulses do not meet SPEC 6.1's force bound (README, Known limitations):
-  // only its floor reaction is checked, to its own accuracy.
+  // Bullet's sequential impulses do not meet the equilibrium test's force bound (README, Known
+  // limitations): only its floor reaction is checked, to its own accuracy.
   if (backend == "nscd") REQUIRE(out.reached);
-  // The step grew well past the SPEC 4 step once the pile stopped falling.
+  // The step grew well past the fixed step once the pile stopped falling.
   CHECK(out.dtLargest > 10.0 * out.dt);
   // ... and equilibrium was still checked at least every kAdaptiveCheckSpacing of simulated time.
   REQUIRE(out.history.size() > 2);

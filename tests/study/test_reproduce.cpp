@@ -1,5 +1,6 @@
-// The study of SPEC 7 at its three scales (study/reproduce.hpp), as the run tables they expand to.
-// `confpack reproduce` itself, with the real binary, is tested in tests/apps/test_reproduce.cpp.
+// The confinement study (docs/model.md, "The study and its report") at its three scales
+// (study/reproduce.hpp), as the run tables they expand to. `confpack reproduce` itself, with the
+// real binary, is tested in tests/apps/test_reproduce.cpp.
 #include <catch2/catch.hpp>
 #include <map>
 #include <set>
@@ -11,7 +12,7 @@
 
 using namespace confpack;
 
-TEST_CASE("reproduce: the paper scale is the SPEC 7 study") {
+TEST_CASE("reproduce: the paper scale is the full study") {
   const auto runs = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("paper")));
   // Spheres x_S x {5, 10, 20, bi}: 4 x 4; MSP wall friction {0.3, 0.5, 1} x {5, 10, 20}: 9;
   // pinacoids x {5, 10, 20, bi}: 4. Each with 3 seeds and 2 backends.
