@@ -36,11 +36,11 @@
 //
 // Sweep order: frictionless rows sorted by the height z of their contact point, lowest first (ties by
 // bodies a, b, then contact and point index), then the side-wall friction rows in contact order.
-// The order depends only on the configuration: bitwise determinism. Measured on a 536-sphere pile
-// near jamming (one cold static solve to eps < 1e-6): bottom-to-top needs 4260 / 1390 / 1310 sweeps
-// at omega = 1.5 / 1.8 / 1.85 against 4470 / 2030 / 1400 in contact order; top-to-bottom is no
-// better than contact order (a velocity-level sweep does not carry weight down a chain in one pass:
-// the top contact of a free-falling column sees zero relative velocity).
+// The order depends only on the configuration: bitwise determinism. Bottom to top needs fewer
+// sweeps than contact order near jamming; top to bottom does not (a velocity-level sweep does not
+// carry weight down a chain in one pass: the top contact of a free-falling column sees zero
+// relative velocity). Measurements: docs/performance.md, "nscd settings: the measurements behind
+// the defaults".
 //
 // Sweep blocks (for the Gauss-Seidel preconditioner of mprgp, mprgp_solver.hpp).
 //   A sweep is serial by nature; for two threads the rows are ordered in blocks (build()): on a
@@ -48,15 +48,9 @@
 //   strips within a lever arm of their edges, each half bottom to top, then the strip rows bottom
 //   to top. The halves share no grain, so two threads sweep them at once and give the bits of
 //   one: the order depends on the configuration only, never on the thread count. On one thread
-//   it costs a few iterations: 58.5 against 57.7 per step on 8,000 spheres between walls (first
-//   6 t0), 69.9 against 66.7 on 2,000 in a biperiodic 10.4 x 10.4 box (first 8 t0), where the
-//   strips hold a fifth of the rows. Two threads ran the 8,000-sphere case 1.33x faster.
-//   The passes around the solve (building the rows, sorting their keys, the warm start's lookups,
-//   MPRGP's scatter entries and operator bound, the export to the cache) were also tried on the
-//   team, each part writing only its own rows, and not kept: on this 2-core machine they were no
-//   faster (prepare 2.58 s on two threads against 2.18 s on one, one run each; 8,000 spheres
-//   between walls, first 3.5 t0): they stream memory, and this machine's bandwidth grows only
-//   1.4x with the second core (one streaming loop 10.5 GB/s, one on each core 15.1 GB/s).
+//   it costs a few per cent more iterations; the passes around the solve stay on one thread, as
+//   they stream memory and gained nothing from a second core (docs/performance.md, "Two
+//   threads").
 #include <array>
 #include <cstddef>
 #include <span>

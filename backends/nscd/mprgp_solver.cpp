@@ -280,10 +280,9 @@ double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVeloc
 // Unlike Dostal's expansion, conjugate gradients do not restart after it: the next direction is
 // phi - gamma p with gamma = phi.A p / p.A p (`phiAp` returns phi.A p), restricted to the new free
 // set, and a restart from phi happens only if that is not a descent direction. f still decreases at
-// every step. Measured on the same problems (the 2,000-sphere scaling point, its 4 t0 fall and 200
-// timed steps, every step solved both ways, the run following the new solver): Dostal's expansion
-// 158 iterations per step, this one 116, 22% less solve time; 1,548 steps took fewer iterations,
-// 187 more. Restarting after the projected step instead gave about 134 (10% less time than Dostal's).
+// every step. On a loading pile it takes about a quarter fewer iterations than Dostal's expansion,
+// and fewer than restarting after the projected step would (docs/performance.md, "nscd settings:
+// the measurements behind the defaults").
 bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp) {
   const std::size_t m = y_.size();
   const double gDotD = blockedSum(m, threads, partial_, [&](std::size_t k) {
@@ -431,27 +430,11 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
 // gradients on the free set (sqrt of the condition number, of M_F^-1 A_FF when preconditioned in
 // face) instead of Gauss-Seidel's; the projected CG expansion keeps the monotone decrease but not
 // that proof, and is measured instead (projectedCgStep).
-// The preconditioner was chosen on the free blocks A_FF of problems dumped from the 493-sphere
-// biperiodic pile (solved offline from the warm start to the same 1e-10): conjugate gradients took
-// 98 / 204 / 322 / 730 iterations at steps 1,000 / 4,000 / 6,000 / 13,000 (the last near
-// jamming), symmetric Gauss-Seidel 37 / 75 / 118 / 264, incomplete Cholesky (Eigen's, natural
-// order) 37 / 71 / 113 / 270, and in AMD order 65 / 120 / 163 / 378. Gauss-Seidel does as well
-// as the factorisation without one, so nothing is redone when the free set changes, and it needs
-// no matrix.
-// What is left near jamming, measured offline on the same kind of blocks (not built): the block of
-// step 13,000 (1,426 free rows) has a condition number of 2.6e4 (3.3e3 preconditioned), 59
-// eigenvalues below 1e-2, and its lowest eigenvectors spread over 76 to 235 rows (inverse
-// participation ratio): soft modes extended over the pile, as expected close to isostaticity.
-// - A coarse correction by aggregation (greedy aggregates of strongly coupled rows, smoothed,
-//   exact coarse solve, between the forward and the backward sweep) took 209 iterations with 191
-//   aggregates and 100 with 755, against 264: local aggregates do not span extended modes.
-// - Deflating the 10 / 20 / 40 lowest modes of the preconditioned block (another run, step 11,001:
-//   237 iterations plain) left 131 / 99 / 66 iterations with the exact modes, 144 / 116 / 83 with
-//   those of the step before (172 / 148 / 123 with those of 100 steps before), 152 / 142 / 136
-//   with Ritz vectors of the step before's solve; deflating the initial guess only gained nothing.
-//   A deflated iteration streams 2k more numbers per row (k modes), which for k = 10 to 40 costs,
-//   by byte count, about what the saved iterations save: the gain would have to come from a
-//   cheaper projection.
+// The preconditioner is symmetric Gauss-Seidel because it needs as few iterations as an
+// incomplete Cholesky factorisation without one: no matrix, nothing redone when the free set
+// changes. Near jamming the free block's softest modes extend over the whole pile; a coarse
+// correction or a deflation of them was tried offline and not built (docs/performance.md, "The
+// preconditioner", has those measurements).
 int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
   residual_ = 0.0;
   if (rows.rowCount() == 0) return 0;
