@@ -1,7 +1,8 @@
 #pragma once
 // Narrow phase of the nscd backend: exact contact geometry (plane, points, gaps) for a candidate
-// pair in the predicted configuration q_m, dispatched on the pair of shapes (STYLE: a pair table
-// indexed by shape type, after Box2D's s_registers).
+// pair in the predicted configuration q_m, dispatched on the pair of shapes by an if/else over
+// the two shape kinds (sphere-sphere, polyhedron-polyhedron, polyhedron-sphere; walls apart): with
+// two shapes that is all a pair table would hold.
 #include <array>
 #include <cstdint>
 #include <vector>

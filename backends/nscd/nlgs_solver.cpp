@@ -44,10 +44,9 @@ int NlgsSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const N
       sumDelta2 += dn * dn + d1 * d1 + d2 * d2;
       sumR2 += rn * rn + row.rt1 * row.rt1 + row.rt2 * row.rt2;
     };
-    // Forward sweeps only, bottom to top (rows sorted by ContactRows::build()). Measured on a
-    // 536-sphere pile: a symmetric (alternating) sweep is slower (258 versus 166 sweeps per step over the first
-    // 5 t0 in contact order; 19000 versus 4300 sweeps for one cold static solve at omega = 1.5,
-    // and no convergence within 50000 at 1.85), and top to bottom is no better than contact order.
+    // Forward sweeps only, bottom to top (rows sorted by ContactRows::build()): alternating
+    // symmetric sweeps needed more sweeps, not fewer (docs/performance.md, "nscd settings: the
+    // measurements behind the defaults").
     for (NormalRow& row : rows.normalRows()) normalRow(row);
     for (FrictionRow& row : rows.frictionRows()) frictionRow(row);
     residual_ = sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : (sumDelta2 > 0.0 ? 1.0 : 0.0);
