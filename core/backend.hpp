@@ -34,7 +34,7 @@ struct BodyState {
   Vec3 angularVelocity = Vec3::Zero(); ///< world frame [1/t0]
 };
 
-/// Named phases of one step (STYLE "One step = named phases", after Box2D's solver stages).
+/// Named phases of one step (after Box2D's solver stages).
 /// A backend fills the phases it has and leaves the others at zero.
 enum class Phase : int {
   UpdatePairs,     ///< broad phase

@@ -18,9 +18,9 @@
 
 namespace confpack::core {
 
-/// Geometric type of a contact (docs/model.md, "Coordination number"): vertex-face or edge-edge ->
-/// Simple (1 point), edge-face -> Double (2 points), face-face -> Triple (3+ points from the face
-/// intersection). Sphere contacts are Simple.
+/// Geometric type of a contact (docs/model.md, "Coordination number"): vertex-face or crossing
+/// edges -> Simple (1 point), edge-face or two edges lying along each other -> Double (2 points),
+/// face-face -> Triple (3+ points from the face intersection). Sphere contacts are Simple.
 enum class ContactType { Simple, Double, Triple };
 
 std::string_view toString(ContactType t);

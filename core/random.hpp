@@ -1,5 +1,5 @@
 #pragma once
-// Reproducible random streams (STYLE "Randomness", after HOOMD's RNGIdentifiers.h).
+// Reproducible random streams (after HOOMD's RNGIdentifiers.h).
 // Every stream is derived from (user seed, stream id, run index) by SplitMix64 mixing and drives a
 // xoshiro256** generator. Raw 64-bit draws are mapped to doubles here, not by <random>'s
 // distributions, whose output differs between standard libraries.

@@ -1,6 +1,6 @@
 #pragma once
-// The fully resolved configuration of one run (STYLE "Configuration": definition structs with
-// defaults and units, each with a JSON round trip so that a run writes back what it used).
+// The fully resolved configuration of one run: definition structs with
+// defaults and units, each with a JSON round trip so that a run writes back what it used.
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>

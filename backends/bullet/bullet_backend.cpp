@@ -20,7 +20,7 @@
 //   grain pair so that the Gauss-Seidel row order does not depend on where a contact came from.
 // - The material rule of the model: grain-grain friction 0, side walls mu_w, floor 0, restitution 0
 //   (Bullet would multiply the two bodies' coefficients), installed as gContactAddedCallback.
-// - The step as named phases (STYLE), timed around Bullet's own pieces.
+// - The step as named phases (core::Phase), timed by one core::PhaseClock around Bullet's own pieces.
 #include "backends/bullet/bullet_backend.hpp"
 
 #include <btBulletCollisionCommon.h>

@@ -1,5 +1,5 @@
 #pragma once
-// Persistent contact cache for warm starting (STYLE "Data", after Jolt's contact cache): the
+// Persistent contact cache for warm starting (after Jolt's contact cache): the
 // impulses of the last step, keyed by (grain a, grain b or wall, periodic image of b, feature
 // pair). A sorted flat vector searched by bisection: no allocation per step once it has grown,
 // and a deterministic iteration order.

@@ -31,10 +31,10 @@ Quat rotate(const Quat& q, const Vec3& w, double h) {
   return r;
 }
 
-// Moreau-Jean theta time stepping (SPEC 5.1):
+// Moreau-Jean theta time stepping (docs/model.md, "nscd: Moreau-Jean contact dynamics"):
 //   v_free  = v_i + dt g                      (gravity is the only external force)
 //   q_m     = q_i + dt (1 - theta) v_i        (contacts are detected here)
-//   v_{i+1} = v_free + M^-1 H r               (r from the Gauss-Seidel solver)
+//   v_{i+1} = v_free + M^-1 H r               (r from the contact solver: MPRGP or NLGS)
 //   q_{i+1} = q_m + dt theta v_{i+1}
 // Rotations use the exact rotation of angle |w| h for each partial step h. Without torques the
 // world-frame angular momentum is conserved, so the free angular velocity is

@@ -657,7 +657,7 @@ TEST_CASE("bullet: the contact of a grain that wraps is reported at the grain's 
 }
 
 TEST_CASE("bullet fixed-seed run hashes to its recorded value", "[bullet]") {
-  // STYLE "Tests": the constant changes only in a commit that says why (a change of physics,
+  // The constant changes only in a commit that says why (a change of physics,
   // solver order or settings). FNV-1a over the bits of every pose and velocity after 300 steps
   // of a small mixed pile (spheres and pinacoids cannot mix in a sample, so two boxes).
   std::uint64_t hash = 1469598103934665603ull;

@@ -1,5 +1,5 @@
 // The conformance suite: the same physics tests, with analytic oracles, run against every backend
-// named by backends::backendNames() (STYLE "Tests": one suite for both backends).
+// named by backends::backendNames() (one suite for both backends).
 //
 // A backend whose factory still says "not built yet" makes each test WARN and return (Catch2 v2
 // has no SKIP); it never passes silently.
