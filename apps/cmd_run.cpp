@@ -1,5 +1,6 @@
 // `confpack run`: the whole protocol (docs/model.md, "Protocols") for one configuration and one
-// backend: deposit, compact until equilibrium or the time limit, analyse, write.
+// backend: deposit (or, with --from, the grains of a packing file), compact until equilibrium or
+// the time limit, analyse, write.
 //
 //   DIR/result.json    docs/model.md, "Results" (written last: its presence means the run finished)
 //   DIR/packing.json   final packing with contacts and forces (docs/packing-format.md)
@@ -9,11 +10,15 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
+#include "core/packing_io.hpp"
 #include "study/run_pipeline.hpp"
 
 namespace confpack::app {
@@ -29,12 +34,41 @@ struct RunState {
   core::RunConfig cfg;
   CommonOptions opts;
   std::string backendOptions;  ///< --backend-options JSON text
+  std::string from;            ///< --from PACKING: start from its grains instead of a deposit
+  CLI::App* sub = nullptr;
 };
+
+/// Options that --from replaces: the packing gives the box and the grains.
+constexpr const char* kGivenByPacking[] = {"--length-x", "--width", "--periodic-y", "--height", "--shape",
+                                           "--small-fraction", "--grains", "--pinacoid-G", "--pinacoid-E",
+                                           "--pinacoid-alpha"};
+
+/// The starting state of `run --from`: the packing's grains at rest, with cfg's box and population
+/// taken from it (the side walls' friction from --wall-friction when that is given).
+core::Deposit startFromPacking(RunState& st) {
+  for (const char* name : kGivenByPacking)
+    if (st.sub->count(name) > 0)
+      throw std::invalid_argument(fmt::format("--from takes the box and the grains from the packing; drop {}", name));
+  const core::Packing packing = core::readPacking(st.from);
+  core::RunConfig& cfg = st.cfg;
+  const double wallFriction = st.sub->count("--wall-friction") > 0 ? cfg.box.wallFriction : packing.box.wallFriction;
+  cfg.box = packing.box;
+  cfg.box.wallFriction = wallFriction;
+  core::Deposit start = study::depositFromPacking(packing, st.from);
+  cfg.population.shape = packing.grains.front().shape;
+  if (cfg.population.shape == core::ShapeKind::Pinacoid) cfg.population.pinacoid = packing.grains.front().params;
+  cfg.population.largeSize = 0.0;
+  for (const core::Grain& g : packing.grains) cfg.population.largeSize = std::max(cfg.population.largeSize, g.size);
+  cfg.deposition.grainCount = packing.grains.size();
+  return start;
+}
 
 void runRun(RunState& st) {
   core::RunConfig& cfg = st.cfg;
+  std::optional<core::Deposit> start;
   checkInput("run", [&] {
     if (!st.backendOptions.empty()) cfg.backendOptions = nlohmann::json::parse(st.backendOptions);
+    if (!st.from.empty()) start = startFromPacking(st);
     cfg.validate();
     checkOutputTarget(st.opts.out);
   });
@@ -43,7 +77,8 @@ void runRun(RunState& st) {
     StagedOutput output(st.opts.out);
     Progress progress("run", !st.opts.quiet, 10.0);
     const nlohmann::json result = study::runAndWrite(
-        cfg, output.dir(), [&](double fraction, const std::string& status) { progress.update(fraction, status); });
+        cfg, output.dir(), [&](double fraction, const std::string& status) { progress.update(fraction, status); },
+        start ? &*start : nullptr);
     progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
     writeJson(output.dir() / "config.json", result["config"]);
     output.commit();
@@ -61,7 +96,7 @@ void runRun(RunState& st) {
 
 void registerRun(CLI::App& app) {
   auto st = std::make_shared<RunState>();
-  auto* sub = app.add_subcommand(
+  auto* sub = st->sub = app.add_subcommand(
       "run", "Deposit, compact with a backend until equilibrium (or the time limit), analyse, write DIR/result.json");
   addRunConfigOptions(*sub, st->cfg, st->opts);
   sub->add_option("--dt", st->cfg.compaction.dt,
@@ -93,6 +128,11 @@ void registerRun(CLI::App& app) {
   sub->add_option("--grains", st->cfg.deposition.grainCount,
                   "Number of grains (0 = from --height and the expected solid fraction)")
       ->capture_default_str();
+  sub->add_option("--from", st->from,
+                  "Start from the grains of this packing file (their poses, at rest) instead of a new deposit, "
+                  "e.g. to take a run that stopped before equilibrium on to rest; the box and the grains come "
+                  "from the file")
+      ->type_name("PACKING");
   sub->add_option("--backend-options", st->backendOptions,
                   "Backend settings as JSON, e.g. '{\"tolerance\": 1e-5}' (see the README for the keys)");
   sub->callback([st] { runRun(*st); });

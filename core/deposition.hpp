@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 #include <vector>
 
 #include "core/box.hpp"
@@ -40,6 +41,8 @@ struct Deposit {
   /// overlap-free position they visited (0 in a healthy deposit).
   std::size_t unsettledCount = 0;
   double meanMoves = 0.0;          ///< mean number of analytic moves (fall/roll) per placeholder
+  /// The packing file the grains were read from (`confpack run --from`); empty for a deposit.
+  std::string source;
 };
 
 /// Called now and then with (placeholders placed, total).

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <ctime>
 #include <limits>
+#include <stdexcept>
 
 #include "analysis/equilibrium.hpp"
 #include "analysis/interpenetration.hpp"
@@ -83,6 +84,16 @@ double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit)
   const double finalHeight = volume / (cfg.box.lengthX * cfg.box.width * cfg.deposition.expectedSolidFraction);
   const double dh = std::max(deposit.pileHeight - finalHeight, cfg.population.largeSize);
   return 0.01 * std::sqrt(cfg.population.largeSize / (2.0 * dh));
+}
+
+core::Deposit depositFromPacking(const core::Packing& packing, const std::filesystem::path& source) {
+  if (packing.grains.empty()) throw std::invalid_argument(fmt::format("{}: the packing has no grains", source.string()));
+  core::Deposit d;
+  d.grains = packing.grains;
+  for (const core::Grain& g : d.grains) d.pileHeight = std::max(d.pileHeight, g.position.z() + g.boundingRadius());
+  d.solidFraction = core::totalVolume(d.grains) / (packing.box.lengthX * packing.box.width * d.pileHeight);
+  d.source = source.string();
+  return d;
 }
 
 CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit, const std::filesystem::path& vtkDir,
@@ -287,6 +298,7 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
   r["deposit"] = {{"pile_height", deposit.pileHeight},
                   {"placeholder_diameter", deposit.placeholderDiameter},
                   {"solid_fraction", deposit.solidFraction}};
+  if (!deposit.source.empty()) r["deposit"]["from"] = deposit.source;
   r["config"] = cfg;
   r["config"]["backend_settings"] = out.backendSettings;
   r["config"]["compaction"]["dt"] = out.dt;

@@ -87,6 +87,11 @@ struct CompactionOutcome {
   bool reached = false;
 };
 
+/// The grains of a packing as the starting state of a compaction (`confpack run --from`): its
+/// poses, at rest. pileHeight is the top of the highest grain's bounding sphere; there are no
+/// placeholders. Throws std::invalid_argument if the packing has no grains.
+core::Deposit depositFromPacking(const core::Packing& packing, const std::filesystem::path& source);
+
 /// Compacts a deposit with cfg.backend. Writes ParaView frames into `vtkDir` when it is not empty.
 CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit,
                           const std::filesystem::path& vtkDir = {}, const RunProgressFn& progress = {});
