@@ -123,17 +123,10 @@ Vec3 wallForce(const std::vector<core::Contact>& contacts, core::WallId w) {
 
 /// A pinacoid (L = G = E = 1, alpha = 60 deg) lying on a trapezoid face on the floor.
 core::Grain pinacoidOnFace(double x, double y) {
-  core::Grain g;
-  g.shape = core::ShapeKind::Pinacoid;
-  g.size = 1.0;
   // The trapezoid faces have outward normals (0, +-1, +-1)/sqrt(2) for G = E; a rotation of
   // 45 degrees about x brings (0, -1, -1)/sqrt(2) onto -z.
-  g.orientation = core::Quat(Eigen::AngleAxisd(std::numbers::pi / 4.0, Vec3::UnitX()));
-  g.position = Vec3(x, y, 0.0);
-  double zMin = 1e300;
-  for (const Vec3& v : g.worldVertices()) zMin = std::min(zMin, v.z());
-  g.position.z() = -zMin;
-  return g;
+  const core::Quat onFace(Eigen::AngleAxisd(std::numbers::pi / 4.0, Vec3::UnitX()));
+  return confpack::testing::withBottomAt(confpack::testing::pinacoid(1.0, Vec3(x, y, 0.0), onFace), 0.0);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #pragma once
-// Test helpers shared by the backend tests: a sphere grain, a pinacoid placed by its lowest
-// vertex, and an empty system in a box.
+// Test builders shared by every test folder: a sphere, a pinacoid, a grain moved so that its
+// lowest vertex sits at a given height, and an empty system in a box. Both grain builders take
+// (size, position[, orientation]) in that order.
 #include <algorithm>
 
 #include "core/backend.hpp"
@@ -16,25 +17,35 @@ inline core::Grain sphere(double d, const core::Vec3& p) {
   return g;
 }
 
-/// A unit pinacoid (G = E = 1, alpha = 60 deg) with orientation q, centred at (x, y), its lowest
-/// vertex at height zBottom.
-inline core::Grain pinacoid(const core::Quat& q, double x, double y, double zBottom) {
+/// A pinacoid of size `size` (default shape parameters: G = E = 1, alpha = 60 deg) centred at p
+/// with orientation q (body to world).
+inline core::Grain pinacoid(double size, const core::Vec3& p, const core::Quat& q = core::Quat::Identity()) {
   core::Grain g;
   g.shape = core::ShapeKind::Pinacoid;
-  g.size = 1.0;
+  g.size = size;
+  g.position = p;
   g.orientation = q;
-  g.position = core::Vec3(x, y, 0.0);
-  double zMin = 1e300;
-  for (const core::Vec3& v : g.worldVertices()) zMin = std::min(zMin, v.z());
-  g.position.z() = zBottom - zMin;
   return g;
 }
 
-/// Height of a grain's highest vertex.
+/// Height of a pinacoid's lowest vertex.
+inline double bottomOf(const core::Grain& g) {
+  double zMin = 1e300;
+  for (const core::Vec3& v : g.worldVertices()) zMin = std::min(zMin, v.z());
+  return zMin;
+}
+
+/// Height of a pinacoid's highest vertex.
 inline double topOf(const core::Grain& g) {
   double zMax = -1e300;
   for (const core::Vec3& v : g.worldVertices()) zMax = std::max(zMax, v.z());
   return zMax;
+}
+
+/// The pinacoid g moved vertically so that its lowest vertex is at height zBottom.
+inline core::Grain withBottomAt(core::Grain g, double zBottom) {
+  g.position.z() += zBottom - bottomOf(g);
+  return g;
 }
 
 /// A system with no grains in a box of length lengthX and width W (periodic or walled in y)

@@ -1,12 +1,11 @@
-// Bullet-specific tests (docs/model.md, "Bullet: sequential impulses"): the simulated shapes are
-// the grains (no margin inflation), the material rule gives 0 / mu_w / 0, periodic contacts equal
-// interior ones, long runs lose no grain. Everything goes through makeBackend("bullet") and the
-// Bullet-free bullet::inspect hooks.
+// The Bullet backend (backends/bullet/bullet_backend.hpp; docs/model.md, "Bullet: sequential
+// impulses"): the simulated shapes are the grains (no margin inflation), the material rule gives
+// 0 / mu_w / 0, periodic contacts equal interior ones, long runs lose no grain. Everything goes
+// through makeBackend("bullet") and the Bullet-free bullet::inspect hooks.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -14,10 +13,9 @@
 
 #include "backends/backend_factory.hpp"
 #include "backends/bullet/bullet_backend.hpp"
-#include "backends/bullet/bullet_settings.hpp"
-#include "backends/bullet/periodic_pairs.hpp"
 #include "core/backend.hpp"
 #include "core/random.hpp"
+#include "tests/support/hash.hpp"
 #include "tests/support/systems.hpp"
 
 using namespace confpack;
@@ -25,6 +23,7 @@ using core::Vec3;
 
 namespace {
 
+using confpack::testing::pinacoid;
 using confpack::testing::sphere;
 
 using confpack::testing::boxSystem;
@@ -40,15 +39,6 @@ core::Quat stableFaceTowards(const core::ConvexPolyhedron& poly, const Vec3& dow
   const auto& offsets = poly.faceOffsets();
   const int f = static_cast<int>(std::min_element(offsets.begin(), offsets.end()) - offsets.begin());
   return core::Quat::FromTwoVectors(poly.faceNormals()[f], down);
-}
-
-core::Grain pinacoid(double size, const core::Quat& q, const Vec3& p) {
-  core::Grain g;
-  g.shape = core::ShapeKind::Pinacoid;
-  g.size = size;
-  g.orientation = q;
-  g.position = p;
-  return g;
 }
 
 /// World vertices of grain i in the backend's current pose.
@@ -84,27 +74,6 @@ double pairForce(const core::ContactBackend& b, int a, int other) {
 
 }  // namespace
 
-TEST_CASE("bullet settings: defaults round-trip, unknown keys and bad values are refused", "[bullet]") {
-  const bullet::BulletSettings d;
-  const nlohmann::json j = d;
-  const bullet::BulletSettings back = bullet::bulletSettingsFromJson(j);
-  CHECK(nlohmann::json(back) == j);
-  CHECK_THROWS_WITH(bullet::bulletSettingsFromJson({{"iteratons", 10}}), Catch::Contains("iteratons"));
-  CHECK_THROWS_WITH(bullet::bulletSettingsFromJson({{"iterations", 0}}), Catch::Contains("iterations"));
-  CHECK_THROWS_WITH(bullet::bulletSettingsFromJson({{"erp2", 1.5}}), Catch::Contains("erp2"));
-  CHECK_THROWS_WITH(bullet::bulletSettingsFromJson({{"split_impulse", 1}}), Catch::Contains("split_impulse"));
-  CHECK_THROWS_WITH(bullet::bulletSettingsFromJson({{"split_impulse_penetration_threshold", 0.01}}),
-                    Catch::Contains("split_impulse_penetration_threshold"));
-  // The backend writes back the fully resolved settings, including the overridden key.
-  auto s = boxSystem(5.0, 5.0, false, 0.0);
-  s.grains = {sphere(1.0, {2.5, 2.5, 0.5})};
-  auto b = makeBullet(s, {{"iterations", 37}});
-  CHECK(b->name() == "bullet");
-  CHECK(b->settings().at("iterations") == 37);
-  CHECK(b->settings().at("erp2") == d.erp2);
-  CHECK(b->settings().size() == j.size());
-}
-
 TEST_CASE("bullet refuses systems it cannot represent with one clear message", "[bullet]") {
   auto s = boxSystem(5.0, 5.0, false, 0.0);
   s.grains = {sphere(-1.0, {2.5, 2.5, 0.5})};
@@ -120,7 +89,7 @@ TEST_CASE("bullet refuses systems it cannot represent with one clear message", "
 TEST_CASE("bullet hull is the pinacoid: support points equal the vertices to 1e-9, zero margin", "[bullet]") {
   core::PinacoidParams params;
   auto s = boxSystem(10.0, 10.0, false, 0.0);
-  s.grains = {pinacoid(1.0, core::Quat::Identity(), {5, 5, 2}), pinacoid(0.83, core::Quat::Identity(), {2, 5, 2})};
+  s.grains = {pinacoid(1.0, {5, 5, 2}), pinacoid(0.83, {2, 5, 2})};
   s.grains[1].params.widthRatio = 0.7;
   s.grains[1].params.heightRatio = 0.5;
   s.grains[1].params.alphaDeg = 50.0;
@@ -188,10 +157,10 @@ TEST_CASE("bullet resting sphere: floor force = m g, normal into the floor, poin
 TEST_CASE("bullet pinacoids touch at the true surface: floor, hull-hull and hull-sphere", "[bullet]") {
   // A pinacoid on its stable face on the floor, a second one face-down on its top face, a
   // sphere on a third one. Dropped from 1e-3 above contact, settled for 2 t0.
-  const core::Grain proto = pinacoid(1.0, core::Quat::Identity(), Vec3::Zero());
+  const core::Grain proto = pinacoid(1.0, Vec3::Zero());
   const core::ConvexPolyhedron poly = proto.polyhedron();
   const core::Quat q = stableFaceTowards(poly, -Vec3::UnitZ());
-  core::Grain lower = pinacoid(1.0, q, {2.0, 3.0, 0.0});
+  core::Grain lower = pinacoid(1.0, {2.0, 3.0, 0.0}, q);
   lower.position.z() = -minZ(lower.worldVertices()) + 1e-3;
   core::Grain upper = lower;
   upper.position.z() = maxZ(lower.worldVertices()) + 1e-3 + (upper.position.z() - minZ(upper.worldVertices()));
@@ -254,9 +223,9 @@ TEST_CASE("bullet wall friction is Coulomb: stick below mu_w, slide at g (sin - 
   // A pinacoid lies on its stable face against the side wall y = 0, far above the floor.
   // Gravity is tilted into the wall: g = (0, -cos th, -sin th).
   const double mu = 0.5;
-  const core::Grain proto = pinacoid(1.0, core::Quat::Identity(), Vec3::Zero());
+  const core::Grain proto = pinacoid(1.0, Vec3::Zero());
   const core::Quat q = stableFaceTowards(proto.polyhedron(), -Vec3::UnitY());
-  core::Grain g = pinacoid(1.0, q, {3.0, 0.0, 10.0});
+  core::Grain g = pinacoid(1.0, {3.0, 0.0, 10.0}, q);
   double minY = std::numeric_limits<double>::infinity();
   for (const Vec3& v : g.worldVertices()) minY = std::min(minY, v.y());
   g.position.y() = -minY;
@@ -293,7 +262,7 @@ TEST_CASE("bullet wall friction is Coulomb: stick below mu_w, slide at g (sin - 
   // The floor is frictionless whatever mu_w: a pinacoid on its face slides down a tilted floor
   // at g sin th.
   const core::Quat qf = stableFaceTowards(proto.polyhedron(), -Vec3::UnitZ());
-  core::Grain onFloor = pinacoid(1.0, qf, {3.0, 2.0, 0.0});
+  core::Grain onFloor = pinacoid(1.0, {3.0, 2.0, 0.0}, qf);
   onFloor.position.z() = -minZ(onFloor.worldVertices());
   auto s = boxSystem(6.0, 4.0, false, 1.0);
   const double th = 0.3;
@@ -387,11 +356,11 @@ TEST_CASE("bullet periodic contacts equal interior contacts (x, and the xy corne
     requireSame(interior, periodic, 1e-9);
   }
   SECTION("pinacoids across x: one leaning on another, face-face and edge contacts") {
-    const core::Grain proto = pinacoid(1.0, core::Quat::Identity(), Vec3::Zero());
+    const core::Grain proto = pinacoid(1.0, Vec3::Zero());
     const core::Quat q = stableFaceTowards(proto.polyhedron(), -Vec3::UnitZ());
-    core::Grain lower = pinacoid(1.0, q, {-0.3, 1.5, 0.0});
+    core::Grain lower = pinacoid(1.0, {-0.3, 1.5, 0.0}, q);
     lower.position.z() = -minZ(lower.worldVertices()) + 1e-3;
-    core::Grain upper = pinacoid(0.9, q, {0.2, 1.6, 0.0});
+    core::Grain upper = pinacoid(0.9, {0.2, 1.6, 0.0}, q);
     upper.position.z() = maxZ(lower.worldVertices()) + 2e-3 + (upper.position.z() - minZ(upper.worldVertices()));
     auto s = boxSystem(6.0, 3.2, false, 0.0);
     s.grains = {lower, upper};
@@ -411,44 +380,6 @@ TEST_CASE("bullet periodic contacts equal interior contacts (x, and the xy corne
     const Outcome periodic = runPlaced(s, Vec3(0.1, 0.1, 0.0), 300);
     CHECK(interior.force.size() >= 25 + 4);  // floor, top ball (+ layer pairs within the threshold)
     requireSame(interior, periodic, 1e-9);
-  }
-}
-
-TEST_CASE("bullet periodic pair finder: cell list and brute force agree with all-pairs", "[bullet]") {
-  for (const bool periodicY : {false, true}) {
-    for (const double length : {2.5, 9.0}) {  // 2.5: too short for 3 cells -> brute force
-      core::BoxDef box;
-      box.lengthX = length;
-      box.width = length;
-      box.periodicY = periodicY;
-      core::Rng rng(3, core::StreamId::Test, periodicY ? 1 : 0);
-      std::vector<Vec3> p;
-      std::vector<double> r;
-      for (int i = 0; i < 150; ++i) {
-        p.emplace_back(rng.uniform() * length, rng.uniform() * length, rng.uniform() * 3.0);
-        r.push_back(0.4 + 0.1 * rng.uniform());
-      }
-      const double thr = 0.02;
-      const bullet::PeriodicPairFinder finder(box, 2.0 * 0.5 + thr);
-      const auto found = finder.find(p, r, thr);
-      // All-pairs reference over every image.
-      std::size_t expected = 0;
-      const int sy = periodicY ? 1 : 0;
-      for (int a = 0; a < 150; ++a)
-        for (int b = a + 1; b < 150; ++b)
-          for (int ix = -1; ix <= 1; ++ix)
-            for (int iy = -sy; iy <= sy; ++iy) {
-              if (ix == 0 && iy == 0) continue;
-              const Vec3 shift(ix * length, iy * length, 0.0);
-              if ((p[b] + shift - p[a]).norm() < r[a] + r[b] + thr) ++expected;
-            }
-      CHECK(found.size() == expected);
-      for (const auto& q : found) {
-        CHECK(q.a < q.b);
-        CHECK((q.shiftX != 0 || q.shiftY != 0));
-        CHECK((p[q.b] + q.shift - p[q.a]).norm() < r[q.a] + r[q.b] + thr);
-      }
-    }
   }
 }
 
@@ -559,9 +490,10 @@ TEST_CASE("bullet pinacoids sliding through the periodic faces keep bounded over
   core::Rng rng(8, core::StreamId::Test, 0);
   for (int k = 0; k < 2; ++k)
     for (int j = 0; j < 3; ++j)
-      for (int i = 0; i < 3; ++i)
-        s.grains.push_back(pinacoid(0.95 + 0.05 * rng.uniform(), rng.uniformQuaternion(),
-                                    {0.7 + 1.3 * i, 0.7 + 1.3 * j, 0.75 + 1.4 * k}));
+      for (int i = 0; i < 3; ++i) {
+        const core::Quat q = rng.uniformQuaternion();  // drawn before the size, as it always was
+        s.grains.push_back(pinacoid(0.95 + 0.05 * rng.uniform(), {0.7 + 1.3 * i, 0.7 + 1.3 * j, 0.75 + 1.4 * k}, q));
+      }
   auto b = makeBullet(s);
   double worstGap = 0.0;
   int wraps = 0;
@@ -598,13 +530,13 @@ TEST_CASE("bullet: a face-face contact carried across a periodic face stays a co
   // g = (1, 0, 0): they move together and cross x = L_x one after the other. When the leading one
   // wraps, its contact with the trailing one changes from a broad-phase pair to a periodic one;
   // a stale cached point would join anchors a period apart along the normal.
-  const core::Grain proto = pinacoid(1.0, core::Quat::Identity(), Vec3::Zero());
+  const core::Grain proto = pinacoid(1.0, Vec3::Zero());
   const core::ConvexPolyhedron poly = proto.polyhedron();
   const core::Quat q = stableFaceTowards(poly, Vec3::UnitX());
   const double offset = *std::min_element(poly.faceOffsets().begin(), poly.faceOffsets().end());
   auto s = boxSystem(4.0, 4.0, true, 0.0);
   s.gravity = Vec3(1.0, 0.0, 0.0);
-  s.grains = {pinacoid(1.0, q, {2.8 - 2.0 * offset, 2.0, 5.0}), pinacoid(1.0, q, {2.8 - 1e-6, 2.0, 5.0})};
+  s.grains = {pinacoid(1.0, {2.8 - 2.0 * offset, 2.0, 5.0}, q), pinacoid(1.0, {2.8 - 1e-6, 2.0, 5.0}, q)};
   auto b = makeBullet(s);
   double worstGap = 0.0;
   for (int n = 0; n < 2000; ++n) {
@@ -660,15 +592,8 @@ TEST_CASE("bullet fixed-seed run hashes to its recorded value", "[bullet]") {
   // The constant changes only in a commit that says why (a change of physics,
   // solver order or settings). FNV-1a over the bits of every pose and velocity after 300 steps
   // of a small mixed pile (spheres and pinacoids cannot mix in a sample, so two boxes).
-  std::uint64_t hash = 1469598103934665603ull;
-  auto mix = [&](double v) {
-    std::uint64_t bits;
-    std::memcpy(&bits, &v, sizeof bits);
-    for (int k = 0; k < 8; ++k) {
-      hash ^= (bits >> (8 * k)) & 0xffu;
-      hash *= 1099511628211ull;
-    }
-  };
+  testing::Fnv1a hash;
+  auto mix = [&](double v) { hash.mix(v); };
   for (const auto shape : {core::ShapeKind::Sphere, core::ShapeKind::Pinacoid}) {
     auto s = boxSystem(4.0, 3.0, false, 0.3);
     core::Rng rng(42, core::StreamId::Test, 0);
@@ -691,7 +616,7 @@ TEST_CASE("bullet fixed-seed run hashes to its recorded value", "[bullet]") {
       for (int k = 0; k < 4; ++k) mix(st.orientation.coeffs()[k]);
     }
   }
-  CHECK(hash == 0xf272ab82de83fb97ull);
+  CHECK(hash.value == 0xf272ab82de83fb97ull);
 }
 
 TEST_CASE("bullet with no grains steps and reports nothing", "[bullet]") {

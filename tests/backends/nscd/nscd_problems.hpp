@@ -1,0 +1,116 @@
+#pragma once
+// Systems and problems shared by the nscd tests: piles that touch from the first step, one cold
+// step's contact problem, and the broad phase's candidate pairs.
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "backends/nscd/broad_phase.hpp"
+#include "backends/nscd/contact_solver.hpp"
+#include "backends/nscd/narrow_phase.hpp"
+#include "backends/nscd/nscd_settings.hpp"
+#include "core/backend.hpp"
+#include "core/deposition.hpp"
+#include "tests/support/same_bits.hpp"
+#include "tests/support/systems.hpp"
+
+namespace confpack::testing {
+
+using core::Vec3;
+
+/// Spheres that touch at once: a geometric deposit of `count` grains, each given its
+/// placeholder's diameter (so seated on three supports or the floor).
+inline core::SystemDef touchingSpheres(double lx, double w, bool periodicY, std::size_t count, std::uint64_t seed) {
+  core::SystemDef s = boxSystem(lx, w, periodicY, 0.0);
+  core::DepositionDef def;
+  def.grainCount = count;
+  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, seed);
+  s.grains = dep.grains;
+  for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter;
+  return s;
+}
+
+/// A deposited pile (docs/model.md, "Deposition") of n grains between side walls with friction 0.3,
+/// every grain scaled by `grow` (placeholders circumscribe the largest grain, so a plain deposit
+/// touches nowhere; grown grains touch and load each other from the first step).
+inline core::SystemDef pile(core::ShapeKind shape, double lengthX, double width, std::size_t n, double grow = 1.0) {
+  core::SystemDef s;
+  s.box.lengthX = lengthX;
+  s.box.width = width;
+  s.box.periodicY = false;
+  s.box.wallFriction = 0.3;
+  core::PopulationDef population;
+  population.shape = shape;
+  core::DepositionDef def;
+  def.grainCount = n;
+  s.grains = core::deposit(s.box, population, def, 11).grains;
+  for (core::Grain& g : s.grains) g.size *= grow;
+  return s;
+}
+
+/// The broad phase's candidate pairs of the grains of `s` at their initial positions.
+inline std::vector<nscd::CandidatePair> candidatePairs(const core::SystemDef& s, const nscd::NarrowPhase& narrow) {
+  std::vector<Vec3> positions;
+  std::vector<double> reach;
+  for (std::size_t i = 0; i < s.grains.size(); ++i) {
+    positions.push_back(s.grains[i].position);
+    reach.push_back(narrow.reach(static_cast<int>(i)));
+  }
+  std::vector<nscd::CandidatePair> pairs;
+  nscd::BroadPhase(s.box, narrow.maxReach()).findPairs(positions, reach, pairs);
+  return pairs;
+}
+
+/// One step's contact problem of the grains of `s` at rest, solved cold (no warm start) with
+/// `settings`: contacts from the broad and narrow phases at the grains' positions, inverse masses
+/// (the last body is the static walls), velocities kicked by gravity over dt = 2e-3 and then
+/// corrected by the solve.
+struct ColdStep {
+  static constexpr double kDt = 2e-3;
+  std::vector<nscd::BodyInverseMass> bodies;
+  std::vector<nscd::BodyVelocity> velocities;
+  std::vector<nscd::ContactGeometry> contacts;
+  nscd::ContactSolver solver;
+  int iterations = 0;
+
+  ColdStep(const core::SystemDef& s, const nscd::NscdSettings& settings)
+      : bodies(s.grains.size() + 1), velocities(s.grains.size() + 1) {
+    nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
+    nscd::BroadPhase broad(s.box, narrow.maxReach());
+    std::vector<Vec3> positions;
+    std::vector<core::Quat> orientations;
+    std::vector<double> reach;
+    for (std::size_t i = 0; i < s.grains.size(); ++i) {
+      const core::Grain& g = s.grains[i];
+      positions.push_back(g.position);
+      orientations.push_back(g.orientation);
+      reach.push_back(narrow.reach(static_cast<int>(i)));
+      bodies[i].invMass = 1.0 / (s.density * g.volume());
+      bodies[i].invInertia = g.bodyInertia(s.density).inverse();
+      velocities[i].v = Vec3(0.0, 0.0, -kDt);  // g = 1
+    }
+    std::vector<nscd::CandidatePair> pairs;
+    broad.findPairs(positions, reach, pairs);
+    narrow.collideAll(pairs, positions, orientations, contacts, 1);
+    solver.prepare(contacts, positions, bodies, s.box, kDt, settings);
+    solver.warmStart(nscd::ContactCache{}, contacts, kDt, velocities);
+    iterations = solver.solve(velocities, settings);
+  }
+};
+
+/// Largest grain speed of step a, and largest difference of grain velocities between steps a and
+/// b of the same system (the static-walls body left out).
+struct VelocityComparison {
+  double largest = 0.0;
+  double difference = 0.0;
+};
+inline VelocityComparison compareVelocities(const ColdStep& a, const ColdStep& b) {
+  VelocityComparison c;
+  for (std::size_t i = 0; i + 1 < a.velocities.size(); ++i) {
+    c.largest = std::max(c.largest, a.velocities[i].v.norm());
+    c.difference = std::max(c.difference, (a.velocities[i].v - b.velocities[i].v).norm());
+  }
+  return c;
+}
+
+}  // namespace confpack::testing

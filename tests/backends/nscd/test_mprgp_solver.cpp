@@ -1,0 +1,156 @@
+// The MPRGP contact solver (backends/nscd/mprgp_solver.hpp) on one cold step's contact problem:
+// its preconditioner's blocks, its norm bound, and the velocities its variants reach.
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <set>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+#include "backends/nscd/mprgp_solver.hpp"
+#include "tests/backends/nscd/nscd_problems.hpp"
+
+using namespace confpack;
+using core::Vec3;
+using testing::boxSystem;
+using testing::ColdStep;
+using testing::touchingSpheres;
+
+TEST_CASE("nscd mprgp: the preconditioner's two sweep blocks share no grain, and two threads sweep them to the bits of one",
+          "[nscd]") {
+  // Spheres (rows without lever arms across the normal) and pinacoids (angular rows, multi-point
+  // contacts, side walls with friction), each in a box long enough for the rows to be split.
+  const bool pinacoids = GENERATE(false, true);
+  core::SystemDef s;
+  if (pinacoids) {
+    s = boxSystem(28.0, 5.0, false, 0.0);
+    s.box.wallFriction = 0.3;
+    core::PopulationDef population;
+    population.shape = core::ShapeKind::Pinacoid;
+    core::DepositionDef def;
+    def.grainCount = 3000;
+    s.grains = core::deposit(s.box, population, def, 11).grains;
+    // Placeholders circumscribe the grains: grown by half, neighbours overlap, as in a pile
+    // pressed together (one cold step: overlaps only set the gap terms).
+    for (core::Grain& g : s.grains) g.size *= 1.5;
+  } else {
+    s = touchingSpheres(14.0, 14.0, true, 1500, 5);
+  }
+  nscd::NscdSettings one;  // the defaults: MPRGP preconditioned by Gauss-Seidel
+  one.maxIterations = 30;
+  nscd::NscdSettings two = one;
+  two.threads = 2;
+  const ColdStep a(s, one), b(s, two);
+  INFO("pinacoids " << pinacoids << ", rows " << a.solver.rowCount() << ", iterations " << a.iterations);
+  // Enough rows for the solver to run on the team (its passes need 4,096 unknowns), and each
+  // block a good part of the pile.
+  REQUIRE(a.solver.rowCount() > 4096);
+  const auto blocks = a.solver.sweepBlockBodies(static_cast<int>(s.grains.size()));
+  CHECK(blocks[0].size() > s.grains.size() / 4);
+  CHECK(blocks[1].size() > s.grains.size() / 4);
+  std::vector<int> shared;
+  std::set_intersection(blocks[0].begin(), blocks[0].end(), blocks[1].begin(), blocks[1].end(),
+                        std::back_inserter(shared));
+  CHECK(shared.empty());
+  CHECK(a.iterations == b.iterations);
+  std::size_t different = 0;
+  for (std::size_t i = 0; i < s.grains.size(); ++i)
+    different += a.velocities[i].v != b.velocities[i].v || a.velocities[i].w != b.velocities[i].w;
+  CHECK(different == 0);
+}
+
+TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin bound (spheres)", "[nscd]") {
+  // MPRGP's expansion step alpha_bar = 1.95 / bound needs bound >= ||S W S|| (Dostal); the closer,
+  // the longer the step. The bound must be the largest absolute row sum of S W S, formed here
+  // densely from the contact normals and masses. Rows of a touching sphere network: a geometric
+  // deposit with every grain given its placeholder's diameter (each seated on three supports or
+  // the floor), sizes then shrunk by up to 2% so that masses differ and gaps stay within the alert
+  // distance.
+  core::SystemDef s = touchingSpheres(5.0, 5.0, false, 120, 3);
+  core::Rng rng(5, core::StreamId::Test);
+  for (core::Grain& g : s.grains) g.size *= 1.0 - 0.02 * rng.uniform();
+  const int n = static_cast<int>(s.grains.size());
+  const nscd::NscdSettings settings;  // mprgp
+  ColdStep step(s, settings);
+  const std::vector<nscd::BodyInverseMass>& bodies = step.bodies;
+  const std::vector<nscd::ContactGeometry>& contacts = step.contacts;
+  const nscd::ContactSolver& solver = step.solver;
+
+  // ||S W S|| = largest eigenvalue of B^T B, B = M^-1/2 H S: column k holds -s_k m_a^-1/2 n_k on
+  // grain a and +s_k m_b^-1/2 n_k on grain b (none on a wall), s_k = (1/m_a + 1/m_b)^-1/2.
+  std::vector<std::tuple<int, int, Vec3>> rows;
+  for (const auto& g : contacts)
+    for (int p = 0; p < g.pointCount; ++p) rows.emplace_back(g.a, g.b, g.normal);
+  Eigen::MatrixXd bMatrix = Eigen::MatrixXd::Zero(3 * n, static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto& [a, b, normal] = rows[k];
+    const double wa = bodies[a].invMass, wb = b >= 0 ? bodies[b].invMass : 0.0;
+    const double sk = 1.0 / std::sqrt(wa + wb);
+    bMatrix.block<3, 1>(3 * a, static_cast<Eigen::Index>(k)) = -sk * std::sqrt(wa) * normal;
+    if (b >= 0) bMatrix.block<3, 1>(3 * b, static_cast<Eigen::Index>(k)) = sk * std::sqrt(wb) * normal;
+  }
+  const Eigen::MatrixXd a = bMatrix.transpose() * bMatrix;
+  const double exact = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  const double gershgorin = a.cwiseAbs().rowwise().sum().maxCoeff();
+  INFO("rows " << rows.size() << ", exact " << exact << ", bound " << solver.operatorBound() << ", Gershgorin "
+               << gershgorin);
+  REQUIRE(rows.size() > 2 * static_cast<std::size_t>(n));  // a connected network, floor included
+  CHECK(solver.operatorBound() >= exact);
+  CHECK(solver.operatorBound() == Approx(gershgorin).epsilon(1e-12));
+  CHECK(solver.operatorBound() < 2.0 * exact);  // 1.72 here
+}
+
+TEST_CASE("nscd mprgp: the projected-CG and Dostal expansions reach the same velocities", "[nscd]") {
+  // Both expansions (NscdSettings::expansion) minimise the same quadratic program
+  // 1/2 r.W r + r.(u_free + c) over r >= 0, W = H^T M^-1 H. Its minimisers all share W r (the
+  // objective is convex and quadratic, so it is constant along the segment between two of them,
+  // which forces (r1 - r2).W (r1 - r2) = 0), hence M^-1 H r: the grains' velocities after the step
+  // are unique, whichever path reaches them. The pile must make both expansions run: touching
+  // spheres, so that every grain is stopped by a network of active contacts.
+  const core::SystemDef s = touchingSpheres(6.0, 6.0, false, 250, 7);
+  // Tolerance 1e-12 on the relative projected gradient: near jamming a small residual still
+  // allows a larger velocity error (W is ill-conditioned); at the default 1e-10 the two differ by
+  // 7e-7 of the largest velocity, at 1e-12 by 8e-9.
+  nscd::NscdSettings projected;
+  projected.tolerance = 1e-12;
+  nscd::NscdSettings gradient = projected;
+  gradient.expansion = nscd::ExpansionKind::Gradient;
+  const ColdStep a(s, projected), b(s, gradient);
+  INFO("rows " << a.solver.rowCount() << "; iterations projected " << a.iterations << " (cg " << a.solver.mprgpSteps().conjugate
+       << ", projected " << a.solver.mprgpSteps().projected << ", gradient " << a.solver.mprgpSteps().gradient
+       << "), gradient " << b.iterations << " (cg " << b.solver.mprgpSteps().conjugate << ", gradient "
+       << b.solver.mprgpSteps().gradient << ")");
+  REQUIRE(a.solver.mprgpSteps().projected > 0);
+  REQUIRE(b.solver.mprgpSteps().gradient > 0);
+  CHECK(b.solver.mprgpSteps().projected == 0);
+  CHECK(a.solver.residual() < projected.tolerance);
+  CHECK(b.solver.residual() < gradient.tolerance);
+  const auto [largest, difference] = testing::compareVelocities(a, b);
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(largest > 0.5 * ColdStep::kDt);  // not a trivial solution
+  CHECK(difference < 1e-7 * largest);
+}
+
+TEST_CASE("nscd mprgp: the Gauss-Seidel preconditioner reaches the plain solver's velocities in fewer iterations",
+          "[nscd]") {
+  // Preconditioning changes the path of the conjugate gradients on the free set, not the
+  // quadratic program, whose minimisers all share the grains' velocities (previous test). The
+  // preconditioned solve must reach them, and in fewer applications of W: the point of it.
+  const core::SystemDef s = touchingSpheres(6.0, 6.0, false, 250, 7);
+  nscd::NscdSettings plain;
+  plain.tolerance = 1e-12;
+  plain.preconditioner = nscd::PreconditionerKind::None;
+  nscd::NscdSettings sgs = plain;
+  sgs.preconditioner = nscd::PreconditionerKind::SymmetricGaussSeidel;
+  const ColdStep a(s, sgs), b(s, plain);
+  INFO("rows " << a.solver.rowCount() << "; iterations sgs " << a.iterations << ", none " << b.iterations);
+  CHECK(a.solver.residual() < sgs.tolerance);
+  CHECK(b.solver.residual() < plain.tolerance);
+  CHECK(a.iterations < b.iterations);
+  const auto [largest, difference] = testing::compareVelocities(a, b);
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(largest > 0.5 * ColdStep::kDt);
+  CHECK(difference < 1e-7 * largest);
+}
