@@ -7,11 +7,11 @@
 
 #include "analysis/analyze.hpp"
 #include "core/deposition.hpp"
-#include "lattices.hpp"
+#include "tests/support/lattices.hpp"
 #include "tests/support/read_file.hpp"
 
 using namespace confpack;
-using analysis::testing::simpleCubic;
+using confpack::testing::simpleCubic;
 
 namespace {
 

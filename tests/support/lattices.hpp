@@ -4,8 +4,9 @@
 #include <vector>
 
 #include "core/packing.hpp"
+#include "tests/support/systems.hpp"
 
-namespace confpack::analysis::testing {
+namespace confpack::testing {
 
 /// Simple cubic lattice of touching spheres of diameter d: nx x ny x nz spheres, centres at
 /// ((i + 1/2) d, (j + 1/2) d, (k + 1/2) d); box periodic in x and y (lengths nx d, ny d).
@@ -17,10 +18,7 @@ inline core::Packing simpleCubic(int nx, int ny, int nz, double d = 1.0) {
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        core::Grain g;
-        g.size = d;
-        g.position = core::Vec3((i + 0.5) * d, (j + 0.5) * d, (k + 0.5) * d);
-        p.grains.push_back(g);
+        p.grains.push_back(sphere(d, core::Vec3((i + 0.5) * d, (j + 0.5) * d, (k + 0.5) * d)));
       }
   return p;
 }
@@ -39,10 +37,7 @@ inline core::Packing faceCentredCubic(int ncell, int ncz, double z0 = 0.5) {
     for (int j = 0; j < ncell; ++j)
       for (int i = 0; i < ncell; ++i)
         for (const auto& b : basis) {
-          core::Grain g;
-          g.size = 1.0;
-          g.position = core::Vec3((i + b[0] + 0.25) * a, (j + b[1] + 0.25) * a, (k + b[2]) * a + z0);
-          p.grains.push_back(g);
+          p.grains.push_back(sphere(1.0, core::Vec3((i + b[0] + 0.25) * a, (j + b[1] + 0.25) * a, (k + b[2]) * a + z0)));
         }
   return p;
 }
@@ -50,13 +45,8 @@ inline core::Packing faceCentredCubic(int ncell, int ncz, double z0 = 0.5) {
 /// A vertical column of n touching spheres of diameter d resting on the floor at (x, y).
 inline std::vector<core::Grain> column(int n, double x, double y, double d = 1.0) {
   std::vector<core::Grain> out;
-  for (int k = 0; k < n; ++k) {
-    core::Grain g;
-    g.size = d;
-    g.position = core::Vec3(x, y, (k + 0.5) * d);
-    out.push_back(g);
-  }
+  for (int k = 0; k < n; ++k) out.push_back(sphere(d, core::Vec3(x, y, (k + 0.5) * d)));
   return out;
 }
 
-}  // namespace confpack::analysis::testing
+}  // namespace confpack::testing

@@ -1,77 +1,16 @@
-// Free surface, bulk region and the equilibrium test (docs/model.md, "Equilibrium") against exact
-// static forces.
+// The equilibrium test and the contact stress (analysis/equilibrium.hpp; docs/model.md,
+// "Equilibrium") against exact static forces.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 
 #include "analysis/bulk_region.hpp"
 #include "analysis/equilibrium.hpp"
-#include "analysis/sphere_geometry.hpp"
-#include "lattices.hpp"
+#include "tests/support/lattices.hpp"
 
 using namespace confpack;
-using analysis::testing::column;
-using analysis::testing::simpleCubic;
-
-TEST_CASE("sphere slab volume is the spherical segment", "[analysis][sphere]") {
-  const double r = 0.7;
-  // Cap of height h: pi h^2 (3r - h)/3.
-  const double h = 0.3;
-  CHECK(analysis::sphereSlabVolume(r, 2.0, 2.0 + r - h, 10.0) ==
-        Approx(std::numbers::pi * h * h * (3 * r - h) / 3.0).epsilon(1e-13));
-  CHECK(analysis::sphereSlabVolume(r, 0.0, -1.0, 1.0) == Approx(4.0 / 3.0 * std::numbers::pi * r * r * r));
-  CHECK(analysis::sphereSlabVolume(r, 0.0, -1.0, 0.0) == Approx(2.0 / 3.0 * std::numbers::pi * r * r * r));
-  CHECK(analysis::sphereSlabVolume(r, 0.0, 0.8, 1.0) == 0.0);
-  // Thin slices reproduce the disc area pi (r^2 - z^2).
-  const double dz = 1e-4;
-  for (double z : {-0.6, -0.2, 0.0, 0.35, 0.69}) {
-    const double v = analysis::sphereSlabVolume(r, 0.0, z - dz / 2, z + dz / 2) / dz;
-    CHECK(v == Approx(std::numbers::pi * (r * r - z * z)).epsilon(1e-6));
-  }
-  // A partition of the axis sums to the sphere.
-  double sum = 0.0;
-  for (double lo = -1.0; lo < 1.0; lo += 0.13) sum += analysis::sphereSlabVolume(r, 0.05, lo, lo + 0.13);
-  CHECK(sum == Approx(analysis::sphereVolume(r)).epsilon(1e-13));
-}
-
-TEST_CASE("sphere lens volume", "[analysis][sphere]") {
-  // Equal spheres: two caps of height h = r - d/2: 2 pi h^2 (3r - h)/3.
-  const double r = 0.5, d = 0.8, h = r - d / 2;
-  CHECK(analysis::sphereLensVolume(r, r, d) == Approx(2 * std::numbers::pi * h * h * (3 * r - h) / 3).epsilon(1e-13));
-  CHECK(analysis::sphereLensVolume(r, r, 1.0) == 0.0);
-  CHECK(analysis::sphereLensVolume(0.5, 0.2, 0.1) == Approx(analysis::sphereVolume(0.2)));
-  // Unequal radii: caps from the radical plane at x = (d^2 + r1^2 - r2^2) / (2d) from centre 1.
-  const double r1 = 0.5, r2 = 0.3, dd = 0.6;
-  const double x = (dd * dd + r1 * r1 - r2 * r2) / (2 * dd);
-  const double h1 = r1 - x, h2 = r2 - (dd - x);
-  const double expected =
-      std::numbers::pi * h1 * h1 * (3 * r1 - h1) / 3 + std::numbers::pi * h2 * h2 * (3 * r2 - h2) / 3;
-  CHECK(analysis::sphereLensVolume(r1, r2, dd) == Approx(expected).epsilon(1e-13));
-}
-
-TEST_CASE("free surface and bulk region of a flat lattice", "[analysis][bulk]") {
-  const core::Packing p = simpleCubic(6, 4, 10);
-  const analysis::BulkRegion r = analysis::bulkRegion(p);
-  CHECK(r.freeSurface == Approx(10.0));
-  CHECK(r.zLow == 3.0);
-  CHECK(r.zHigh == Approx(7.0));
-  CHECK(r.contains(5.5));
-  CHECK_FALSE(r.contains(2.5));
-  CHECK_FALSE(r.contains(7.5));
-  CHECK(r.volume(p.box) == Approx(6 * 4 * 4.0));
-
-  // One loose grain on top moves the mean by (1 / number of cells) of its height only.
-  core::Packing q = p;
-  core::Grain extra = q.grains.front();
-  extra.position = core::Vec3(0.5, 0.5, 10.5);
-  q.grains.push_back(extra);
-  analysis::BulkRegionDef def;
-  def.cellSize = 2.0;  // 3 x 2 cells
-  CHECK(analysis::freeSurfaceHeight(q, def.cellSize) == Approx(10.0 + 1.0 / 6.0));
-
-  def.cellSize = -1.0;
-  CHECK_THROWS_AS(analysis::bulkRegion(p, def), std::invalid_argument);
-}
+using confpack::testing::column;
+using confpack::testing::simpleCubic;
 
 namespace {
 // A column of n beads on the floor with the exact static forces: the k-th contact from the top
