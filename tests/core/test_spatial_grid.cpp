@@ -6,27 +6,14 @@
 
 #include "core/random.hpp"
 #include "core/spatial_grid.hpp"
+#include "tests/support/brute_force.hpp"
 
 using namespace confpack::core;
 
 namespace {
 
-using Hit = std::tuple<int, double, double, double>;
-
-// All images pos + (i Lx, j W, 0) of every point within r of p, by enumerating enough periods.
-std::vector<Hit> bruteForce(const BoxDef& box, const std::vector<Vec3>& pts, const Vec3& p, double r) {
-  std::vector<Hit> out;
-  const int kx = static_cast<int>(std::ceil((r + std::abs(p.x()) + box.lengthX) / box.lengthX)) + 1;
-  const int ky = box.periodicY ? static_cast<int>(std::ceil((r + std::abs(p.y()) + box.width) / box.width)) + 1 : 0;
-  for (std::size_t id = 0; id < pts.size(); ++id)
-    for (int i = -kx; i <= kx; ++i)
-      for (int j = -ky; j <= ky; ++j) {
-        const Vec3 image = pts[id] + Vec3(i * box.lengthX, j * box.width, 0.0);
-        if ((image - p).norm() <= r) out.emplace_back(static_cast<int>(id), image.x(), image.y(), image.z());
-      }
-  std::sort(out.begin(), out.end());
-  return out;
-}
+using confpack::testing::imagesNear;
+using Hit = confpack::testing::ImageHit;
 
 std::vector<Hit> fromGrid(const SpatialGrid& grid, const Vec3& p, double r) {
   std::vector<Hit> out;
@@ -51,7 +38,7 @@ void compareWithBruteForce(const BoxDef& box, double cell, double radius, int nP
     const Vec3 p(rng.uniform(-box.lengthX, 2.0 * box.lengthX),
                  box.periodicY ? rng.uniform(-box.width, 2.0 * box.width) : rng.uniform(0.0, box.width),
                  rng.uniform(-1.0, 7.0));
-    const auto expected = bruteForce(box, pts, p, radius);
+    const auto expected = imagesNear(box, pts, p, radius);
     // Image coordinates may differ in the last bit (stored wrapped + shift): compare ids and
     // coordinates to 1e-12.
     const auto got = fromGrid(grid, p, radius);

@@ -1,7 +1,5 @@
-// ParaView output (docs/model.md, "ParaView"): the files are well-formed XML whose declared counts
-// match both the arrays they contain and the packing they were written from.
-#include <unistd.h>
-
+// ParaView output (core/vtk_writer.hpp; docs/model.md, "ParaView"): the files are well-formed XML
+// whose declared counts match both the arrays they contain and the packing they were written from.
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +12,7 @@
 
 #include "core/random.hpp"
 #include "core/vtk_writer.hpp"
+#include "tests/support/scratch.hpp"
 
 using namespace confpack::core;
 namespace fs = std::filesystem;
@@ -154,16 +153,11 @@ Packing mixedPacking(int spheres, int pinacoids, bool withContacts) {
   return p;
 }
 
-fs::path freshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("confpack_test_vtk_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
-}
 
 }  // namespace
 
 TEST_CASE("the grains file holds one vertex per sphere and eight world-space faces per pinacoid") {
-  const fs::path dir = freshDir("grains");
+  const fs::path dir = confpack::testing::scratchPath("vtk_grains");
   const int spheres = 7, pinacoids = 4;
   const Packing p = mixedPacking(spheres, pinacoids, false);
   std::vector<Vec3> velocities(p.grains.size(), Vec3(0.0, 0.0, -0.5));
@@ -215,7 +209,7 @@ TEST_CASE("the grains file holds one vertex per sphere and eight world-space fac
 }
 
 TEST_CASE("contacts are lines with their force and type, the pvd lists every frame") {
-  const fs::path dir = freshDir("contacts");
+  const fs::path dir = confpack::testing::scratchPath("vtk_contacts");
   const Packing p = mixedPacking(5, 2, true);
   VtkSeries series(dir, "run");
   series.addFrame(0.0, p);
@@ -261,7 +255,7 @@ TEST_CASE("contacts are lines with their force and type, the pvd lists every fra
 }
 
 TEST_CASE("a frame with a wrong velocity count is refused") {
-  const fs::path dir = freshDir("bad");
+  const fs::path dir = confpack::testing::scratchPath("vtk_bad");
   const Packing p = mixedPacking(3, 0, false);
   VtkSeries series(dir, "f");
   std::vector<Vec3> v(2, Vec3::Zero());

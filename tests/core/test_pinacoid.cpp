@@ -1,3 +1,5 @@
+// The pinacoid (core/pinacoid.hpp; docs/model.md, "Pinacoids"): its topology, its closed-form dimensions, its
+// symmetries and its mass properties.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <set>
@@ -70,41 +72,4 @@ TEST_CASE("pinacoid mass properties: closed forms equal the divergence theorem")
       CHECK(closed.volume == Approx(params.heightRatio * L * params.widthRatio * L * (L + l) / 3.0).epsilon(1e-14));
     }
   }
-}
-
-TEST_CASE("divergence-theorem mass properties of a unit cube") {
-  std::vector<Vec3> v;
-  for (int i = 0; i < 8; ++i) v.emplace_back(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5);
-  // Faces CCW from outside.
-  std::vector<std::vector<int>> f = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  const MassProperties mp = ConvexPolyhedron(v, f).massProperties();
-  CHECK(mp.volume == Approx(1.0));
-  CHECK((mp.inertia() - Mat3::Identity() / 6.0).norm() < 1e-14);
-}
-
-TEST_CASE("a badly oriented face is refused") {
-  std::vector<Vec3> v = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  std::vector<std::vector<int>> good = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  CHECK_NOTHROW(ConvexPolyhedron(v, good));
-  auto bad = good;
-  std::swap(bad[0][1], bad[0][2]);
-  CHECK_THROWS_AS(ConvexPolyhedron(v, bad), std::invalid_argument);
-}
-
-TEST_CASE("sphere grain volume and inertia") {
-  Grain g;
-  g.size = 2.0;
-  CHECK(g.volume() == Approx(4.0 / 3.0 * M_PI));
-  CHECK(g.bodyInertia()(0, 0) == Approx(0.4 * g.volume() * 1.0));
-  CHECK(g.boundingRadius() == 1.0);
-}
-
-TEST_CASE("pinacoid bounding radius is the farthest vertex") {
-  Grain g;
-  g.shape = ShapeKind::Pinacoid;
-  g.size = 1.1;
-  double r = 0;
-  const ConvexPolyhedron poly = g.polyhedron();
-  for (const Vec3& v : poly.vertices()) r = std::max(r, v.norm());
-  CHECK(g.boundingRadius() == Approx(r).epsilon(1e-14));
 }
