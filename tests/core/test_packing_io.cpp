@@ -1,16 +1,22 @@
 // Packing file (docs/packing-format.md): exact round trip of every double, the documented keys, and
-// one clear message naming element and field for each kind of bad input.
-#include <unistd.h>
+// one clear message naming element and field for each kind of bad input; and the atomic writes every
+// output goes through.
+#include <sys/resource.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "core/packing_io.hpp"
 #include "core/random.hpp"
+#include "tests/support/read_file.hpp"
+#include "tests/support/scratch.hpp"
 
 using namespace confpack::core;
 using nlohmann::json;
@@ -18,12 +24,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("confpack_test_packing_io_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+using confpack::testing::slurp;
+
+/// Names of the entries of a directory, sorted.
+std::vector<std::string> filesIn(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
 }
 
 /// A packing that exercises everything: spheres and pinacoids with awkward doubles, contacts
@@ -126,7 +134,7 @@ void requireRefused(const json& j, const std::string& expected) {
 }  // namespace
 
 TEST_CASE("a packing file round-trips every double exactly") {
-  const fs::path dir = freshDir("roundtrip");
+  const fs::path dir = confpack::testing::freshDir("packing_io_roundtrip");
   const Packing p = samplePacking();
   writePacking(p, dir / "packing.json");
   const Packing q = readPacking(dir / "packing.json");
@@ -297,7 +305,7 @@ TEST_CASE("bad packing files are refused with the element and field named") {
 }
 
 TEST_CASE("reading a broken or missing file gives one clear message") {
-  const fs::path dir = freshDir("broken");
+  const fs::path dir = confpack::testing::freshDir("packing_io_broken");
   {
     std::ofstream f(dir / "bad.json");
     f << R"({"format": "confpack-packing", "version": 1, "box": )";
@@ -308,7 +316,7 @@ TEST_CASE("reading a broken or missing file gives one clear message") {
 }
 
 TEST_CASE("writing refuses a packing that would not read back and leaves nothing behind") {
-  const fs::path dir = freshDir("refuse");
+  const fs::path dir = confpack::testing::freshDir("packing_io_refuse");
   Packing p = samplePacking();
   p.grains[2].position.x() = p.box.lengthX;  // outside [0, length_x)
   CHECK_THROWS_WITH(writePacking(p, dir / "p.json"), Catch::Contains("grains[2].position[0]"));
@@ -322,11 +330,58 @@ TEST_CASE("writing refuses a packing that would not read back and leaves nothing
 }
 
 TEST_CASE("an atomic write replaces the old file as a whole") {
-  const fs::path dir = freshDir("atomic");
+  const fs::path dir = confpack::testing::freshDir("packing_io_atomic");
   writeFileAtomically(dir / "f.txt", "first version, longer than the second\n");
   writeFileAtomically(dir / "f.txt", "second\n");
-  std::ifstream in(dir / "f.txt");
-  const std::string text((std::istreambuf_iterator<char>(in)), {});
-  CHECK(text == "second\n");
+  CHECK(slurp(dir / "f.txt") == "second\n");
+  CHECK(filesIn(dir) == std::vector<std::string>{"f.txt"});
+  fs::remove_all(dir);
+}
+
+namespace {
+
+/// Caps the size of any file this process writes at `bytes` while it lives: a write past the cap
+/// fails with EFBIG (SIGXFSZ ignored), as on a full disk or over a quota. Restores both on exit.
+class FileSizeCap {
+ public:
+  explicit FileSizeCap(rlim_t bytes) {
+    REQUIRE(::getrlimit(RLIMIT_FSIZE, &saved_) == 0);
+    previousHandler_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit capped = saved_;
+    capped.rlim_cur = bytes;
+    REQUIRE(::setrlimit(RLIMIT_FSIZE, &capped) == 0);
+  }
+  ~FileSizeCap() {
+    ::setrlimit(RLIMIT_FSIZE, &saved_);
+    std::signal(SIGXFSZ, previousHandler_);
+  }
+  FileSizeCap(const FileSizeCap&) = delete;
+  FileSizeCap& operator=(const FileSizeCap&) = delete;
+
+ private:
+  rlimit saved_{};
+  void (*previousHandler_)(int) = SIG_DFL;
+};
+
+}  // namespace
+
+TEST_CASE("an atomic write that fails part-way leaves the old file whole and no temporary behind") {
+  // The write fails after 4 KiB of the new text reached the disk. A plain truncating write would
+  // have destroyed the old file by then and left 4 KiB of the new one in its place.
+  const fs::path dir = confpack::testing::freshDir("packing_io_atomic_failure");
+  const std::string old = "the old file, which a failed write must leave as it was\n";
+  writeFileAtomically(dir / "f.txt", old);
+  const std::string text(64 * 1024, 'x');
+  {
+    const FileSizeCap cap(4096);
+    CHECK_THROWS_AS(writeFileAtomically(dir / "f.txt", text), std::runtime_error);
+  }
+  const std::string after = slurp(dir / "f.txt");
+  INFO("f.txt now holds " << after.size() << " bytes, starting '" << after.substr(0, 16) << "'");
+  CHECK((after == old));
+  CHECK(filesIn(dir) == std::vector<std::string>{"f.txt"});
+  // With the cap lifted the same write goes through: the failure above was the cap's.
+  writeFileAtomically(dir / "f.txt", text);
+  CHECK((slurp(dir / "f.txt") == text));
   fs::remove_all(dir);
 }
