@@ -14,18 +14,13 @@
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
 #include "study/sweep.hpp"
+#include "tests/support/scratch.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;
 using nlohmann::json;
 
 namespace {
-
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("confpack_test_sweep_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
 
 // 3 confinements x 2 seeds x 2 backends = 12 runs, 6 deposits.
 json smallSweep() {
@@ -199,7 +194,7 @@ TEST_CASE("slicing covers every run exactly once and keeps deposit groups togeth
 }
 
 TEST_CASE("interrupted sweep resumes: finished runs are never redone, unfinished ones are") {
-  const fs::path dir = freshDir("resume");
+  const fs::path dir = confpack::testing::scratchPath("sweep_resume");
   const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
   Recorder rec;
   rec.throwOn = {"r0003", "r0008"};
@@ -237,7 +232,7 @@ TEST_CASE("interrupted sweep resumes: finished runs are never redone, unfinished
 }
 
 TEST_CASE("both backends of one (configuration, seed) compact the same deposit, also after a resume") {
-  const fs::path dir = freshDir("deposit");
+  const fs::path dir = confpack::testing::scratchPath("sweep_deposit");
   const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
   const auto runs = study::expandRuns(spec);
   Recorder rec;
@@ -259,7 +254,7 @@ TEST_CASE("both backends of one (configuration, seed) compact the same deposit, 
 }
 
 TEST_CASE("job-array slices run separately in one folder finish the study, parallel jobs run each once") {
-  const fs::path dir = freshDir("slices");
+  const fs::path dir = confpack::testing::scratchPath("sweep_slices");
   const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
   Recorder rec;
   std::size_t ran = 0;
@@ -287,7 +282,7 @@ TEST_CASE("job-array slices run separately in one folder finish the study, paral
 }
 
 TEST_CASE("progress: one line per finished run in the documented form") {
-  const fs::path dir = freshDir("progress");
+  const fs::path dir = confpack::testing::scratchPath("sweep_progress");
   json doc = smallSweep();
   doc["vary"]["width"] = json::array({5});
   doc["vary"]["replicas"] = 1;
