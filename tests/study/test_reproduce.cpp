@@ -1,6 +1,6 @@
 // The confinement study (docs/model.md, "The study and its report") at its three scales
 // (study/reproduce.hpp), as the run tables they expand to. `confpack reproduce` itself, with the
-// real binary, is tested in tests/apps/test_reproduce.cpp.
+// real binary, is tested in tests/apps/test_cmd_reproduce.cpp.
 #include <catch2/catch.hpp>
 #include <map>
 #include <set>

@@ -1,6 +1,6 @@
-// `confpack reproduce` and `confpack sweep` with the real binary and real physics: a sweep killed
-// with SIGKILL and resumed, and the tiny scale end to end. The study definitions (the
-// library's reproductionSweep) are tested in tests/study/test_reproduce.cpp.
+// `confpack sweep` with the real binary and real physics: a sweep killed with SIGKILL and resumed
+// loses no run and redoes none. The sweep engine's bookkeeping is tested in
+// tests/study/test_sweep.cpp.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -11,37 +11,21 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
+#include <string>
 #include <thread>
 
 #include "study/sweep.hpp"
+#include "tests/support/confpack_binary.hpp"
 #include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;
-using nlohmann::json;
-
-namespace {
-
+using confpack::testing::ConfpackSession;
 using confpack::testing::slurp;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("confpack_test_repro_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-int runConfpack(const fs::path& dir, const std::string& args) {
-  const std::string cmd = "cd '" + dir.string() + "' && '" + CONFPACK_BINARY + "' " + args + " > out.txt 2> err.txt";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-}  // namespace
-
 TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost or redone") {
-  const fs::path dir = scratch("kill");
+  const ConfpackSession s("cmd_sweep_kill");
+  const fs::path& dir = s.dir;
   // Four small, short runs of real physics (the time limit, not equilibrium, ends them).
   std::ofstream(dir / "s.json") << R"({
     "name": "kill",
@@ -73,9 +57,9 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
   INFO("finished before the kill: " << markers.size());
   CHECK(markers.size() < 4);
 
-  REQUIRE(runConfpack(dir, "sweep s.json --out sw") == 0);
-  const std::string out = slurp(dir / "out.txt");
-  CHECK(out.find(std::to_string(markers.size()) + " earlier") != std::string::npos);
+  const auto resumed = s.run("sweep s.json --out sw");
+  REQUIRE(resumed.code == 0);
+  CHECK(resumed.out.find(std::to_string(markers.size()) + " earlier") != std::string::npos);
   for (const char* r : {"r0000", "r0001", "r0002", "r0003"}) {
     INFO(r);
     CHECK(study::runStatus(dir / "sw" / "runs" / r) == study::RunStatus::Done);
@@ -85,31 +69,4 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
   // Both backends of a pile read the same deposit file.
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0000.json"));
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0001.json"));
-  fs::remove_all(dir);
-}
-
-TEST_CASE("reproduce --scale tiny: the whole chain to a report") {
-  const fs::path dir = scratch("tiny");
-  const auto t0 = std::chrono::steady_clock::now();
-  const int code = runConfpack(dir, "reproduce --scale tiny --out tiny --jobs 2");
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  INFO("stderr: " << slurp(dir / "err.txt"));
-  REQUIRE(code == 0);
-  WARN("reproduce --scale tiny took " << seconds << " s");
-  const std::string md = slurp(dir / "tiny" / "report" / "report.md");
-  const std::string html = slurp(dir / "tiny" / "report" / "report.html");
-  CHECK(md.find("# confpack study report: tiny") != std::string::npos);
-  CHECK(md.find("| r0005 |") != std::string::npos);
-  CHECK(md.find("### solid_fraction") != std::string::npos);
-  CHECK(md.find("nscd − bullet") != std::string::npos);
-  CHECK(html.find("</html>") != std::string::npos);
-  for (int i = 0; i < 6; ++i) {
-    char name[8];
-    std::snprintf(name, sizeof name, "r%04d", i);
-    CHECK(study::runStatus(dir / "tiny" / "runs" / name) == study::RunStatus::Done);
-  }
-  // Running it again finds everything done and only rewrites the report.
-  REQUIRE(runConfpack(dir, "reproduce --scale tiny --out tiny") == 0);
-  CHECK(slurp(dir / "out.txt").find("0 finished now, 6 earlier") != std::string::npos);
-  fs::remove_all(dir);
 }

@@ -1,0 +1,96 @@
+// RunConfig (core/run_config.hpp): the JSON round trip of every field and the refusal of bad
+// values by field name.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/run_config.hpp"
+
+using namespace confpack;
+using nlohmann::json;
+
+TEST_CASE("the run configuration round-trips through JSON") {
+  core::RunConfig c;
+  c.box.lengthX = 7.25;
+  c.box.width = 1.0 / 3.0;
+  c.box.periodicY = true;
+  c.box.wallFriction = 0.5;
+  c.population.shape = core::ShapeKind::Pinacoid;
+  c.population.smallFraction = 40.0;
+  c.population.pinacoid.alphaDeg = 55.5;
+  c.deposition.expectedSolidFraction = 0.58;
+  c.compaction.dt = 3.3e-4;
+  c.compaction.adaptiveDt = true;
+  c.compaction.timeLimit = 123.0;
+  c.compaction.checkInterval = 77;
+  c.compaction.frameInterval = 5;
+  c.compaction.protocol = core::Protocol::QuasiStatic;
+  c.compaction.trustRadius = 0.02;
+  c.compaction.forceRatio = 2e-4;
+  c.backend = "bullet";
+  c.backendOptions = {{"iterations", 50}};
+  c.seed = 18446744073709551615ULL;  // the largest seed survives (JSON unsigned, not a double)
+  c.threads = 2;
+  const json j = c;
+  const core::RunConfig d = j.get<core::RunConfig>();
+  CHECK(json(d) == j);
+  CHECK(d.seed == c.seed);
+  CHECK(d.box.width == c.box.width);
+  CHECK(d.population.shape == core::ShapeKind::Pinacoid);
+  CHECK(d.compaction.dt == c.compaction.dt);
+  CHECK(d.compaction.checkInterval == 77);
+  CHECK(d.compaction.adaptiveDt);
+  CHECK(d.compaction.protocol == core::Protocol::QuasiStatic);
+  CHECK(j.at("compaction").at("protocol") == "quasi-static");
+  CHECK(d.compaction.trustRadius == 0.02);
+  CHECK_NOTHROW(d.validate());
+  // snake_case keys, as in the packing file.
+  for (const char* k :
+       {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed", "threads"})
+    CHECK(j.contains(k));
+  for (const char* k :
+       {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
+        "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance", "finisher_max_step",
+        "finisher_max_steps"})
+    CHECK(j.at("compaction").contains(k));
+  // A partial document takes the defaults for the rest (sweeps override a base this way).
+  const auto partial = json::parse(R"({"box": {"width": 5}, "seed": 9})").get<core::RunConfig>();
+  CHECK(partial.box.width == 5.0);
+  CHECK(partial.seed == 9);
+  CHECK(partial.backend == "nscd");
+  CHECK(partial.compaction.timeLimit == core::CompactionDef{}.timeLimit);
+}
+
+TEST_CASE("the run configuration refuses bad values naming the field") {
+  auto refused = [](auto edit, const std::string& field) {
+    core::RunConfig c;
+    edit(c);
+    INFO(field);
+    CHECK_THROWS_WITH(c.validate(), Catch::Contains(field));
+  };
+  refused([](core::RunConfig& c) { c.backend = "foo"; }, "backend");
+  refused([](core::RunConfig& c) { c.threads = 0; }, "threads");
+  refused([](core::RunConfig& c) { c.box.width = -1; }, "width");
+  refused([](core::RunConfig& c) { c.population.smallFraction = 101; }, "small fraction");
+  refused([](core::RunConfig& c) { c.compaction.timeLimit = 0; }, "compaction.time_limit");
+  refused([](core::RunConfig& c) { c.compaction.dt = -1e-3; }, "compaction.dt");
+  refused([](core::RunConfig& c) { c.compaction.checkInterval = 0; }, "compaction.check_interval");
+  refused([](core::RunConfig& c) { c.compaction.kineticRatio = -1; }, "compaction.kinetic_ratio");
+  refused([](core::RunConfig& c) { c.compaction.switchKineticRatio = 0; }, "compaction.switch_kinetic_ratio");
+  refused([](core::RunConfig& c) { c.compaction.trustRadius = 0; }, "compaction.trust_radius");
+  refused([](core::RunConfig& c) { c.compaction.trustRadius = 0.9; }, "compaction.trust_radius");
+  refused([](core::RunConfig& c) { c.compaction.settleTolerance = -1e-6; }, "compaction.settle_tolerance");
+  refused([](core::RunConfig& c) { c.compaction.finisherMaxStep = 0; }, "compaction.finisher_max_step");
+  refused([](core::RunConfig& c) { c.compaction.finisherMaxSteps = 0; }, "compaction.finisher_max_steps");
+  CHECK_THROWS_WITH(json::parse(R"({"compaction": {"protocol": "static"}})").get<core::RunConfig>(),
+                    Catch::Contains("compaction.protocol: unknown protocol 'static'"));
+  refused([](core::RunConfig& c) { c.deposition.expectedSolidFraction = 1.2; }, "expected solid fraction");
+  refused([](core::RunConfig& c) { c.backendOptions = json::array(); }, "backend_options");
+  CHECK_THROWS_WITH(json::parse(R"({"sed": 3})").get<core::RunConfig>(), Catch::Contains("config.sed: unknown key"));
+  CHECK_THROWS_WITH(json::parse(R"({"seed": -3})").get<core::RunConfig>(), Catch::Contains("config.seed"));
+  CHECK_THROWS_WITH(json::parse(R"({"threads": "two"})").get<core::RunConfig>(), Catch::Contains("config.threads"));
+  CHECK_THROWS_WITH(json::parse(R"({"compaction": {"adaptive_dt": "yes"}})").get<core::RunConfig>(),
+                    Catch::Contains("compaction.adaptive_dt"));
+  CHECK_THROWS_WITH(json::parse(R"({"compaction": {"time_limt": 3}})").get<core::RunConfig>(),
+                    Catch::Contains("compaction.time_limt: unknown key"));
+}
