@@ -1,0 +1,77 @@
+// `confpack run` (apps/cmd_run.cpp) end to end: --from takes the grains of a packing file to rest.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/packing_io.hpp"
+#include "tests/support/confpack_binary.hpp"
+#include "tests/support/read_file.hpp"
+#include "tests/support/systems.hpp"
+
+using namespace confpack;
+using confpack::testing::ConfpackSession;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Three unit spheres stacked above one point, apart, between two frictionless side walls.
+core::Packing looseColumn() {
+  core::Packing p;
+  p.box.lengthX = 3.0;
+  p.box.width = 3.0;
+  p.box.height = 6.0;
+  for (double z : {1.5, 3.5, 5.0}) p.grains.push_back(testing::sphere(1.0, core::Vec3(1.5, 1.5, z)));
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("run --from brings a packing's grains to rest: a bead column carries k m g at its k-th contact") {
+  ConfpackSession s("cmd_run_from");
+  core::writePacking(looseColumn(), s.dir / "column.json");
+  const auto r = s.run("run --from column.json --protocol quasi-static --time-limit 20 --out out -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const nlohmann::json result = nlohmann::json::parse(testing::slurp(s.dir / "out" / "result.json"));
+  CHECK(result["equilibrium"]["reached"].get<bool>());
+  CHECK(result["n_grains"].get<int>() == 3);
+  CHECK(result["deposit"]["from"].get<std::string>() == "column.json");
+  CHECK(result["config"]["box"]["width"].get<double>() == 3.0);
+
+  // Centres at d/2, 3d/2, 5d/2 above the floor, and the contact under the k-th bead from the top
+  // carries the weight of k beads, m = pi/6 (rho = g = d = 1).
+  const core::Packing end = core::readPacking(s.dir / "out" / "packing.json");
+  std::vector<double> z;
+  for (const core::Grain& g : end.grains) z.push_back(g.position.z());
+  std::sort(z.begin(), z.end());
+  for (int k = 0; k < 3; ++k) CHECK(z[k] == Approx(0.5 + k).margin(1e-6));
+  REQUIRE(end.contacts.has_value());
+  std::vector<double> loads;
+  for (const core::Contact& c : *end.contacts) {
+    double f = 0.0;
+    for (const core::ContactPoint& p : c.points) f += p.normalForce;
+    if (f > 1e-9) loads.push_back(f);
+  }
+  std::sort(loads.begin(), loads.end());
+  const double m = M_PI / 6.0;
+  REQUIRE(loads.size() == 3);
+  for (int k = 0; k < 3; ++k) CHECK(loads[k] == Approx((k + 1) * m).epsilon(1e-6));
+}
+
+TEST_CASE("run --from refuses box options and unreadable files with one line, exit 2 and no output") {
+  ConfpackSession s("cmd_run_from_bad");
+  core::writePacking(looseColumn(), s.dir / "column.json");
+  const auto widthToo = s.run("run --from column.json --width 5 --out out");
+  CHECK(widthToo.code == 2);
+  CHECK(widthToo.err.find("drop --width") != std::string::npos);
+  CHECK(testing::lineCount(widthToo.err) == 1);
+  const auto missing = s.run("run --from missing.json --out out");
+  CHECK(missing.code == 2);
+  CHECK(missing.err.find("missing.json") != std::string::npos);
+  CHECK(testing::lineCount(missing.err) == 1);
+  CHECK(!fs::exists(s.dir / "out"));
+}
