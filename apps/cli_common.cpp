@@ -116,13 +116,15 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
       ->capture_default_str();
 }
 
-std::string oneLineFailure(const CLI::App* /*app*/, const std::exception& e) {
+std::string oneLineFailure(const CLI::App* app, const std::exception& e) {
+  while (app != nullptr && app->get_parent() != nullptr) app = app->get_parent();
+  const std::string program = app != nullptr && !app->get_name().empty() ? app->get_name() : "confpack";
   std::string what = e.what();
   // CLI11 messages can carry a trailing newline; keep the promise of one line.
   for (char& c : what)
     if (c == '\n') c = ' ';
   while (!what.empty() && what.back() == ' ') what.pop_back();
-  return fmt::format("confpack: error: {} (see --help)\n", what);
+  return fmt::format("{}: error: {} (see --help)\n", program, what);
 }
 
 namespace {
@@ -130,10 +132,23 @@ namespace {
   std::string what = e.what();
   for (char& c : what)
     if (c == '\n') c = ' ';
-  std::fprintf(stderr, "confpack %.*s: error: %s\n", static_cast<int>(command.size()), command.data(), what.c_str());
+  // "run" is a subcommand of confpack; "confpack-bench" a program of its own.
+  const std::string label = command.starts_with("confpack") ? std::string(command) : "confpack " + std::string(command);
+  std::fprintf(stderr, "%s: error: %s\n", label.c_str(), what.c_str());
   throw CLI::RuntimeError(code);
 }
 }  // namespace
+
+int parseAndRun(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // help -> 0; RuntimeError -> its code, silently
+    if (code == kExitOk || e.get_name() == "RuntimeError") return code;
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
 
 void checkInput(std::string_view command, const std::function<void()>& checks) {
   try {

@@ -54,6 +54,11 @@ CLI::Validator unsignedInteger();    ///< digits only (CLI11 wraps "-1" to 2^64 
 /// The CLI11 failure message of `confpack`: one line, "confpack: error: <what> (see --help)".
 std::string oneLineFailure(const CLI::App* app, const std::exception& e);
 
+/// Parses the command line and runs the chosen callbacks; returns the exit code: 0 (help
+/// included), the code of a RuntimeError the work raised, or kExitBadInput for every other parse
+/// failure (unknown flag, bad value, missing --out), whatever CLI11's own numbering says.
+int parseAndRun(CLI::App& app, int argc, char** argv);
+
 /// Runs input checks of subcommand `command`: a std::exception becomes one line
 /// "confpack <command>: error: <what>" and exit code 2 (CLI::RuntimeError).
 void checkInput(std::string_view command, const std::function<void()>& checks);

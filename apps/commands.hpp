@@ -16,6 +16,5 @@ void registerAnalyze(CLI::App& app);    ///< analyse a packing file (apps/cmd_an
 void registerSweep(CLI::App& app);      ///< run a study (apps/cmd_sweep.cpp)
 void registerReport(CLI::App& app);     ///< tables and figures of a study (apps/cmd_report.cpp)
 void registerReproduce(CLI::App& app);  ///< the confinement study at a scale (apps/cmd_reproduce.cpp)
-void registerBench(CLI::App& app);      ///< backend timings (apps/cmd_bench.cpp)
 
 }  // namespace confpack::app

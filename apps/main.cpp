@@ -22,7 +22,6 @@ int main(int argc, char** argv) {
   registerSweep(app);
   registerReport(app);
   registerReproduce(app);
-  registerBench(app);
 
   // CLI11 answers a misspelt subcommand with "A subcommand is required"; name it instead.
   if (argc > 1 && argv[1][0] != '-') {
@@ -37,14 +36,5 @@ int main(int argc, char** argv) {
       return kExitBadInput;
     }
   }
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);  // help -> 0; RuntimeError -> its code, silently
-    // Every other parse failure (unknown flag, bad value, missing --out) is bad input: exit 2,
-    // whatever CLI11's own numbering says.
-    if (code == kExitOk || e.get_name() == "RuntimeError") return code;
-    return kExitBadInput;
-  }
-  return kExitOk;
+  return parseAndRun(app, argc, argv);
 }

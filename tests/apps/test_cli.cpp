@@ -31,7 +31,7 @@ TEST_CASE("every subcommand has --help") {
   ConfpackSession s("cli_help");
   const CommandResult root = s.run("--help");
   CHECK(root.code == 0);
-  for (const char* sub : {"deposit", "run", "analyze", "sweep", "report", "reproduce", "bench"}) {
+  for (const char* sub : {"deposit", "run", "analyze", "sweep", "report", "reproduce"}) {
     INFO(sub);
     CHECK(root.out.find(sub) != std::string::npos);
     const CommandResult r = s.run(std::string(sub) + " --help");
@@ -91,7 +91,7 @@ TEST_CASE("every subcommand refuses an unknown flag with one line and exit 2") {
   // A placeholder answers "not implemented yet"; a real subcommand refuses the flag at parse time.
   // Either way nothing runs (no real work in this test: a default `run` would take minutes).
   ConfpackSession s("cli_unknown_flag");
-  for (const char* sub : {"deposit", "run", "analyze", "sweep", "report", "reproduce", "bench"}) {
+  for (const char* sub : {"deposit", "run", "analyze", "sweep", "report", "reproduce"}) {
     INFO(sub);
     const CommandResult r = s.run(std::string(sub) + " --no-such-flag-for-tests");
     INFO("stderr: " << r.err);

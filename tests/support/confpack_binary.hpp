@@ -1,11 +1,13 @@
 #pragma once
-// Runs the real `confpack` binary (CONFPACK_BINARY, set by tests/CMakeLists.txt) as a user runs
-// it, in a scratch folder of its own, with its exit code and its stdout and stderr.
+// Runs a real binary (`confpack`, CONFPACK_BINARY, or `confpack-bench`, CONFPACK_BENCH_BINARY, set
+// by tests/CMakeLists.txt) as a user runs it, in a scratch folder of its own, with its exit code
+// and its stdout and stderr.
 #include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/support/read_file.hpp"
@@ -18,20 +20,22 @@ struct CommandResult {
   std::string out, err;
 };
 
-/// A scratch folder (see scratch.hpp) removed at the end, in which `confpack` runs.
+/// A scratch folder (see scratch.hpp) removed at the end, in which `program` runs.
 struct ConfpackSession {
   std::filesystem::path dir;
+  std::string program;
 
-  explicit ConfpackSession(const std::string& name) : dir(freshDir(name)) {}
+  explicit ConfpackSession(const std::string& name, std::string program = CONFPACK_BINARY)
+      : dir(freshDir(name)), program(std::move(program)) {}
   ~ConfpackSession() { std::filesystem::remove_all(dir); }
   ConfpackSession(const ConfpackSession&) = delete;
   ConfpackSession& operator=(const ConfpackSession&) = delete;
 
-  /// Runs `confpack <args>` inside the folder. stdout and stderr are captured beside it, not in
+  /// Runs `program <args>` inside the folder. stdout and stderr are captured beside it, not in
   /// it, so that the folder shows only what confpack wrote.
   CommandResult run(const std::string& args) const {
     const std::filesystem::path outFile = dir.string() + ".stdout", errFile = dir.string() + ".stderr";
-    const std::string cmd = "cd '" + dir.string() + "' && '" + std::string(CONFPACK_BINARY) + "' " + args + " > '" +
+    const std::string cmd = "cd '" + dir.string() + "' && '" + program + "' " + args + " > '" +
                             outFile.string() + "' 2> '" + errFile.string() + "'";
     const int status = std::system(cmd.c_str());
     CommandResult r;

@@ -1,5 +1,5 @@
 #pragma once
-// `confpack bench`: the two backends on the same deposits, in one process (issue 7).
+// `confpack-bench`: the two backends on the same deposits, in one process.
 //
 // Cases:
 //   msp-w10  monodisperse spheres, L_x = 20, W = 10, h = 16 (about 3,700 grains at phi 0.6)
@@ -17,7 +17,7 @@
 
 #include "study/run_pipeline.hpp"
 
-namespace confpack::app {
+namespace confpack::bench {
 
 struct BenchDef {
   std::vector<std::string> cases = {"msp-w10", "mpp-w10", "scaling"};  ///< which cases to run
@@ -44,4 +44,4 @@ const std::vector<std::string>& benchCaseNames();
 nlohmann::json runBench(const BenchDef& def, const std::function<void(const std::string&)>& log = {},
                         const study::RunProgressFn& progress = {});
 
-}  // namespace confpack::app
+}  // namespace confpack::bench

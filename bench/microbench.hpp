@@ -1,5 +1,5 @@
 #pragma once
-// `confpack bench --micro`: Google Benchmark micro-benchmarks of the hot phases of the nscd
+// `confpack-bench --micro`: Google Benchmark micro-benchmarks of the hot phases of the nscd
 // backend (issue 7), run in-process. Rates are items_per_second, with one item being:
 //   BroadPhase/spheres/N        a grain (BroadPhase::findPairs over the N grains of a geometric
 //                               deposit, biperiodic box of height 16 sized for N)
@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace confpack::app {
+namespace confpack::bench {
 
 struct MicroBenchDef {
   std::string filter = ".";  ///< regex over benchmark names (Google Benchmark's --benchmark_filter; a
@@ -45,4 +45,4 @@ void validateMicroBench(const MicroBenchDef& def);
 /// Google Benchmark keeps global state: call at most once per process.
 void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out);
 
-}  // namespace confpack::app
+}  // namespace confpack::bench

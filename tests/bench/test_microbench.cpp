@@ -1,5 +1,5 @@
-// `confpack bench --micro` (apps/microbench.hpp): the Google Benchmark micro-benchmarks of the nscd
-// phases, run through the real binary (CONFPACK_BINARY) as a user runs them.
+// `confpack-bench --micro` (bench/microbench.hpp): the Google Benchmark micro-benchmarks of the nscd
+// phases, run through the real binary (CONFPACK_BENCH_BINARY) as a user runs them.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -17,9 +17,9 @@ using confpack::testing::ConfpackSession;
 using confpack::testing::lineCount;
 
 TEST_CASE("bench --micro writes Google Benchmark's JSON with a positive sphere-sphere rate") {
-  ConfpackSession s("micro_run");
+  ConfpackSession s("micro_run", CONFPACK_BENCH_BINARY);
   const CommandResult r = s.run(
-      "bench --micro --micro-filter 'NarrowPhase/sphere-sphere' --micro-repetitions 1 "
+      "--micro --micro-filter 'NarrowPhase/sphere-sphere' --micro-repetitions 1 "
       "--micro-min-time 0.01 --out m.json");
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -46,9 +46,9 @@ TEST_CASE("bench --micro writes Google Benchmark's JSON with a positive sphere-s
 }
 
 TEST_CASE("bench --micro with repetitions reports the aggregates only, median included") {
-  ConfpackSession s("micro_reps");
+  ConfpackSession s("micro_reps", CONFPACK_BENCH_BINARY);
   const CommandResult r = s.run(
-      "bench --micro --micro-filter 'NarrowPhase/sphere-wall' --micro-repetitions 2 "
+      "--micro --micro-filter 'NarrowPhase/sphere-wall' --micro-repetitions 2 "
       "--micro-min-time 0.005 --out m.json");
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -65,13 +65,13 @@ TEST_CASE("bench --micro with repetitions reports the aggregates only, median in
 }
 
 TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing written") {
-  ConfpackSession s("micro_bad");
+  ConfpackSession s("micro_bad", CONFPACK_BENCH_BINARY);
   for (const char* args :
-       {"bench --micro --case msp-w10 --out m.json", "bench --micro --scale 0.5 --out m.json",
-        "bench --micro --threads 2 --out m.json", "bench --micro --micro-repetitions 0 --out m.json",
-        "bench --micro --micro-repetitions two --out m.json", "bench --micro --micro-min-time -1 --out m.json",
-        "bench --micro --micro-filter 'NoSuchBenchmark' --out m.json", "bench --micro --micro-filter '(' --out m.json",
-        "bench --micro-filter 'NarrowPhase' --out m.json", "bench --micro --out no/such/dir/m.json"}) {
+       {"--micro --case msp-w10 --out m.json", "--micro --scale 0.5 --out m.json",
+        "--micro --threads 2 --out m.json", "--micro --micro-repetitions 0 --out m.json",
+        "--micro --micro-repetitions two --out m.json", "--micro --micro-min-time -1 --out m.json",
+        "--micro --micro-filter 'NoSuchBenchmark' --out m.json", "--micro --micro-filter '(' --out m.json",
+        "--micro-filter 'NarrowPhase' --out m.json", "--micro --out no/such/dir/m.json"}) {
     INFO(args);
     const CommandResult r = s.run(args);
     CHECK(r.code == 2);
@@ -82,9 +82,9 @@ TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing wri
 }
 
 TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both solvers over a real contact network") {
-  ConfpackSession s("micro_sweep");
+  ConfpackSession s("micro_sweep", CONFPACK_BENCH_BINARY);
   const CommandResult r = s.run(
-      "bench --micro --micro-filter '/2000$' --micro-repetitions 1 --micro-min-time 0.01 "
+      "--micro --micro-filter '/2000$' --micro-repetitions 1 --micro-min-time 0.01 "
       "--out m.json");
   INFO(r.err);
   REQUIRE(r.code == 0);

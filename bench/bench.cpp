@@ -1,4 +1,4 @@
-#include "apps/bench.hpp"
+#include "bench/bench.hpp"
 
 #include <fmt/format.h>
 
@@ -16,7 +16,7 @@
 #include "core/deposition.hpp"
 #include "study/run_pipeline.hpp"
 
-namespace confpack::app {
+namespace confpack::bench {
 
 namespace {
 
@@ -282,4 +282,4 @@ nlohmann::json runBench(const BenchDef& def, const std::function<void(const std:
   return {{"machine", machineInfo()}, {"cases", cases}};
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::bench

@@ -1,23 +1,30 @@
-// `confpack bench`: nscd against Bullet on the same deposits, in one process (issue 7).
-// Writes bench.json (shape in the README's performance section) and prints one line per case.
-// With --micro it runs the Google Benchmark micro-benchmarks of the nscd phases instead
-// (apps/microbench.hpp) and writes Google Benchmark's JSON report.
+// confpack-bench: nscd against Bullet on the same deposits, in one process. Writes bench.json
+// (its shape in docs/performance.md, "The bench") and prints one line per case. With --micro it
+// runs the Google Benchmark micro-benchmarks of the nscd phases instead (bench/microbench.hpp)
+// and writes Google Benchmark's JSON report. Its own executable, so that the product binary
+// carries neither Google Benchmark nor code that reaches into nscd's internals.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <memory>
 
-#include "apps/bench.hpp"
+#include "bench/bench.hpp"
 #include "apps/cli_common.hpp"
-#include "apps/commands.hpp"
-#include "apps/microbench.hpp"
+#include "bench/microbench.hpp"
 #include "apps/progress.hpp"
 #include "core/packing_io.hpp"
 
-namespace confpack::app {
+namespace confpack::bench {
 
 namespace {
+
+using app::applyThreads;
+using app::checkInput;
+using app::nonNegativeNumber;
+using app::positiveNumber;
+using app::Progress;
+using app::runWork;
 
 struct BenchState {
   BenchDef def;
@@ -32,7 +39,7 @@ struct BenchState {
 void runMicroCommand(BenchState& st) {
   // The whole-run default name would mislabel a micro-benchmark report.
   if (!st.outGiven) st.out = "micro.json";
-  checkInput("bench", [&] {
+  checkInput("confpack-bench", [&] {
     st.microDef.seed = st.def.seed;
     validateMicroBench(st.microDef);
     if (std::filesystem::is_directory(st.out))
@@ -41,7 +48,7 @@ void runMicroCommand(BenchState& st) {
     if (!std::filesystem::is_directory(dir))
       throw std::invalid_argument(fmt::format("--out {}: directory {} does not exist", st.out.string(), dir.string()));
   });
-  runWork("bench", [&] {
+  runWork("confpack-bench", [&] {
     runMicroBench(st.microDef, st.out);
     fmt::print("bench: wrote {}\n", st.out.string());
   });
@@ -49,7 +56,7 @@ void runMicroCommand(BenchState& st) {
 
 void runBenchCommand(BenchState& st) {
   if (st.micro) return runMicroCommand(st);
-  checkInput("bench", [&] {
+  checkInput("confpack-bench", [&] {
     if (!st.cases.empty()) st.def.cases = st.cases;
     for (const std::string& c : st.def.cases)
       if (std::find(benchCaseNames().begin(), benchCaseNames().end(), c) == benchCaseNames().end())
@@ -57,7 +64,7 @@ void runBenchCommand(BenchState& st) {
     if (std::filesystem::is_directory(st.out))
       throw std::invalid_argument(fmt::format("--out {} is a directory; give a file name", st.out.string()));
   });
-  runWork("bench", [&] {
+  runWork("confpack-bench", [&] {
     applyThreads(st.def.threads);
     // A full bench runs for hours: each compaction reports its progress (simulated time, steps,
     // iterations, equilibrium ratios) between the lines that say which case and backend ran.
@@ -70,14 +77,8 @@ void runBenchCommand(BenchState& st) {
   });
 }
 
-}  // namespace
-
-void registerBench(CLI::App& app) {
-  auto st = std::make_shared<BenchState>();
-  auto* sub = app.add_subcommand(
-      "bench",
-      "Time nscd against Bullet on the same packings (bench.json), or with --micro the nscd phases alone "
-      "(Google Benchmark, micro.json)");
+/// The options of confpack-bench, on the program's own (root) command.
+void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
   auto* cases = sub->add_option("--case", st->cases, "Cases to run: msp-w10, mpp-w10, scaling (default: all)");
   sub->add_option("--out", st->out, "Output file (micro.json with --micro)")->capture_default_str();
   auto* timeLimit = sub->add_option("--time-limit", st->def.timeLimit, "Simulated time limit of each compaction [t0]")
@@ -103,7 +104,7 @@ void registerBench(CLI::App& app) {
       sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
   auto* adaptive = sub->add_flag("--adaptive-dt", st->def.adaptiveDt,
                                  "msp-w10 and mpp-w10 on the adaptive time step (as run --adaptive-dt), both backends");
-  auto* protocol = addProtocolOption(*sub, st->def.protocol);
+  auto* protocol = app::addProtocolOption(*sub, st->def.protocol);
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   auto* micro = sub->add_flag("--micro", st->micro,
                               "Run the Google Benchmark micro-benchmarks of the nscd phases instead (broad phase, "
@@ -130,4 +131,16 @@ void registerBench(CLI::App& app) {
   });
 }
 
-}  // namespace confpack::app
+}  // namespace
+
+}  // namespace confpack::bench
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "confpack-bench: time nscd against Bullet on the same packings (bench.json), or with --micro the nscd "
+      "phases alone (Google Benchmark, micro.json)"};
+  app.name("confpack-bench");
+  app.failure_message(confpack::app::oneLineFailure);
+  confpack::bench::addBenchOptions(&app, std::make_shared<confpack::bench::BenchState>());
+  return confpack::app::parseAndRun(app, argc, argv);
+}

@@ -1,5 +1,5 @@
-// `confpack bench --case scaling` (apps/bench.hpp): loaded piles timed with both backends and the
-// exponents fitted, run through the real binary (CONFPACK_BINARY) as a user runs it.
+// `confpack-bench --case scaling` (bench/bench.hpp): loaded piles timed with both backends and the
+// exponents fitted, run through the real binary (CONFPACK_BENCH_BINARY) as a user runs it.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -19,12 +19,12 @@ using confpack::testing::ConfpackSession;
 // whole compaction), not of the first steps after the deposit, where grains barely touch (0.17
 // contact rows per grain over steps 200 to 400 of 2,000 spheres, against 3.3 after 4 t0).
 TEST_CASE("bench --case scaling times loaded piles with both backends and fits the exponents") {
-  ConfpackSession s("bench_scaling");
+  ConfpackSession s("bench_scaling", CONFPACK_BENCH_BINARY);
   // glibc's tunables change the memory the solver runs on (2 MiB pages): the bench records them.
   const char* tunables = "glibc.malloc.hugetlb=1";
   REQUIRE(::setenv("GLIBC_TUNABLES", tunables, 1) == 0);
   const CommandResult r = s.run(
-      "bench --case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --out b.json");
+      "--case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --out b.json");
   ::unsetenv("GLIBC_TUNABLES");
   INFO(r.err);
   REQUIRE(r.code == 0);

@@ -1,4 +1,4 @@
-#include "apps/microbench.hpp"
+#include "bench/microbench.hpp"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
@@ -28,7 +28,7 @@
 #include "core/population.hpp"
 #include "core/random.hpp"
 
-namespace confpack::app {
+namespace confpack::bench {
 
 namespace {
 
@@ -571,4 +571,4 @@ void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
   }
 }
 
-}  // namespace confpack::app
+}  // namespace confpack::bench
