@@ -9,7 +9,12 @@
 // dropped silently.
 //
 // Figures: for each one a CSV with its data, a gnuplot script and, when gnuplot is installed, the
-// SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts.
+// SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts; a
+// figure gnuplot fails on says why in its place (study/report_figures.hpp).
+//
+// The report is a document (study/report_document.hpp) that one function per section fills and
+// that renders to both files.
+#include <chrono>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -59,11 +64,13 @@ std::map<std::string, std::optional<double>> flattenResult(const nlohmann::json&
 
 struct ReportOptions {
   std::filesystem::path gnuplot = "gnuplot";  ///< executable; empty = do not draw figures
+  std::chrono::milliseconds figureTimeout = std::chrono::seconds(120);  ///< gnuplot is killed after this, per figure
 };
 
 struct ReportSummary {
   std::size_t runs = 0, done = 0, failed = 0, missing = 0, unequilibrated = 0;
   std::size_t figures = 0;
+  std::vector<std::string> figureErrors;  ///< "figure STEM: gnuplot failed: ..." per figure not drawn
   bool gnuplotUsed = false;
   std::filesystem::path html, markdown;
 };
