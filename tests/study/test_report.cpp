@@ -203,3 +203,29 @@ TEST_CASE("report without gnuplot keeps the data and says so") {
   CHECK_FALSE(fs::exists(dir / "report" / "figures" / "phi_vs_invW.svg"));
   fs::remove_all(dir);
 }
+
+TEST_CASE("report with a gnuplot that fails: each figure says so by name, the rest of the report is written") {
+  const fs::path dir = makeStudy("badgnuplot", false);
+  const fs::path gnuplot = dir / "failing gnuplot";
+  std::ofstream(gnuplot) << "#!/bin/sh\n[ \"$1\" = --version ] && exit 0\necho \"cannot draw $1\" >&2\nexit 2\n";
+  fs::permissions(gnuplot, fs::perms::owner_all);
+  study::ReportOptions o;
+  o.gnuplot = gnuplot;
+  const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
+  CHECK(s.gnuplotUsed);
+  CHECK(s.figures > 0);
+  CHECK(s.figureErrors.size() == s.figures);
+  CHECK_THAT(s.figureErrors.front(),
+             Catch::StartsWith("figure phi_vs_invW: gnuplot failed: exited with status 2: cannot draw phi_vs_invW.gp"));
+  const std::string md = slurp(s.markdown);
+  const std::string html = slurp(s.html);
+  CHECK(md.find("*Figure phi_vs_invW: phi against d_L/W with the fits phi_bulk - C/W (biperiodic at 0)* (not drawn: "
+                "gnuplot failed: exited with status 2: cannot draw phi_vs_invW.gp (its output: "
+                "figures/phi_vs_invW.log); data in") != std::string::npos);
+  CHECK(html.find("(not drawn: gnuplot failed: exited with status 2") != std::string::npos);
+  CHECK(html.find("<svg") == std::string::npos);
+  CHECK(md.find("| MSP x_S=0 mu_w=0 | nscd | 4 | 0.6400 ± ") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "report" / "figures" / "phi_vs_invW.svg"));
+  CHECK(fs::exists(dir / "report" / "figures" / "phi_vs_invW.log"));
+  fs::remove_all(dir);
+}
