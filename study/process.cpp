@@ -50,8 +50,7 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOpti
   const std::string outAbs =
       options.output.empty() ? std::string("/dev/null") : std::filesystem::absolute(options.output).string();
   if (!dir.empty()) posix_spawn_file_actions_addchdir_np(&setup.actions, dir.c_str());
-  posix_spawn_file_actions_addopen(&setup.actions, STDOUT_FILENO, outAbs.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
+  posix_spawn_file_actions_addopen(&setup.actions, STDOUT_FILENO, outAbs.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&setup.actions, STDOUT_FILENO, STDERR_FILENO);
 
   std::vector<char*> args;

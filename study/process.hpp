@@ -10,17 +10,17 @@
 namespace confpack::study {
 
 struct ProcessOptions {
-  std::filesystem::path workDir;  ///< the child's working directory; empty = ours
-  std::filesystem::path output;   ///< file that receives stdout and stderr; empty = /dev/null
+  std::filesystem::path workDir;         ///< the child's working directory; empty = ours
+  std::filesystem::path output;          ///< file that receives stdout and stderr; empty = /dev/null
   std::chrono::milliseconds timeout{0};  ///< killed (SIGKILL) after this long; 0 = no limit
 };
 
 struct ProcessResult {
   bool started = false;
-  int exitCode = -1;     ///< when it exited
-  int signal = 0;        ///< when a signal ended it
+  int exitCode = -1;  ///< when it exited
+  int signal = 0;     ///< when a signal ended it
   bool timedOut = false;
-  std::string error;     ///< why it did not start
+  std::string error;  ///< why it did not start
   bool ok() const { return started && !timedOut && signal == 0 && exitCode == 0; }
   /// "exited with status 3", "killed by signal 9", "timed out after 2 s (killed)", "could not start: ..."
   std::string describe(std::chrono::milliseconds timeout) const;

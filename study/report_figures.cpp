@@ -54,7 +54,10 @@ std::string gnuplotScript(const Plot& p) {
     if (hasErr)
       terms.push_back(fmt::format("'{}.csv' skip 1 using {}:3:4 with yerrorbars {} notitle", p.stem, sel, style));
     terms.push_back(fmt::format("'{}.csv' skip 1 using {}:3 with {} {} title \"{}\" noenhanced", p.stem, sel,
-                                !s.markers ? "lines" : s.lines ? "linespoints" : "points", style, s.name));
+                                !s.markers ? "lines"
+                                : s.lines  ? "linespoints"
+                                           : "points",
+                                style, s.name));
   }
   for (const std::string& f : p.functions) terms.push_back(f);
   gp << "plot " << (terms.empty() ? std::string("NaN notitle") : "\\\n  ");
@@ -80,20 +83,20 @@ Figure FigureWriter::draw(const Plot& p) {
 
   Figure f{p.stem, p.caption, {}, {}};
   if (!available_) return f;
-  if (std::string why = runGnuplot(p.stem); !why.empty()) {
+  std::string svg;
+  if (std::string why = runGnuplot(p.stem, svg); !why.empty()) {
     f.error = fmt::format("gnuplot failed: {} (its output: figures/{}.log)", why, p.stem);
     errors_.push_back(fmt::format("figure {}: {}", p.stem, f.error));
     // A drawing left by a failed run is not kept: it would read as the figure.
     fs::remove(dir_ / (p.stem + ".svg"));
     return f;
   }
-  f.svg = slurp(dir_ / (p.stem + ".svg"));
   // Inline SVG in HTML must not carry the XML declaration.
-  if (const auto pos = f.svg.find("<svg"); pos != std::string::npos) f.svg = f.svg.substr(pos);
+  f.svg = svg.substr(svg.find("<svg"));
   return f;
 }
 
-std::string FigureWriter::runGnuplot(const std::string& stem) {
+std::string FigureWriter::runGnuplot(const std::string& stem, std::string& text) {
   const fs::path log = dir_ / (stem + ".log");
   const fs::path svg = dir_ / (stem + ".svg");
   fs::remove(svg);  // an SVG of an earlier report is not this run's drawing
@@ -102,10 +105,9 @@ std::string FigureWriter::runGnuplot(const std::string& stem) {
     const std::string said = lastLine(slurp(log));
     return r.describe(timeout_) + (said.empty() ? "" : ": " + said);
   }
-  std::error_code ec;
   if (!fs::exists(svg)) return fmt::format("no {}.svg written", stem);
-  if (fs::file_size(svg, ec) == 0) return fmt::format("{}.svg is empty", stem);
-  const std::string text = slurp(svg);
+  text = slurp(svg);
+  if (text.empty()) return fmt::format("{}.svg is empty", stem);
   if (text.find("<svg") == std::string::npos || text.find("</svg>") == std::string::npos)
     return fmt::format("{}.svg is not a complete SVG", stem);
   fs::remove(log);

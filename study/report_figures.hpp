@@ -20,7 +20,7 @@ struct Series {
   bool dashed = false;  ///< second backend
   bool lines = true;
   std::vector<std::array<double, 3>> points;  ///< x, y, err
-  bool markers = true;  ///< false: a plain line (dense profiles)
+  bool markers = true;                        ///< false: a plain line (dense profiles)
 };
 
 struct Plot {
@@ -49,7 +49,8 @@ class FigureWriter {
   Figure draw(const Plot& p);
 
  private:
-  std::string runGnuplot(const std::string& stem);  // "" or why it failed
+  // "" with the SVG in text, or why it failed.
+  std::string runGnuplot(const std::string& stem, std::string& text);
 
   std::filesystem::path dir_;
   std::filesystem::path gnuplot_;
