@@ -14,7 +14,7 @@ TEST_CASE("csv: metadata skipped, header named, non-numbers NaN, ragged rows dro
   CHECK(t->rows[0] == std::vector<double>{0.0, 0.5});
   CHECK(std::isnan(t->rows[1][1]));
   CHECK(t->rows[2] == std::vector<double>{3.0, 0.7});
-  CHECK_FALSE(study::parseCsv("y\n1\n2\n"));    // one column: not a profile
+  CHECK_FALSE(study::parseCsv("y\n1\n2\n"));        // one column: not a profile
   CHECK_FALSE(study::parseCsv("# only\ny,phi\n"));  // no row
   CHECK_FALSE(study::readCsv("/nonexistent/phi_y.csv"));
 }

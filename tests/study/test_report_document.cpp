@@ -15,7 +15,8 @@ namespace {
 std::string unescapeHtml(std::string s) {
   for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
            {"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&amp;", "&"}}) {
-    for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size())) s.replace(p, from.size(), to);
+    for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size()))
+      s.replace(p, from.size(), to);
   }
   return s;
 }
@@ -90,9 +91,10 @@ TEST_CASE("document: blocks come out once each, in order, in both renderings") {
   CHECK(md.find("*Figure fig_b: failed one* (not drawn: gnuplot failed: exited with status 3; data in "
                 "[figures/fig_b.csv](figures/fig_b.csv), script figures/fig_b.gp)") != std::string::npos);
   CHECK(html.find("<title>Report &lt;1&gt;</title>") != std::string::npos);
-  const std::vector<std::string> inOrder = {"<h1>Report &lt;1&gt;</h1>", "<p>first &amp; only</p>", "<p>(no data)</p>",
-                                            "<li>one</li>", "<figure><svg>A</svg>",
-                                            "(not drawn: gnuplot failed: exited with status 3; data in figures/fig_b.csv)"};
+  const std::vector<std::string> inOrder = {
+      "<h1>Report &lt;1&gt;</h1>", "<p>first &amp; only</p>",
+      "<p>(no data)</p>",          "<li>one</li>",
+      "<figure><svg>A</svg>",      "(not drawn: gnuplot failed: exited with status 3; data in figures/fig_b.csv)"};
   std::size_t at = 0;
   for (const std::string& s : inOrder) {
     const std::size_t p = html.find(s);

@@ -19,7 +19,8 @@ namespace {
 // An executable shell script standing in for gnuplot: `--version` succeeds, anything else runs body.
 fs::path fakeGnuplot(const fs::path& dir, const std::string& body) {
   const fs::path p = dir / "fake gnuplot's \"bin\"";
-  std::ofstream(p) << "#!/bin/sh\nif [ \"$1\" = --version ]; then echo 'gnuplot 0.0 fake'; exit 0; fi\n" << body << "\n";
+  std::ofstream(p) << "#!/bin/sh\nif [ \"$1\" = --version ]; then echo 'gnuplot 0.0 fake'; exit 0; fi\n"
+                   << body << "\n";
   fs::permissions(p, fs::perms::owner_all);
   return p;
 }
@@ -56,7 +57,7 @@ TEST_CASE("figures: a gnuplot that fails, times out or writes an empty SVG fails
     REQUIRE(w.errors().size() == 1);
     CHECK(w.errors()[0].rfind("figure fig: gnuplot failed: ", 0) == 0);
     CHECK_FALSE(fs::exists(figures / "fig.svg"));  // a broken drawing is not kept
-    CHECK(fs::exists(figures / "fig.log"));         // gnuplot's output is
+    CHECK(fs::exists(figures / "fig.log"));        // gnuplot's output is
     CHECK(fs::exists(figures / "fig.csv"));
     CHECK(fs::exists(figures / "fig.gp"));
   }
@@ -73,8 +74,9 @@ TEST_CASE("figures: gnuplot runs in the figures folder with the script's name, w
   const fs::path figures = dir / "fig ures 'x'";
   // The fake records its working directory and arguments, then draws.
   const fs::path fake = fakeGnuplot(
-      dir, "pwd > args.txt; printf '%s\\n' \"$@\" >> args.txt; printf '<?xml version=\"1.0\"?>\\n<svg>ok</svg>\\n' > "
-           "\"${1%.gp}.svg\"");
+      dir,
+      "pwd > args.txt; printf '%s\\n' \"$@\" >> args.txt; printf '<?xml version=\"1.0\"?>\\n<svg>ok</svg>\\n' > "
+      "\"${1%.gp}.svg\"");
   study::FigureWriter w(figures, fake);
   const study::Figure f = w.draw(tinyPlot("phi_vs_invW"));
   CHECK(f.error.empty());
