@@ -29,9 +29,14 @@ void runReportCommand(const ReportState& st) {
     study::ReportOptions o;
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
     const study::ReportSummary s = study::writeReport(st.sweepDir, out, o);
+    // A figure gnuplot failed on is said in its place in the report and here; the rest stands.
+    for (const std::string& e : s.figureErrors) fmt::print(stderr, "confpack report: {}\n", e);
+    const std::string drawn = !s.gnuplotUsed ? (st.noFigures ? " (not drawn: --no-figures)" : " (not drawn: gnuplot unavailable)")
+                              : s.figureErrors.empty() ? ""
+                                                       : fmt::format(" ({} not drawn, see above)", s.figureErrors.size());
     fmt::print("report: {} runs ({} done, {} failed, {} missing, {} not equilibrated), {} figures{}\n  {}\n  {}\n",
-               s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures,
-               s.gnuplotUsed ? "" : " (not drawn: gnuplot unavailable)", s.html.string(), s.markdown.string());
+               s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures, drawn, s.html.string(),
+               s.markdown.string());
   });
 }
 
