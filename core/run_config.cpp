@@ -157,6 +157,9 @@ void RunConfig::validate() const {
       throw std::invalid_argument(fmt::format("compaction.{}: must be a positive number (got {})", name, v));
   };
   positive(k.timeLimit, "time_limit");
+  if (k.timeLimit > kMaxTimeLimit)
+    throw std::invalid_argument(fmt::format("compaction.time_limit: must be at most {:g} t0 (got {:g})", kMaxTimeLimit,
+                                            k.timeLimit));
   positive(k.forceRatio, "force_ratio");
   positive(k.momentRatio, "moment_ratio");
   positive(k.kineticRatio, "kinetic_ratio");

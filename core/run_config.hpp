@@ -20,6 +20,10 @@ enum class Protocol {
 std::string toString(Protocol p);  ///< "dynamic", "quasi-static"
 
 /// Compaction under gravity and its stopping rule (docs/model.md).
+/// Largest accepted time_limit [t0]: 1e9 t0 is some 4e11 fixed steps, far beyond any compaction
+/// (the slowest measured reached rest near 170 t0), and its step count stays exact in a long.
+inline constexpr double kMaxTimeLimit = 1e9;
+
 struct CompactionDef {
   /// Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md, "Time step").
   double dt = 0.0;
@@ -29,7 +33,8 @@ struct CompactionDef {
   /// kAdaptiveGrowth times the step before (study/run_pipeline.hpp, AdaptiveTimeStep).
   bool adaptiveDt = false;
   /// Simulated time after which the run stops unequilibrated [t0]; with the quasi-static
-  /// protocol, after which the finisher takes over if the fall has not ended before.
+  /// protocol, after which the finisher takes over if the fall has not ended before. At most
+  /// kMaxTimeLimit.
   double timeLimit = 400.0;
   int checkInterval = 200;          ///< steps between equilibrium checks [-]
   int frameInterval = 0;            ///< steps between ParaView frames; 0 = first and last only [-]

@@ -118,7 +118,12 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   out.protocol = finisher ? core::Protocol::QuasiStatic : core::Protocol::Dynamic;
   // A fixed step runs ceil(limit / dt) steps, its time counted as steps x dt (no round-off drift);
   // an adaptive one sums its steps until the sum reaches the limit.
-  const long maxSteps = static_cast<long>(std::ceil(timeLimit / out.dt));
+  // A step count a long holds exactly (time_limit is bounded by validation; a tiny --dt is not).
+  const double stepsToLimit = std::ceil(timeLimit / out.dt);
+  if (!(stepsToLimit < 0x1p53))
+    throw std::invalid_argument(fmt::format("compaction: time_limit {:g} t0 at dt {:g} t0 is more steps than can be counted",
+                                            timeLimit, out.dt));
+  const long maxSteps = static_cast<long>(stepsToLimit);
   const AdaptiveTimeStep adaptiveStep(deposit.grains, system.gravity.norm(), out.dt);
   double simTime = 0.0, lastCheckTime = 0.0;
   double dt = out.dt;

@@ -64,6 +64,7 @@ TEST_CASE("bad input is refused with one line, exit 2 and no output directory") 
       {"deposit " + valid + " --pinacoid-alpha 90", "--pinacoid-alpha"},
       {"run " + valid + " --protocol static", "--protocol"},
       {"run " + valid + " --switch-kinetic-ratio 0", "--switch-kinetic-ratio"},
+      {"run " + valid + " --time-limit 1e20", "time_limit"},  // once 0 steps and exit 0 (step count overflow)
       {"deposit --length-x 6", "--out"},                                      // missing --out
       {"deposit " + valid + " --shape pinacoid --pinacoid-E 3", "pinacoid"},  // no ridge: refused by validate()
       {"", "subcommand"},

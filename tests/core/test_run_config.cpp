@@ -73,6 +73,8 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   refused([](core::RunConfig& c) { c.box.width = -1; }, "width");
   refused([](core::RunConfig& c) { c.population.smallFraction = 101; }, "small fraction");
   refused([](core::RunConfig& c) { c.compaction.timeLimit = 0; }, "compaction.time_limit");
+  // 1e20 t0 once overflowed the step count and ran 0 steps with exit 0.
+  refused([](core::RunConfig& c) { c.compaction.timeLimit = 1e20; }, "compaction.time_limit: must be at most 1e+09");
   refused([](core::RunConfig& c) { c.compaction.dt = -1e-3; }, "compaction.dt");
   refused([](core::RunConfig& c) { c.compaction.checkInterval = 0; }, "compaction.check_interval");
   refused([](core::RunConfig& c) { c.compaction.kineticRatio = -1; }, "compaction.kinetic_ratio");
