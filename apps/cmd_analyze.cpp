@@ -91,25 +91,25 @@ void registerAnalyze(CLI::App& app) {
   auto& o = st->options;
   sub->add_option("--margin", o.region.margin, "Bulk region: clearance from the floor and the free surface [d_L]")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber());
   sub->add_option("--surface-cell", o.region.cellSize, "Free surface: side of the horizontal grid cells [d_L]")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   sub->add_option("--slice", o.profile.slice, "phi(y) slice thickness [d_L]")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   sub->add_option("--lattice-cell", o.interpenetration.cell, "Interpenetration lattice cell side [d_L]")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   sub->add_flag("--no-lattice", st->noLattice, "Skip the lattice bounds of the interpenetration");
   sub->add_option("--force-threshold", o.coordination.forceThreshold,
                   "Force-carrying contact: f_n above this fraction of the mean f_n")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber());
   sub->add_option("--gap-tolerance", o.geometricContacts.absTolerance,
                   "Geometric contacts (files without contacts): absolute gap tolerance [d_L]")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber());
   sub->callback([st] { runAnalyze(*st); });
 }
 

@@ -81,7 +81,7 @@ void registerReproduce(CLI::App& app) {
       ->check(CLI::IsMember({"tiny", "quick", "paper"}))
       ->capture_default_str();
   sub->add_option("--out", st->out, "Study folder (sweep runs, deposits, report/)")->required();
-  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096))->capture_default_str();
   sub->add_flag("--list", st->list, "Print the run table and exit");
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   sub->callback([st] { runReproduceCommand(*st); });

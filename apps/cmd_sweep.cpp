@@ -78,11 +78,11 @@ void registerSweep(CLI::App& app) {
       "(docs/sweeps.md). Resumable: finished runs are never redone.");
   sub->add_option("file", st->file, "Sweep file (JSON, format confpack-sweep)")->required()->check(CLI::ExistingFile);
   sub->add_option("--out", st->out, "Sweep folder (default: the sweep file's name without extension)");
-  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::PositiveNumber);
-  sub->add_option("--threads", st->threads, "Threads per run (default: from the sweep file)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096));
+  sub->add_option("--threads", st->threads, "Threads per run (0: from the sweep file)")->check(CLI::Range(0, 4096));
   sub->add_option("--task-index", st->taskIndex, "This task's slice, 0-based (e.g. $SLURM_ARRAY_TASK_ID)");
   sub->add_option("--task-count", st->taskCount, "Number of tasks sharing the sweep (e.g. $SLURM_ARRAY_TASK_COUNT)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000));
   sub->add_flag("--list", st->list, "Print the run table (with each run's status when the folder exists) and exit");
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   sub->callback([st] { runSweepCommand(*st); });

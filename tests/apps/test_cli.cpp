@@ -45,6 +45,24 @@ TEST_CASE("every subcommand has --help") {
   CHECK(s.entries().empty());
 }
 
+TEST_CASE("range errors say the range in words, not the largest double in 300 digits") {
+  ConfpackSession s("cli_ranges");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"reproduce --scale tiny --jobs 0 --out o", "--jobs: Value 0 not in range 1 to 4096"},
+      {"analyze none.json --slice -1 --out o", "--slice: must be a positive number (got -1)"},
+      {"analyze none.json --margin -1 --out o", "--margin: must be a number >= 0 (got -1)"},
+  };
+  for (const auto& [args, message] : cases) {
+    INFO("confpack " << args);
+    const CommandResult r = s.run(args);
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(message) != std::string::npos);
+    CHECK(r.err.size() < 120);
+    CHECK(s.empty());
+  }
+}
+
 TEST_CASE("bad input is refused with one line, exit 2 and no output directory") {
   ConfpackSession s("cli_bad");
   const std::string valid = "--length-x 6 --width 4 --height 4 --out out";
