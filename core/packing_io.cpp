@@ -441,6 +441,9 @@ void writePacking(const Packing& packing, const std::filesystem::path& path) {
 
 Packing readPacking(const std::filesystem::path& path) {
   const std::string source = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw std::invalid_argument(fmt::format("{}: is a folder, not a packing file", source));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the packing file", source));
   std::ostringstream text;
@@ -450,6 +453,8 @@ Packing readPacking(const std::filesystem::path& path) {
     j = json::parse(text.str());
   } catch (const json::parse_error& e) {
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", source, e.what()));
+  } catch (const json::out_of_range& e) {  // a number beyond a double, e.g. 1e400
+    throw std::invalid_argument(fmt::format("{}: a number out of the range of a double: {}", source, e.what()));
   }
   return packingFromJson(j, source);
 }

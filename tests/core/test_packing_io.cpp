@@ -312,6 +312,12 @@ TEST_CASE("reading a broken or missing file gives one clear message") {
   }
   CHECK_THROWS_WITH(readPacking(dir / "bad.json"), Catch::Contains("bad.json: not valid JSON"));
   CHECK_THROWS_WITH(readPacking(dir / "absent.json"), Catch::Contains("absent.json: cannot open"));
+  CHECK_THROWS_WITH(readPacking(dir), Catch::Contains("is a folder, not a packing file"));
+  {
+    std::ofstream f(dir / "huge.json");
+    f << R"({"format": "confpack-packing", "version": 1, "grains": [{"position": [1e400, 0, 0]}]})";
+  }
+  CHECK_THROWS_WITH(readPacking(dir / "huge.json"), Catch::Contains("huge.json: a number out of the range of a double"));
   fs::remove_all(dir);
 }
 
