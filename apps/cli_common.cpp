@@ -14,6 +14,7 @@
 #endif
 
 #include "backends/backend_factory.hpp"
+#include "core/interrupt.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::app {
@@ -140,6 +141,7 @@ namespace {
 }  // namespace
 
 int parseAndRun(CLI::App& app, int argc, char** argv) {
+  core::installStopHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -165,6 +167,10 @@ void runWork(std::string_view command, const std::function<void()>& work) {
     work();
   } catch (const CLI::RuntimeError&) {
     throw;
+  } catch (const core::Interrupted& e) {
+    // Exit 128 + the signal, as a shell reports a process the signal killed. Staged output has
+    // been removed on the way here (StagedOutput's destructor); a sweep keeps its finished runs.
+    failWith(command, e, 128 + e.signal());
   } catch (const std::exception& e) {
     failWith(command, e, kExitRuntimeFailure);
   }

@@ -12,6 +12,7 @@
 #include "analysis/equilibrium.hpp"
 #include "analysis/interpenetration.hpp"
 #include "backends/backend_factory.hpp"
+#include "core/interrupt.hpp"
 #include "core/packing_io.hpp"
 #include "core/quasi_static_finisher.hpp"
 #include "core/vtk_writer.hpp"
@@ -178,6 +179,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   // the fall.
   bool handOver = false;
   while (adaptive ? simTime < timeLimit : steps < maxSteps) {
+    if (core::stopSignal() != 0)
+      throw core::Interrupted(core::stopSignal(), fmt::format("at t = {:.3g} (step {})", simTime, steps));
     if (adaptive && steps > 0) {
       dt = adaptiveStep.next(dt, backend->states());
       out.dtLargest = std::max(out.dtLargest, dt);
@@ -221,6 +224,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   core::QuasiStaticFinisher finish(def, core::smallestSize(deposit.grains), dt);
   if (handOver) {
     for (long k = 1; k <= def.finisherMaxSteps; ++k) {
+      if (core::stopSignal() != 0)
+        throw core::Interrupted(core::stopSignal(), fmt::format("in finisher step {} of the quasi-static protocol", k));
       timed([&] { finish.step(*backend); });
       const bool last = k == def.finisherMaxSteps;
       const bool frameDue = frames && def.frameInterval > 0 && steps % def.frameInterval == 0;

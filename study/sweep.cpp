@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "backends/backend_factory.hpp"
+#include "core/interrupt.hpp"
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
 
@@ -498,6 +499,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
 
   auto worker = [&]() {
     for (;;) {
+      if (core::stopSignal() != 0) return;  // no new run after SIGINT/SIGTERM
       const std::size_t k = next.fetch_add(1);
       if (k >= total) return;
       const SweepRun& r = runs[todo[k]];
@@ -505,6 +507,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
       const auto t0 = std::chrono::steady_clock::now();
       json result;
       std::string error;
+      bool interrupted = false;
       try {
         // Anything left in an unfinished folder may be half written: start from nothing.
         fs::remove_all(runDir);
@@ -517,6 +520,9 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
         result = run(r.config, runDir, *deposit,
                      [&](double fraction, const std::string& status) { printer.update(tag, fraction, status); });
         printer.remove(tag);
+      } catch (const core::Interrupted&) {
+        // Not a failure: the run's folder has no marker, so the next invocation redoes it.
+        interrupted = true;
       } catch (const std::exception& e) {
         error = e.what();
         if (error.empty()) error = "unknown error";
@@ -524,6 +530,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
         error = "unknown error";
       }
       release(r);
+      if (interrupted) return;
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const std::size_t n = finishedCount.fetch_add(1) + 1;
       const std::string w = r.config.box.periodicY ? "bi" + trimNumber(r.config.box.width)
@@ -573,6 +580,9 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
     worker();  // the calling thread is one of the workers
   }
 
+  if (core::stopSignal() != 0)
+    throw core::Interrupted(core::stopSignal(), fmt::format("after {} of {} runs; the others run when the sweep is started again",
+                                                            finishedCount.load(), total));
   summary.failed = failedCount.load();
   summary.ran = finishedCount.load() - summary.failed;
   summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -1,5 +1,13 @@
-// `confpack run` (apps/cmd_run.cpp) end to end: --from takes the grains of a packing file to rest.
+// `confpack run` (apps/cmd_run.cpp) end to end: --from takes the grains of a packing file to rest;
+// SIGTERM stops a run cleanly.
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <thread>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -74,4 +82,34 @@ TEST_CASE("run --from refuses box options and unreadable files with one line, ex
   CHECK(missing.err.find("missing.json") != std::string::npos);
   CHECK(testing::lineCount(missing.err) == 1);
   CHECK(!fs::exists(s.dir / "out"));
+}
+
+TEST_CASE("SIGTERM stops a run at its next step: one line saying where, exit 143, nothing written") {
+  ConfpackSession s("cmd_run_sigterm");
+  const fs::path err = s.dir.string() + ".err";
+  const pid_t pid = fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    if (::chdir(s.dir.c_str()) != 0) _exit(127);
+    const int out = ::open("/dev/null", O_WRONLY);
+    const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(errFile, 2);
+    // A compaction of about 1,000 spheres for 400 t0: minutes of work, stopped after a second.
+    ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "run", "--length-x", "10", "--width", "10", "--height", "10", "--out",
+            "out", "-q", (char*)nullptr);
+    _exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const std::string message = testing::slurp(err);
+  fs::remove(err);
+  INFO(message);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 143);
+  CHECK(testing::lineCount(message) == 1);
+  CHECK(message.find("confpack run: error: interrupted by SIGTERM") != std::string::npos);
+  CHECK(s.empty());  // neither out/ nor its staging folder
 }

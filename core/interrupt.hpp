@@ -1,0 +1,31 @@
+#pragma once
+// Ctrl-C (SIGINT) and SIGTERM (what a cluster sends a job at its time limit) as a request to stop
+// at the next safe point: the signal handler only records the signal; long loops (a compaction's
+// steps, a sweep's runs) poll stopSignal() and throw Interrupted, so that staged output is removed
+// on the way out and the command can say where it stopped (exit 128 + the signal: 130 or 143).
+#include <stdexcept>
+#include <string>
+
+namespace confpack::core {
+
+/// Thrown at a safe point after SIGINT or SIGTERM.
+class Interrupted : public std::runtime_error {
+ public:
+  /// `where` says where it stopped, e.g. "at t = 3.2 (step 1400)".
+  Interrupted(int signal, const std::string& where);
+  int signal() const { return signal_; }
+
+ private:
+  int signal_;
+};
+
+/// Routes SIGINT and SIGTERM to the stop request (once per process; later calls do nothing).
+void installStopHandlers();
+
+/// The signal that asked to stop, or 0.
+int stopSignal();
+
+/// Records a stop request as the handler does (tests, and code that stops for its own reasons).
+void requestStop(int signal);
+
+}  // namespace confpack::core
