@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -198,6 +199,21 @@ fs::path normalisedTarget(const fs::path& p) {
   while (!t.has_filename() && t.has_parent_path() && t != t.parent_path()) t = t.parent_path();
   return t;
 }
+
+/// Removes the staging folders of `target` (".NAME.partial-PID") whose process is gone: a
+/// command killed with SIGKILL (or by a power cut) could not remove its own.
+void removeStaleStaging(const fs::path& target) {
+  const std::string prefix = "." + target.filename().string() + ".partial-";
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(target.parent_path(), ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.starts_with(prefix)) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
+  }
+}
 }  // namespace
 
 StagedOutput::StagedOutput(const fs::path& target) : target_(normalisedTarget(target)) {
@@ -207,6 +223,7 @@ StagedOutput::StagedOutput(const fs::path& target) : target_(normalisedTarget(ta
     if (p == p.parent_path()) break;
   }
   fs::create_directories(target_.parent_path());
+  removeStaleStaging(target_);
   staging_ = target_.parent_path() / fmt::format(".{}.partial-{}", target_.filename().string(), ::getpid());
   fs::remove_all(staging_);
   fs::create_directory(staging_);

@@ -1,5 +1,8 @@
 // What the subcommands share (apps/cli_common.hpp): an output directory that appears complete or
 // not at all (StagedOutput), --out checks, and JSON written atomically.
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -40,6 +43,27 @@ TEST_CASE("a staged output never committed leaves nothing behind, not even the p
   } catch (const std::runtime_error&) {
   }
   CHECK(fs::is_empty(root));  // no target, no staging folder, no parents
+  fs::remove_all(root);
+}
+
+TEST_CASE("a staged output removes the staging folders of dead processes and leaves live ones") {
+  const fs::path root = confpack::testing::freshDir("cli_common_stale");
+  const pid_t dead = fork();  // a process that has exited and been reaped: its PID is free
+  REQUIRE(dead >= 0);
+  if (dead == 0) _exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string stale = ".run.partial-" + std::to_string(dead);
+  const std::string live = ".run.partial-" + std::to_string(::getppid());  // our parent is alive
+  fs::create_directories(root / stale / "vtk");
+  fs::create_directories(root / live);
+  fs::create_directories(root / ".other.partial-1");  // another target's: not ours to judge
+  {
+    StagedOutput out(root / "run");
+    out.commit();
+  }
+  CHECK_FALSE(fs::exists(root / stale));
+  CHECK(fs::exists(root / live));
+  CHECK(fs::exists(root / ".other.partial-1"));
   fs::remove_all(root);
 }
 
