@@ -302,18 +302,24 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                             "(not run or interrupted), {} done but not equilibrated.",
                             fs::absolute(study.sweepDir).string(), when, CONFPACK_VERSION, summary.runs, summary.done,
                             summary.failed, summary.missing, summary.unequilibrated));
-  doc.paragraph(
-      "How to read the tables: each cell is the mean ± sample standard deviation over the replicas (seeds) that "
-      "finished, with their number n. The difference column is the first backend minus the second with the "
-      "standard error of a difference of independent means, sqrt(s1²/n1 + s2²/n2); (*) marks a difference "
-      "larger than twice its uncertainty. Both backends of one (configuration, seed) compact the same deposit. "
-      "Units: lengths in large-grain diameters d_L, times in sqrt(d_L/g), wall time in seconds.");
+  doc.paragraph("The results come first: a summary per family and backend, then the two backends compared; the "
+                "runs, every quantity per configuration, the fits, the profiles and the cost follow.");
   if (!figuresDrawn)
     doc.paragraph(options.gnuplot.empty()
                       ? "Figures were not drawn (disabled); their CSV data and gnuplot scripts are in figures/."
                       : fmt::format("gnuplot ('{}') was not found: figures are not drawn. Their CSV data and gnuplot "
                                     "scripts are in figures/ (install gnuplot-nox and rerun `confpack report`).",
                                     options.gnuplot.string()));
+}
+
+// How to read the per-configuration tables that follow the summary and the verdict.
+void addReadingGuide(Document& doc) {
+  doc.paragraph(
+      "How to read the tables: each cell is the mean ± sample standard deviation over the replicas (seeds) that "
+      "finished, with their number n. The difference column is the first backend minus the second with the "
+      "standard error of a difference of independent means, sqrt(s1²/n1 + s2²/n2); (*) marks a difference "
+      "larger than twice its uncertainty. Both backends of one (configuration, seed) compact the same deposit. "
+      "Units: lengths in large-grain diameters d_L, times in sqrt(d_L/g), wall time in seconds.");
 }
 
 // Every run with its status; the ones that are missing, failed or not at rest first, with why.
@@ -374,6 +380,14 @@ void addQuantityTable(Document& doc, const StudyView& study, const std::string& 
   }
   doc.table(head, rows);
 }
+
+// The fitted parameters as the fit section and the summary both print them, so the two agree.
+std::string bulkText(const analysis::ConfinementFit& f) { return fmt::format("{:.4f} ± {:.2g}", f.bulk, f.bulkError); }
+std::string cText(const analysis::ConfinementFit& f) { return fmt::format("{:.3f} ± {:.2g}", f.c, f.cError); }
+std::string chiText(const analysis::ConfinementFit& f) {
+  return f.dof > 0 ? fmt::format("{:.3g}/{}", f.chiSquare, f.dof) : "exact (2 points)";
+}
+std::string qText(const analysis::ConfinementFit& f) { return f.quality ? fmt::format("{:.3g}", *f.quality) : "-"; }
 
 // A fit of the geometrical model, per series and backend.
 struct FitRow {
@@ -436,12 +450,12 @@ std::vector<FitRow> addFitSection(Document& doc, const StudyView& study, FigureW
   for (const FitRow& f : fits) {
     std::vector<std::string> row = {seriesText(f.series), f.backend, std::to_string(f.points.size())};
     if (f.fit) {
-      row.push_back(fmt::format("{:.4f} ± {:.2g}", f.fit->bulk, f.fit->bulkError));
-      row.push_back(fmt::format("{:.3f} ± {:.2g}", f.fit->c, f.fit->cError));
+      row.push_back(bulkText(*f.fit));
+      row.push_back(cText(*f.fit));
       row.push_back(fmt::format("{:.3f}", f.fit->zeta()));
       row.push_back(f.fit->weighted ? "weighted" : "unweighted");
-      row.push_back(f.fit->dof > 0 ? fmt::format("{:.3g}/{}", f.fit->chiSquare, f.fit->dof) : "exact (2 points)");
-      row.push_back(f.fit->quality ? fmt::format("{:.3g}", *f.fit->quality) : "-");
+      row.push_back(chiText(*f.fit));
+      row.push_back(qText(*f.fit));
     } else {
       for (int i = 0; i < 5; ++i) row.push_back(i == 0 ? "no fit: " + f.why : "");
     }
@@ -549,6 +563,190 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
     doc.table({"backend", "points", "k = lambda_L / C", "weights"}, originRows);
     doc.figure(figures.draw(byC));
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The answers first: one row per family and backend, then nscd against Bullet
+
+std::string familyName(const SeriesKey& s) {
+  return fmt::format("{}: {} x_S = {}, mu_w = {}", familyOf(s.shape, s.xs),
+                     s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids", num(s.xs),
+                     num(s.mu));
+}
+
+// A number of the summary with its standard error (0 when it has none) as printed.
+struct Estimate {
+  double value = 0.0;
+  double error = 0.0;
+  std::string text;
+};
+
+// One quantity of the summary per (family, backend), with its short definition.
+struct SummaryQuantity {
+  std::string name;
+  std::string definition;
+  std::map<std::pair<SeriesKey, std::string>, Estimate> values;
+};
+
+// Runs of a family and backend: at equilibrium (done, equilibrium/reached true) and in total.
+struct RunCount {
+  std::size_t equilibrated = 0, unequilibrated = 0, done = 0, total = 0;
+};
+
+// What the summary and the verdict show, computed once from the same fits as the fit sections.
+struct StudySummary {
+  std::vector<SummaryQuantity> quantities;
+  std::map<std::pair<SeriesKey, std::string>, RunCount> runs;
+  std::map<std::pair<SeriesKey, std::string>, std::string> phiFitQuality;  // chi²/dof and Q, or why no fit
+};
+
+// phi_bulk and C (or Z_bulk and C_Z) of the fits of one key; nothing when the study has no fit.
+void addFitQuantities(StudySummary& out, const std::vector<FitRow>& fits, const std::string& bulkName,
+                      const std::string& bulkDefinition, const std::string& cName, const std::string& cDefinition) {
+  SummaryQuantity bulk{bulkName, bulkDefinition, {}}, c{cName, cDefinition, {}};
+  for (const FitRow& f : fits)
+    if (f.fit) {
+      bulk.values[{f.series, f.backend}] = {f.fit->bulk, f.fit->bulkError, bulkText(*f.fit)};
+      c.values[{f.series, f.backend}] = {f.fit->c, f.fit->cError, cText(*f.fit)};
+    }
+  if (bulk.values.empty()) return;
+  out.quantities.push_back(std::move(bulk));
+  out.quantities.push_back(std::move(c));
+}
+
+StudySummary summarize(const StudyView& study) {
+  StudySummary out;
+  if (study.keys.count("solid_fraction")) {
+    const std::vector<FitRow> fits = confinementFits(study, "solid_fraction");
+    for (const FitRow& f : fits)
+      out.phiFitQuality[{f.series, f.backend}] =
+          f.fit ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit)) : "no fit: " + f.why;
+    addFitQuantities(out, fits, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
+                     "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
+  }
+  if (study.keys.count("coordination/Z"))
+    addFitQuantities(out, confinementFits(study, "coordination/Z"), "Z_bulk",
+                     "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
+                     "C_Z", "loss of coordination due to the walls, in d_L");
+  const std::string overlap = "interpenetration_percent/exact";
+  SummaryQuantity interpenetration{"interpenetration",
+                                   "volume shared by overlapping grains, % of the grains' volume, mean over every "
+                                   "finished run of the family (± standard error of the mean)",
+                                   {}};
+  for (const SeriesKey& sk : study.seriesKeys())
+    for (const std::string& b : study.backends) {
+      std::vector<double> v;
+      RunCount& count = out.runs[{sk, b}];
+      for (const auto& [k, byBackend] : study.groups) {
+        if (seriesOf(k) != sk || !byBackend.count(b)) continue;
+        for (const RunRecord* r : byBackend.at(b)) {
+          ++count.total;
+          if (r->status != RunStatus::Done) continue;
+          ++count.done;
+          const auto reached = r->values.find("equilibrium/reached");
+          if (reached != r->values.end() && reached->second && *reached->second != 0.0) ++count.equilibrated;
+          if (unequilibrated(*r)) ++count.unequilibrated;
+          const auto it = r->values.find(overlap);
+          if (it != r->values.end() && it->second) v.push_back(*it->second);
+        }
+      }
+      if (v.empty()) continue;
+      const ReplicaStat st = replicaStat(v);
+      const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+      interpenetration.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
+    }
+  if (!interpenetration.values.empty()) out.quantities.push_back(std::move(interpenetration));
+  return out;
+}
+
+void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary) {
+  doc.heading(2, "Summary: the results per family and backend");
+  std::vector<std::string> head = {"family", "backend", "runs at equilibrium / total"};
+  for (const SummaryQuantity& q : summary.quantities) {
+    head.push_back(q.name);
+    if (q.name == "C") head.push_back("phi(W) fit quality");
+  }
+  std::vector<std::vector<std::string>> rows;
+  for (const SeriesKey& sk : study.seriesKeys())
+    for (const std::string& b : study.backends) {
+      const RunCount& n = summary.runs.at({sk, b});
+      if (n.total == 0) continue;
+      std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total)};
+      for (const SummaryQuantity& q : summary.quantities) {
+        const auto it = q.values.find({sk, b});
+        row.push_back(it != q.values.end() ? it->second.text : "-");
+        if (q.name == "C") {
+          const auto fq = summary.phiFitQuality.find({sk, b});
+          row.push_back(fq != summary.phiFitQuality.end() ? fq->second : "-");
+        }
+      }
+      rows.push_back(std::move(row));
+    }
+  doc.table(head, rows);
+  std::vector<std::string> definitions = {
+      "runs at equilibrium: finished runs whose forces and moments balance (equilibrium reached), out of all the "
+      "runs of the family and backend"};
+  for (const SummaryQuantity& q : summary.quantities) {
+    definitions.push_back(q.name + ": " + q.definition);
+    if (q.name == "C")
+      definitions.push_back("phi(W) fit quality: chi² per degree of freedom of the fit over the confined widths and Q, "
+                            "the probability of a chi² at least as large if the law holds (weighted fits)");
+  }
+  definitions.push_back("± values are standard errors; the fits' are from the least squares (docs/model.md).");
+  doc.bullets(definitions);
+}
+
+// nscd against Bullet (the first two backends) for every family and summary quantity.
+void addVerdictSection(Document& doc, const StudyView& study, const StudySummary& summary) {
+  doc.heading(2, "Cross-solver verdict");
+  if (!study.pair()) {
+    doc.paragraph("This study ran a single backend: there is nothing to compare.");
+    return;
+  }
+  const std::string& a = study.backends[0];
+  const std::string& b = study.backends[1];
+  doc.paragraph(fmt::format("{} against {}: the difference {} − {}, its combined standard error sqrt(SE1² + SE2²), "
+                            "and whether it is larger than twice that error.",
+                            a, b, a, b));
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> sentences;
+  for (const SeriesKey& sk : study.seriesKeys()) {
+    std::string text;
+    for (const SummaryQuantity& q : summary.quantities) {
+      const auto ea = q.values.find({sk, a});
+      const auto eb = q.values.find({sk, b});
+      if (ea == q.values.end() || eb == q.values.end()) continue;
+      const double diff = ea->second.value - eb->second.value;
+      const double se = std::hypot(ea->second.error, eb->second.error);
+      const bool known = se > 0.0;
+      const bool differ = known && std::abs(diff) > 2.0 * se;
+      const std::string both = fmt::format("({} against {})", ea->second.text, eb->second.text);
+      rows.push_back({familyName(sk), q.name, ea->second.text, eb->second.text, fmt::format("{:+.3g}", diff),
+                      fmt::format("{:.2g}", se), known ? (differ ? "yes: differ (*)" : "no: agree") : "no standard error"});
+      if (!known)
+        text += fmt::format(" {} and {} give {} {} with no standard error to compare them.", a, b, q.name, both);
+      else if (differ)
+        text += fmt::format(" {} and {} differ on {} by {:.2g} standard errors {}.", a, b, q.name, std::abs(diff) / se,
+                            both);
+      else
+        text += fmt::format(" {} and {} agree on {} within 2 standard errors {}.", a, b, q.name, both);
+    }
+    for (const std::string& backend : {a, b}) {
+      const RunCount& n = summary.runs.at({sk, backend});
+      if (n.done > 0 && n.equilibrated == 0)
+        text += fmt::format(" None of {}'s {} finished runs reached equilibrium: this compares unequilibrated piles.",
+                            backend, n.done);
+      else if (n.unequilibrated > 0)
+        text += fmt::format(" {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
+                            "unequilibrated piles.",
+                            n.unequilibrated, backend, n.done);
+      if (n.done < n.total)
+        text += fmt::format(" {} of {}'s {} runs did not finish.", n.total - n.done, backend, n.total);
+    }
+    if (!text.empty()) sentences.push_back(fmt::format("For {}:{}", familyName(sk), text));
+  }
+  doc.table({"family", "quantity", a, b, a + " − " + b, "combined SE", "|diff| > 2 SE"}, rows);
+  if (!sentences.empty()) doc.bullets(sentences);
 }
 
 // Every quantity of result.json, section by section, with the fits and figures of its section.
@@ -683,6 +881,10 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
 
   Document doc(fmt::format("confpack study report: {}", study.spec.name));
   addIntroduction(doc, study, summary, options, figures.available());
+  const StudySummary results = summarize(study);
+  addSummarySection(doc, study, results);
+  addVerdictSection(doc, study, results);
+  addReadingGuide(doc);
   addRunsSection(doc, study);
   addQuantitySections(doc, study, figures);
   addProfilesSection(doc, study, figures);
