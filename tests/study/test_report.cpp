@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "study/report.hpp"
 #include "study/sweep.hpp"
@@ -22,10 +24,11 @@ using confpack::testing::slurp;
 // Synthetic physics: phi = phi_bulk - C / W with a replica offset delta (s - 2) for seeds 1, 2, 3,
 // so that the replica mean is exactly on the law and the replica std is exactly delta.
 // nscd: phi_bulk = 0.64, C = 0.5; bullet: phi_bulk = 0.63, C = 0.4. Z = 6 - 1.2 / W for both.
+// With sameLaw, bullet follows nscd's law for every quantity.
 constexpr double kDelta = 0.002;
 
-json syntheticResult(const core::RunConfig& cfg) {
-  const bool nscd = cfg.backend == "nscd";
+json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
+  const bool nscd = sameLaw || cfg.backend == "nscd";
   const double phiBulk = nscd ? 0.64 : 0.63;
   const double c = nscd ? 0.5 : 0.4;
   const double offset = kDelta * (static_cast<double>(cfg.seed) - 2.0);
@@ -46,7 +49,7 @@ json syntheticResult(const core::RunConfig& cfg) {
       {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
-fs::path makeStudy(const std::string& name, bool withFailures) {
+fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false) {
   const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const json doc = json::parse(R"({
@@ -61,7 +64,7 @@ fs::path makeStudy(const std::string& name, bool withFailures) {
     // bullet at W = 20 fails for every seed: its cell must read "missing", not vanish.
     if (withFailures && cfg.backend == "bullet" && cfg.box.width == 20.0 && !cfg.box.periodicY)
       throw std::runtime_error("solver diverged");
-    json r = syntheticResult(cfg);
+    json r = syntheticResult(cfg, sameLaw);
     // Seed 3 at W = 10 is not at rest: nscd's finisher ran out of steps, Bullet hit its time limit.
     if (withFailures && cfg.box.width == 10.0 && !cfg.box.periodicY && cfg.seed == 3) {
       r["equilibrium"]["reached"] = false;
@@ -227,5 +230,112 @@ TEST_CASE("report with a gnuplot that fails: each figure says so by name, the re
   CHECK(md.find("| MSP x_S=0 mu_w=0 | nscd | 4 | 0.6400 ± ") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "report" / "figures" / "phi_vs_invW.svg"));
   CHECK(fs::exists(dir / "report" / "figures" / "phi_vs_invW.log"));
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// The cells of the first Markdown table row at or after `from` that starts with `prefix`.
+std::vector<std::string> rowCells(const std::string& md, const std::string& prefix, std::size_t from = 0) {
+  const std::size_t at = md.find(prefix, from);
+  if (at == std::string::npos) return {};
+  std::vector<std::string> cells;
+  std::istringstream line(md.substr(at + 1, md.find('\n', at) - at - 1));
+  for (std::string cell; std::getline(line, cell, '|');)
+    cells.push_back(cell.substr(1, cell.size() >= 2 ? cell.size() - 2 : 0));
+  return cells;
+}
+
+// The verdict section of a report: from its heading to the reading guide.
+std::string verdictOf(const std::string& md) {
+  const std::size_t at = md.find("## Cross-solver verdict");
+  return at == std::string::npos ? std::string() : md.substr(at, md.find("How to read the tables", at) - at);
+}
+
+}  // namespace
+
+TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk and C_Z") {
+  const fs::path dir = makeStudy("summary", false);
+  const study::ReportSummary s = study::writeReport(dir, dir / "report");
+  const std::string md = slurp(s.markdown);
+  const std::string html = slurp(s.html);
+  // Summary, then verdict, then the run table, in both renderings.
+  const std::size_t summaryAt = md.find("## Summary"), verdictAt = md.find("## Cross-solver verdict"),
+                    runsAt = md.find("## Runs");
+  REQUIRE(summaryAt != std::string::npos);
+  CHECK(summaryAt < verdictAt);
+  CHECK(verdictAt < runsAt);
+  CHECK(html.find("<h2>Summary") < html.find("<h2>Cross-solver verdict</h2>"));
+  CHECK(html.find("<h2>Cross-solver verdict</h2>") < html.find("<h2>Runs</h2>"));
+  struct Expected {
+    std::string backend, phiBulk, c;
+  };
+  for (const Expected& e : {Expected{"nscd", "0.6400", "0.500"}, Expected{"bullet", "0.6300", "0.400"}}) {
+    const std::string& backend = e.backend;
+    INFO(backend);
+    // The fit section's rows (phi first, Z second), on the synthetic law.
+    const std::string fitPrefix = "| MSP x_S=0 mu_w=0 | " + backend + " | 4 | ";
+    const auto phiFit = rowCells(md, fitPrefix, runsAt);
+    const auto zFit = rowCells(md, fitPrefix, md.find(fitPrefix, runsAt) + 1);
+    REQUIRE(phiFit.size() > 5);
+    REQUIRE(zFit.size() > 5);
+    CHECK_THAT(phiFit[3], Catch::StartsWith(e.phiBulk + " ± "));
+    CHECK_THAT(phiFit[4], Catch::StartsWith(e.c + " ± "));
+    CHECK_THAT(zFit[3], Catch::StartsWith("6.0000 ± "));
+    CHECK_THAT(zFit[4], Catch::StartsWith("1.200 ± "));
+    // The summary row: every run at equilibrium, the same numbers as the fits, the fit quality.
+    const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
+    REQUIRE(row.size() == 9);
+    CHECK(md.find("| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt) < verdictAt);
+    CHECK(row[2] == "15 / 15");
+    CHECK(row[3] == phiFit[3]);
+    CHECK(row[4] == phiFit[4]);
+    CHECK(row[5] == "chi²/dof " + phiFit[7] + ", Q " + phiFit[8]);
+    CHECK(row[6] == zFit[3]);
+    CHECK(row[7] == zFit[4]);
+    CHECK_THAT(row[8], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
+  }
+  // Quantities are named and defined, never numbered.
+  CHECK(md.find("- phi_bulk: solid fraction far from the walls") != std::string::npos);
+  if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
+}
+
+TEST_CASE("cross-solver verdict: agree on a shared law, differ on a shifted phi_bulk") {
+  SECTION("the backends share the law") {
+    const fs::path dir = makeStudy("agree", false, true);
+    const std::string verdict = verdictOf(slurp(study::writeReport(dir, dir / "report").markdown));
+    CHECK_THAT(verdict, Catch::Contains("For MSP: spheres x_S = 0, mu_w = 0: nscd and bullet agree on phi_bulk "
+                                        "within 2 standard errors (0.6400 ± "));
+    CHECK_THAT(verdict, Catch::Contains("nscd and bullet agree on C within 2 standard errors (0.500 ± "));
+    CHECK_THAT(verdict, Catch::Contains("| MSP: spheres x_S = 0, mu_w = 0 | phi_bulk | "));
+    CHECK_THAT(verdict, !Catch::Contains("differ"));
+    CHECK_THAT(verdict, !Catch::Contains("equilibrium"));
+    fs::remove_all(dir);
+  }
+  SECTION("bullet's phi_bulk is 0.01 lower, many standard errors") {
+    const fs::path dir = makeStudy("differ", false);
+    const std::string verdict = verdictOf(slurp(study::writeReport(dir, dir / "report").markdown));
+    CHECK_THAT(verdict, Catch::Contains("nscd and bullet differ on phi_bulk by "));
+    const auto row = rowCells(verdict, "| MSP: spheres x_S = 0, mu_w = 0 | phi_bulk |");
+    REQUIRE(row.size() == 7);
+    CHECK(row[4] == "+0.01");
+    CHECK(row[6] == "yes: differ (*)");
+    // Z follows one law in both backends: they agree on it.
+    CHECK_THAT(verdict, Catch::Contains("nscd and bullet agree on Z_bulk within 2 standard errors (6.0000 ± "));
+    fs::remove_all(dir);
+  }
+}
+
+TEST_CASE("summary and verdict say which runs were not at equilibrium or did not finish") {
+  const fs::path dir = makeStudy("verdict_failures", true);
+  const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
+  // nscd: r0000 interrupted, seed 3 at W = 10 not at rest; bullet: W = 20 failed, seed 3 at W = 10 not at rest.
+  CHECK(rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | nscd |").at(2) == "13 / 15");
+  CHECK(rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | bullet |").at(2) == "11 / 15");
+  const std::string verdict = verdictOf(md);
+  CHECK_THAT(verdict, Catch::Contains("1 of nscd's 14 finished runs did not reach equilibrium: the comparison is "
+                                      "partly of unequilibrated piles."));
+  CHECK_THAT(verdict, Catch::Contains("1 of bullet's 12 finished runs did not reach equilibrium"));
+  CHECK_THAT(verdict, Catch::Contains("3 of bullet's 15 runs did not finish."));
   fs::remove_all(dir);
 }
