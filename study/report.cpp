@@ -722,8 +722,11 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       const bool differ = known && std::abs(diff) > 2.0 * se;
       const std::string both = fmt::format("({} against {})", ea->second.text, eb->second.text);
       rows.push_back({familyName(sk), q.name, ea->second.text, eb->second.text, fmt::format("{:+.3g}", diff),
-                      fmt::format("{:.2g}", se), known ? (differ ? "yes: differ (*)" : "no: agree") : "no standard error"});
-      if (!known)
+                      fmt::format("{:.2g}", se),
+                      known ? (differ ? "yes: differ (*)" : "no: agree") : diff == 0.0 ? "no: identical" : "no standard error"});
+      if (!known && diff == 0.0)
+        text += fmt::format(" {} and {} give the same {} {}.", a, b, q.name, both);
+      else if (!known)
         text += fmt::format(" {} and {} give {} {} with no standard error to compare them.", a, b, q.name, both);
       else if (differ)
         text += fmt::format(" {} and {} differ on {} by {:.2g} standard errors {}.", a, b, q.name, std::abs(diff) / se,

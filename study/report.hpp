@@ -1,7 +1,11 @@
 #pragma once
 // The study report (docs/model.md, "The study and its report"): reads a sweep folder and writes one
 // self-contained HTML file (figures inlined as SVG) and the same content as Markdown (figures
-// linked), with every quantity of result.json tabulated per configuration (shape, x_S, W, mu_w),
+// linked). It leads with the results: a summary per family (shape, x_S, mu_w) and backend (phi_bulk
+// and C of the phi(W) fit, its quality, Z_bulk and C_Z, the interpenetration, the runs at
+// equilibrium) and a cross-solver verdict (each of those numbers nscd against Bullet, with the
+// combined standard error and whether they differ by more than twice it). Then come every quantity
+// of result.json tabulated per configuration (shape, x_S, W, mu_w),
 // the two backends side by side as mean +- standard deviation over the replicas, their difference
 // with its uncertainty, the geometrical-model fits phi(W) = phi_bulk - C/W and Z(W) = Z_bulk -
 // C_Z/W per backend, lambda_L against x_S and against C, the profiles of the runs, and the cost of
