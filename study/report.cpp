@@ -302,8 +302,9 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                             "(not run or interrupted), {} done but not equilibrated.",
                             fs::absolute(study.sweepDir).string(), when, CONFPACK_VERSION, summary.runs, summary.done,
                             summary.failed, summary.missing, summary.unequilibrated));
-  doc.paragraph("The results come first: a summary per family and backend, then the two backends compared; the "
-                "runs, every quantity per configuration, the fits, the profiles and the cost follow.");
+  doc.paragraph(
+      "The results come first: a summary per family and backend, then the two backends compared; the "
+      "runs, every quantity per configuration, the fits, the profiles and the cost follow.");
   if (!figuresDrawn)
     doc.paragraph(options.gnuplot.empty()
                       ? "Figures were not drawn (disabled); their CSV data and gnuplot scripts are in figures/."
@@ -382,12 +383,18 @@ void addQuantityTable(Document& doc, const StudyView& study, const std::string& 
 }
 
 // The fitted parameters as the fit section and the summary both print them, so the two agree.
-std::string bulkText(const analysis::ConfinementFit& f) { return fmt::format("{:.4f} ± {:.2g}", f.bulk, f.bulkError); }
-std::string cText(const analysis::ConfinementFit& f) { return fmt::format("{:.3f} ± {:.2g}", f.c, f.cError); }
+std::string bulkText(const analysis::ConfinementFit& f) {
+  return fmt::format("{:.4f} ± {:.2g}", f.bulk, f.bulkError);
+}
+std::string cText(const analysis::ConfinementFit& f) {
+  return fmt::format("{:.3f} ± {:.2g}", f.c, f.cError);
+}
 std::string chiText(const analysis::ConfinementFit& f) {
   return f.dof > 0 ? fmt::format("{:.3g}/{}", f.chiSquare, f.dof) : "exact (2 points)";
 }
-std::string qText(const analysis::ConfinementFit& f) { return f.quality ? fmt::format("{:.3g}", *f.quality) : "-"; }
+std::string qText(const analysis::ConfinementFit& f) {
+  return f.quality ? fmt::format("{:.3g}", *f.quality) : "-";
+}
 
 // A fit of the geometrical model, per series and backend.
 struct FitRow {
@@ -689,8 +696,9 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
   for (const SummaryQuantity& q : summary.quantities) {
     definitions.push_back(q.name + ": " + q.definition);
     if (q.name == "C")
-      definitions.push_back("phi(W) fit quality: chi² per degree of freedom of the fit over the confined widths and Q, "
-                            "the probability of a chi² at least as large if the law holds (weighted fits)");
+      definitions.push_back(
+          "phi(W) fit quality: chi² per degree of freedom of the fit over the confined widths and Q, "
+          "the probability of a chi² at least as large if the law holds (weighted fits)");
   }
   definitions.push_back("± values are standard errors; the fits' are from the least squares (docs/model.md).");
   doc.bullets(definitions);
@@ -705,9 +713,10 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
   }
   const std::string& a = study.backends[0];
   const std::string& b = study.backends[1];
-  doc.paragraph(fmt::format("{} against {}: the difference {} − {}, its combined standard error sqrt(SE1² + SE2²), "
-                            "and whether it is larger than twice that error.",
-                            a, b, a, b));
+  doc.paragraph(
+      fmt::format("{} against {}: the difference {} − {}, its combined standard error sqrt(SE1² + SE2²), "
+                  "and whether it is larger than twice that error.",
+                  a, b, a, b));
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> sentences;
   for (const SeriesKey& sk : study.seriesKeys()) {
@@ -723,7 +732,9 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       const std::string both = fmt::format("({} against {})", ea->second.text, eb->second.text);
       rows.push_back({familyName(sk), q.name, ea->second.text, eb->second.text, fmt::format("{:+.3g}", diff),
                       fmt::format("{:.2g}", se),
-                      known ? (differ ? "yes: differ (*)" : "no: agree") : diff == 0.0 ? "no: identical" : "no standard error"});
+                      known         ? (differ ? "yes: differ (*)" : "no: agree")
+                      : diff == 0.0 ? "no: identical"
+                                    : "no standard error"});
       if (!known && diff == 0.0)
         text += fmt::format(" {} and {} give the same {} {}.", a, b, q.name, both);
       else if (!known)
@@ -740,9 +751,10 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
         text += fmt::format(" None of {}'s {} finished runs reached equilibrium: this compares unequilibrated piles.",
                             backend, n.done);
       else if (n.unequilibrated > 0)
-        text += fmt::format(" {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
-                            "unequilibrated piles.",
-                            n.unequilibrated, backend, n.done);
+        text += fmt::format(
+            " {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
+            "unequilibrated piles.",
+            n.unequilibrated, backend, n.done);
       if (n.done < n.total)
         text += fmt::format(" {} of {}'s {} runs did not finish.", n.total - n.done, backend, n.total);
     }
