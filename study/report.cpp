@@ -740,8 +740,9 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       else if (!known)
         text += fmt::format(" {} and {} give {} {} with no standard error to compare them.", a, b, q.name, both);
       else if (differ)
-        text += fmt::format(" {} and {} differ on {} by {:.2g} standard errors {}.", a, b, q.name, std::abs(diff) / se,
-                            both);
+        text += fmt::format(
+            " {} and {} differ on {} by {:+.3g} ± {:.2g}, {} standard errors {}.", a, b, q.name, diff, se,
+            std::abs(diff) > 100.0 * se ? "more than 100" : fmt::format("{:.2g}", std::abs(diff) / se), both);
       else
         text += fmt::format(" {} and {} agree on {} within 2 standard errors {}.", a, b, q.name, both);
     }
