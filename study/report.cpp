@@ -626,8 +626,10 @@ StudySummary summarize(const StudyView& study) {
   if (study.keys.count("solid_fraction")) {
     const std::vector<FitRow> fits = confinementFits(study, "solid_fraction");
     for (const FitRow& f : fits)
-      out.phiFitQuality[{f.series, f.backend}] =
-          f.fit ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit)) : "no fit: " + f.why;
+      out.phiFitQuality[{f.series, f.backend}] = !f.fit ? "no fit: " + f.why
+                                                 : f.fit->dof > 0
+                                                     ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit))
+                                                     : "exact through 2 widths: no standard errors";
     addFitQuantities(out, fits, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
                      "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
   }
