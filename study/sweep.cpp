@@ -580,7 +580,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
     worker();  // the calling thread is one of the workers
   }
 
-  if (core::stopSignal() != 0)
+  if (core::stopSignal() != 0 && finishedCount.load() < total)
     throw core::Interrupted(core::stopSignal(), fmt::format("after {} of {} runs; the others run when the sweep is started again",
                                                             finishedCount.load(), total));
   summary.failed = failedCount.load();
