@@ -406,6 +406,13 @@ struct FitRow {
   std::optional<ReplicaStat> biperiodic;
 };
 
+/// The fits of the geometrical model a report shows, made once and read by the summary and the
+/// fit sections alike (empty when the study has no such quantity).
+struct ConfinementFits {
+  std::vector<FitRow> phi;  ///< solid_fraction
+  std::vector<FitRow> z;    ///< coordination/Z
+};
+
 std::vector<FitRow> confinementFits(const StudyView& study, const std::string& key) {
   std::vector<FitRow> out;
   for (const SeriesKey& s : study.seriesKeys())
@@ -445,12 +452,10 @@ std::vector<FitRow> confinementFits(const StudyView& study, const std::string& k
 }
 
 // The fit table of quantity(W) = quantity_bulk - cName/W, the backends' differences of its
-// parameters and its figure; returns the fits (lambda_L against C uses those of phi).
-std::vector<FitRow> addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
-                                  const std::string& key, const std::string& quantity, const std::string& cName,
-                                  const std::string& stem) {
-  const std::vector<FitRow> fits = confinementFits(study, key);
-  if (fits.empty()) return fits;
+// parameters and its figure.
+void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
+                   const std::string& quantity, const std::string& cName, const std::string& stem) {
+  if (fits.empty()) return;
   const auto& backends = study.backends;
   doc.heading(3, fmt::format("Geometrical model: {}(W) = {}_bulk − {}/W", quantity, quantity, cName));
   std::vector<std::vector<std::string>> rows;
@@ -510,7 +515,6 @@ std::vector<FitRow> addFitSection(Document& doc, const StudyView& study, FigureW
                                         colors[f.series], dashed ? 2 : 1));
   }
   doc.figure(figures.draw(p));
-  return fits;
 }
 
 // lambda_L from the widest confined sample of each series (the wall effect of one wall, least
@@ -600,7 +604,7 @@ struct RunCount {
   std::size_t equilibrated = 0, unequilibrated = 0, done = 0, total = 0;
 };
 
-// What the summary and the verdict show, computed once from the same fits as the fit sections.
+// What the summary and the verdict show, from the same fits as the fit sections.
 struct StudySummary {
   std::vector<SummaryQuantity> quantities;
   std::map<std::pair<SeriesKey, std::string>, RunCount> runs;
@@ -621,20 +625,18 @@ void addFitQuantities(StudySummary& out, const std::vector<FitRow>& fits, const 
   out.quantities.push_back(std::move(c));
 }
 
-StudySummary summarize(const StudyView& study) {
+StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   StudySummary out;
-  if (study.keys.count("solid_fraction")) {
-    const std::vector<FitRow> fits = confinementFits(study, "solid_fraction");
-    for (const FitRow& f : fits)
+  if (!fits.phi.empty()) {
+    for (const FitRow& f : fits.phi)
       out.phiFitQuality[{f.series, f.backend}] = !f.fit ? "no fit: " + f.why
                                                  : f.fit->dof > 0
                                                      ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit))
                                                      : "exact through 2 widths: no standard errors";
-    addFitQuantities(out, fits, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
+    addFitQuantities(out, fits.phi, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
                      "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
   }
-  if (study.keys.count("coordination/Z"))
-    addFitQuantities(out, confinementFits(study, "coordination/Z"), "Z_bulk",
+  addFitQuantities(out, fits.z, "Z_bulk",
                      "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
                      "C_Z", "loss of coordination due to the walls, in d_L");
   const std::string overlap = "interpenetration_percent/exact";
@@ -768,13 +770,12 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
 }
 
 // Every quantity of result.json, section by section, with the fits and figures of its section.
-void addQuantitySections(Document& doc, const StudyView& study, FigureWriter& figures) {
+void addQuantitySections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits) {
   std::vector<std::vector<std::string>> sectionKeys(sections().size() + 1);
   for (const std::string& k : study.keys) {
     const int s = sectionOf(k);
     sectionKeys[s < 0 ? sections().size() : static_cast<std::size_t>(s)].push_back(k);
   }
-  std::vector<FitRow> phiFits;
   for (std::size_t s = 0; s <= sections().size(); ++s) {
     const bool other = s == sections().size();
     std::vector<std::string> shown;
@@ -792,11 +793,9 @@ void addQuantitySections(Document& doc, const StudyView& study, FigureWriter& fi
       for (const auto& k : notApplicable) list += (list.empty() ? "" : ", ") + k;
       doc.paragraph("Not applicable to any run of this study (null in every result.json): " + list + ".");
     }
-    if (s == 0 && study.keys.count("solid_fraction"))
-      phiFits = addFitSection(doc, study, figures, "solid_fraction", "phi", "C", "phi_vs_invW");
-    if (s == 2 && study.keys.count("coordination/Z"))
-      addFitSection(doc, study, figures, "coordination/Z", "Z", "C_Z", "Z_vs_invW");
-    if (s == 1 && study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, phiFits);
+    if (s == 0) addFitSection(doc, study, figures, fits.phi, "phi", "C", "phi_vs_invW");
+    if (s == 2) addFitSection(doc, study, figures, fits.z, "Z", "C_Z", "Z_vs_invW");
+    if (s == 1 && study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, fits.phi);
   }
 }
 
@@ -899,12 +898,15 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
 
   Document doc(fmt::format("confpack study report: {}", study.spec.name));
   addIntroduction(doc, study, summary, options, figures.available());
-  const StudySummary results = summarize(study);
+  ConfinementFits fits;
+  if (study.keys.count("solid_fraction")) fits.phi = confinementFits(study, "solid_fraction");
+  if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
+  const StudySummary results = summarize(study, fits);
   addSummarySection(doc, study, results);
   addVerdictSection(doc, study, results);
   addReadingGuide(doc);
   addRunsSection(doc, study);
-  addQuantitySections(doc, study, figures);
+  addQuantitySections(doc, study, figures, fits);
   addProfilesSection(doc, study, figures);
   addCostSection(doc, study);
   addMethodSection(doc, study);
