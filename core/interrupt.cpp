@@ -2,7 +2,7 @@
 
 #include <atomic>
 #include <csignal>
-#include <cstring>
+#include <string>
 
 namespace confpack::core {
 
@@ -40,7 +40,5 @@ void installStopHandlers() {
 }
 
 int stopSignal() { return requested.load(std::memory_order_relaxed); }
-
-void requestStop(int signal) { requested.store(signal, std::memory_order_relaxed); }
 
 }  // namespace confpack::core

@@ -25,7 +25,4 @@ void installStopHandlers();
 /// The signal that asked to stop, or 0.
 int stopSignal();
 
-/// Records a stop request as the handler does (tests, and code that stops for its own reasons).
-void requestStop(int signal);
-
 }  // namespace confpack::core

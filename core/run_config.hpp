@@ -19,11 +19,11 @@ enum class Protocol {
 
 std::string toString(Protocol p);  ///< "dynamic", "quasi-static"
 
-/// Compaction under gravity and its stopping rule (docs/model.md).
 /// Largest accepted time_limit [t0]: 1e9 t0 is some 4e11 fixed steps, far beyond any compaction
 /// (the slowest measured reached rest near 170 t0), and its step count stays exact in a long.
 inline constexpr double kMaxTimeLimit = 1e9;
 
+/// Compaction under gravity and its stopping rule (docs/model.md).
 struct CompactionDef {
   /// Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md, "Time step").
   double dt = 0.0;
