@@ -130,18 +130,24 @@ std::string oneLineFailure(const CLI::App* app, const std::exception& e) {
 }
 
 namespace {
+/// The running program's name, for error lines (set by parseAndRun).
+std::string& programName() {
+  static std::string name = "confpack";
+  return name;
+}
+
 [[noreturn]] void failWith(std::string_view command, const std::exception& e, int code) {
   std::string what = e.what();
   for (char& c : what)
     if (c == '\n') c = ' ';
-  // "run" is a subcommand of confpack; "confpack-bench" a program of its own.
-  const std::string label = command.starts_with("confpack") ? std::string(command) : "confpack " + std::string(command);
+  const std::string label = command.empty() ? programName() : programName() + " " + std::string(command);
   std::fprintf(stderr, "%s: error: %s\n", label.c_str(), what.c_str());
   throw CLI::RuntimeError(code);
 }
 }  // namespace
 
 int parseAndRun(CLI::App& app, int argc, char** argv) {
+  programName() = app.get_name();
   core::installStopHandlers();
   try {
     app.parse(argc, argv);

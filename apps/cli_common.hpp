@@ -59,10 +59,12 @@ std::string oneLineFailure(const CLI::App* app, const std::exception& e);
 /// failure (unknown flag, bad value, missing --out), whatever CLI11's own numbering says.
 int parseAndRun(CLI::App& app, int argc, char** argv);
 
-/// Runs input checks of subcommand `command`: a std::exception becomes one line
-/// "confpack <command>: error: <what>" and exit code 2 (CLI::RuntimeError).
+/// Runs input checks of subcommand `command` (empty for a program without subcommands): a
+/// std::exception becomes one line "<program> <command>: error: <what>" and exit code 2
+/// (CLI::RuntimeError); <program> is the name of the app parseAndRun ran.
 void checkInput(std::string_view command, const std::function<void()>& checks);
-/// Runs the work of a subcommand: any std::exception becomes one line and exit code 1.
+/// Runs the work of a subcommand: any std::exception becomes one line and exit code 1;
+/// core::Interrupted exit code 128 + its signal.
 void runWork(std::string_view command, const std::function<void()>& work);
 
 /// Refuses an --out that cannot be a directory (an existing file), as bad input.

@@ -39,7 +39,7 @@ struct BenchState {
 void runMicroCommand(BenchState& st) {
   // The whole-run default name would mislabel a micro-benchmark report.
   if (!st.outGiven) st.out = "micro.json";
-  checkInput("confpack-bench", [&] {
+  checkInput("", [&] {
     st.microDef.seed = st.def.seed;
     validateMicroBench(st.microDef);
     if (std::filesystem::is_directory(st.out))
@@ -48,7 +48,7 @@ void runMicroCommand(BenchState& st) {
     if (!std::filesystem::is_directory(dir))
       throw std::invalid_argument(fmt::format("--out {}: directory {} does not exist", st.out.string(), dir.string()));
   });
-  runWork("confpack-bench", [&] {
+  runWork("", [&] {
     runMicroBench(st.microDef, st.out);
     fmt::print("bench: wrote {}\n", st.out.string());
   });
@@ -56,7 +56,7 @@ void runMicroCommand(BenchState& st) {
 
 void runBenchCommand(BenchState& st) {
   if (st.micro) return runMicroCommand(st);
-  checkInput("confpack-bench", [&] {
+  checkInput("", [&] {
     if (!st.cases.empty()) st.def.cases = st.cases;
     for (const std::string& c : st.def.cases)
       if (std::find(benchCaseNames().begin(), benchCaseNames().end(), c) == benchCaseNames().end())
@@ -64,7 +64,7 @@ void runBenchCommand(BenchState& st) {
     if (std::filesystem::is_directory(st.out))
       throw std::invalid_argument(fmt::format("--out {} is a directory; give a file name", st.out.string()));
   });
-  runWork("confpack-bench", [&] {
+  runWork("", [&] {
     applyThreads(st.def.threads);
     // A full bench runs for hours: each compaction reports its progress (simulated time, steps,
     // iterations, equilibrium ratios) between the lines that say which case and backend ran.
