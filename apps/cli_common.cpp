@@ -4,11 +4,15 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <new>
 #include <system_error>
 #ifdef _OPENMP
 #include <omp.h>
@@ -136,6 +140,47 @@ std::string& programName() {
   return name;
 }
 
+// What the out-of-memory line names: the subcommand that checkInput or runWork last started (a
+// literal) and the innermost WorkStep of the thread.
+std::string_view currentCommand;
+thread_local const char* currentStep = "reading the command line";
+
+// Address space set aside at start and given back when an allocation first fails, just before
+// std::bad_alloc is thrown. The unwinding that follows allocates: nlohmann::json's destructor
+// keeps the children of the value it destroys on a stack, a vector as long as its largest array
+// (1 MB for the packing of a 68,000-grain deposit), and a bad_alloc thrown by a destructor during
+// unwinding terminates the program (SIGABRT) with the staging folder left behind. 16 MB covers
+// the destruction of arrays of a million elements; untouched, it costs no physical memory.
+constexpr std::size_t kUnwindingReserve = std::size_t{16} << 20;
+std::atomic<void*> unwindingReserve{nullptr};
+
+void releaseReserveAndFail() {
+  std::free(unwindingReserve.exchange(nullptr));
+  throw std::bad_alloc();
+}
+
+/// "<program> <command>: out of memory while <step>", assembled on the stack and written with one
+/// write(2): nothing here allocates, so it works when memory has run out.
+void writeOutOfMemoryLine() noexcept {
+  char line[512];
+  std::size_t n = 0;
+  auto put = [&](std::string_view s) {
+    const std::size_t k = std::min(s.size(), sizeof line - 1 - n);  // room kept for the newline
+    std::memcpy(line + n, s.data(), k);
+    n += k;
+  };
+  put(programName());
+  if (!currentCommand.empty()) {
+    put(" ");
+    put(currentCommand);
+  }
+  put(": out of memory while ");
+  put(currentStep);
+  line[n++] = '\n';
+  std::fflush(stdout);
+  (void)!::write(STDERR_FILENO, line, n);
+}
+
 [[noreturn]] void failWith(std::string_view command, const std::exception& e, int code) {
   std::string what = e.what();
   for (char& c : what)
@@ -149,20 +194,48 @@ std::string& programName() {
 int parseAndRun(CLI::App& app, int argc, char** argv) {
   programName() = app.get_name();
   core::installStopHandlers();
+  if (unwindingReserve.load() == nullptr) {
+    unwindingReserve = std::malloc(kUnwindingReserve);
+    std::set_new_handler(releaseReserveAndFail);
+  }
+  // Out of memory is a failure of the work wherever it happens (exit 1), never bad input. By the
+  // time this handler runs, the unwinding has released what the failed work held; the line is
+  // still written without allocating, in case that was not enough.
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);  // help -> 0; RuntimeError -> its code, silently
-    if (code == kExitOk || e.get_name() == "RuntimeError") return code;
-    return kExitBadInput;
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+      const int code = app.exit(e);  // help -> 0; RuntimeError -> its code, silently
+      if (code == kExitOk || e.get_name() == "RuntimeError") return code;
+      return kExitBadInput;
+    }
+  } catch (const std::bad_alloc&) {
+    writeOutOfMemoryLine();
+    return kExitRuntimeFailure;
   }
   return kExitOk;
 }
 
+WorkStep::WorkStep(const char* what) noexcept : previous_(currentStep), uncaught_(std::uncaught_exceptions()) {
+  currentStep = what;
+}
+
+void WorkStep::next(const char* what) noexcept {
+  currentStep = what;
+}
+
+WorkStep::~WorkStep() {
+  if (std::uncaught_exceptions() == uncaught_) currentStep = previous_;
+}
+
 void checkInput(std::string_view command, const std::function<void()>& checks) {
+  currentCommand = command;
+  const WorkStep step("checking the input");
   try {
     checks();
   } catch (const CLI::RuntimeError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
     throw;
   } catch (const std::exception& e) {
     failWith(command, e, kExitBadInput);
@@ -170,9 +243,13 @@ void checkInput(std::string_view command, const std::function<void()>& checks) {
 }
 
 void runWork(std::string_view command, const std::function<void()>& work) {
+  currentCommand = command;
+  const WorkStep step("preparing the output");
   try {
     work();
   } catch (const CLI::RuntimeError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
     throw;
   } catch (const core::Interrupted& e) {
     // Exit 128 + the signal, as a shell reports a process the signal killed. Staged output has
@@ -237,9 +314,17 @@ StagedOutput::StagedOutput(const fs::path& target) : target_(normalisedTarget(ta
 
 StagedOutput::~StagedOutput() {
   if (committed_) return;
-  std::error_code ec;
-  fs::remove_all(staging_, ec);
-  for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only if empty
+  // remove_all allocates (directory entries) and may throw std::bad_alloc even with an error_code;
+  // out of a destructor that would terminate the program (SIGABRT) in the middle of the unwinding
+  // of an out-of-memory failure. The work's memory is released by then (it lives in scopes inside
+  // this one), so the removal normally succeeds; if it cannot, the next command on this target
+  // removes the folder (removeStaleStaging).
+  try {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+    for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only if empty
+  } catch (...) {
+  }
 }
 
 void StagedOutput::commit() {

@@ -3,7 +3,8 @@
 // core::RunConfig, the exit-code discipline, and all-or-nothing output directories.
 //
 // Exit codes: 0 ok, 2 bad input (refused before any work, nothing written), 1 runtime failure
-// (nothing partial left behind). Every failure prints exactly one line on stderr.
+// (nothing partial left behind; running out of memory included), 128 + signal when SIGINT or
+// SIGTERM stopped the work. Every failure prints exactly one line on stderr.
 #include <exception>
 #include <filesystem>
 #include <functional>
@@ -55,16 +56,37 @@ CLI::Validator unsignedInteger();    ///< digits only (CLI11 wraps "-1" to 2^64 
 std::string oneLineFailure(const CLI::App* app, const std::exception& e);
 
 /// Parses the command line and runs the chosen callbacks; returns the exit code: 0 (help
-/// included), the code of a RuntimeError the work raised, or kExitBadInput for every other parse
-/// failure (unknown flag, bad value, missing --out), whatever CLI11's own numbering says.
+/// included), the code of a RuntimeError the work raised, kExitRuntimeFailure with the line
+/// "<program> <command>: out of memory while <step>" for a std::bad_alloc from anywhere (parsing,
+/// input checks or work; see WorkStep), or kExitBadInput for every other parse failure (unknown
+/// flag, bad value, missing --out), whatever CLI11's own numbering says.
 int parseAndRun(CLI::App& app, int argc, char** argv);
 
-/// Runs input checks of subcommand `command` (empty for a program without subcommands): a
-/// std::exception becomes one line "<program> <command>: error: <what>" and exit code 2
-/// (CLI::RuntimeError); <program> is the name of the app parseAndRun ran.
+/// Names what the current thread is doing, for the out-of-memory line of parseAndRun ("confpack
+/// deposit: out of memory while writing packing.json"). `what` must be a string literal: the line is
+/// written without allocating, once the memory has run out. A scope left by an exception keeps its
+/// step, so that the line names the innermost step where the allocation failed.
+class WorkStep {
+ public:
+  explicit WorkStep(const char* what) noexcept;
+  ~WorkStep();
+  /// The scope has moved on to its next step.
+  void next(const char* what) noexcept;
+  WorkStep(const WorkStep&) = delete;
+  WorkStep& operator=(const WorkStep&) = delete;
+
+ private:
+  const char* previous_;
+  int uncaught_;  ///< std::uncaught_exceptions() at construction: more at destruction = unwinding
+};
+
+/// Runs input checks of subcommand `command` (a string literal; empty for a program without
+/// subcommands): a std::exception becomes one line "<program> <command>: error: <what>" and exit
+/// code 2 (CLI::RuntimeError); <program> is the name of the app parseAndRun ran. std::bad_alloc
+/// is not bad input: it goes on to parseAndRun (exit 1).
 void checkInput(std::string_view command, const std::function<void()>& checks);
 /// Runs the work of a subcommand: any std::exception becomes one line and exit code 1;
-/// core::Interrupted exit code 128 + its signal.
+/// core::Interrupted exit code 128 + its signal; std::bad_alloc goes on to parseAndRun.
 void runWork(std::string_view command, const std::function<void()>& work);
 
 /// Refuses an --out that cannot be a directory (an existing file), as bad input.

@@ -50,12 +50,15 @@ void runAnalyze(AnalyzeState& st) {
   checkInput("analyze", [&] {
     st.options.validate();
     checkOutputTarget(st.out);
+    WorkStep step("reading the packing file");
     packing = core::readPacking(st.file);
     // Analysed before any output exists: an inconsistent packing is refused as bad input.
+    step.next("analysing the packing");
     result = analysis::analyze(packing, st.options);
   });
   runWork("analyze", [&] {
     StagedOutput output(st.out);
+    const WorkStep step("writing the results");
     nlohmann::json j = analysis::toJson(result);
     j["source"] = std::filesystem::absolute(st.file).string();
     j["backend"] = nullptr;

@@ -38,6 +38,7 @@ void runDeposit(const DepositState& st) {
     if (st.opts.verbosity > 0) fmt::print(stderr, "deposit: configuration {}\n", nlohmann::json(cfg).dump());
 
     Progress progress("deposit", !st.opts.quiet, 5.0);
+    WorkStep step("depositing the grains");
     const core::Deposit pile =
         core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
           progress.update(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
@@ -45,14 +46,18 @@ void runDeposit(const DepositState& st) {
         });
     progress.done(fmt::format("{} grains", pile.grains.size()));
 
+    step.next("writing packing.json");
     core::Packing packing;
     packing.box = cfg.box;
     packing.grains = pile.grains;
     core::writePacking(packing, output.dir() / "packing.json");
+    step.next("writing config.json");
     writeJson(output.dir() / "config.json", cfg);
+    step.next("writing the ParaView frame");
     core::VtkSeries vtk(output.dir() / "vtk", "deposit");
     vtk.addFrame(0.0, packing);
     vtk.finish();
+    step.next("moving the output into place");
     output.commit();
 
     fmt::print("deposit: {} grains, pile height {:.4g} d_L, solid fraction {:.4f}, {:.2f} s -> {}\n",

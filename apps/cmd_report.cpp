@@ -26,6 +26,7 @@ void runReportCommand(const ReportState& st) {
     checkOutputTarget(out);
   });
   runWork("report", [&] {
+    const WorkStep step("writing the report");
     study::ReportOptions o;
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
     const study::ReportSummary s = study::writeReport(st.sweepDir, out, o);

@@ -47,6 +47,7 @@ void runReproduceCommand(const ReproduceState& st) {
   study::SweepSummary summary;
   study::ReportSummary report;
   runWork("reproduce", [&] {
+    WorkStep step("running the study");
     study::SweepOptions opt;
     opt.jobs = st.jobs;
     opt.quiet = st.quiet;
@@ -55,6 +56,7 @@ void runReproduceCommand(const ReproduceState& st) {
     // The study's definition next to its results, as a sweep file a user can edit and rerun.
     core::writeFileAtomically(st.out / "study.json", study::reproductionSweep(st.scale).dump(2));
     summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1), study::pipelineDepositor());
+    step.next("writing the report");
     report = study::writeReport(st.out, st.out / "report");
   });
   fmt::print("reproduce {}: {} runs ({} finished now, {} earlier, {} failed) in {:.0f} s\nreport: {}\n        {}\n",

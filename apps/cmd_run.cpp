@@ -68,7 +68,10 @@ void runRun(RunState& st) {
   std::optional<core::Deposit> start;
   checkInput("run", [&] {
     if (!st.backendOptions.empty()) cfg.backendOptions = nlohmann::json::parse(st.backendOptions);
-    if (!st.from.empty()) start = startFromPacking(st);
+    if (!st.from.empty()) {
+      const WorkStep step("reading the packing file");
+      start = startFromPacking(st);
+    }
     cfg.validate();
     checkOutputTarget(st.opts.out);
   });
@@ -76,11 +79,14 @@ void runRun(RunState& st) {
     applyThreads(cfg.threads);
     StagedOutput output(st.opts.out);
     Progress progress("run", !st.opts.quiet, 10.0);
+    WorkStep step("compacting, analysing and writing the run");
     const nlohmann::json result = study::runAndWrite(
         cfg, output.dir(), [&](double fraction, const std::string& status) { progress.update(fraction, status); },
         start ? &*start : nullptr);
     progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
+    step.next("writing config.json");
     writeJson(output.dir() / "config.json", result["config"]);
+    step.next("moving the output into place");
     output.commit();
     fmt::print("run: {} {} grains, phi = {}, Z = {}, interpenetration {} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
                cfg.backend, result["n_grains"].get<int>(), number(result["solid_fraction"]),

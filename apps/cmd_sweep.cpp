@@ -50,6 +50,7 @@ void runSweepCommand(const SweepState& st) {
   }
   study::SweepSummary summary;
   runWork("sweep", [&] {
+    const WorkStep step("running the sweep");
     study::SweepOptions opt;
     opt.jobs = st.jobs;
     opt.taskIndex = st.taskIndex;

@@ -1,6 +1,12 @@
 // The `confpack` command line, run as a user runs it (the real binary, CONFPACK_BINARY), and the
 // run configuration it writes back.
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -170,4 +176,39 @@ TEST_CASE("a small deposit writes a readable packing inside the box, its config 
   REQUIRE(other.code == 0);
   CHECK(slurp(s.dir / "b" / "packing.json") != slurp(dir / "packing.json"));
   CHECK(core::readPacking(s.dir / "b" / "packing.json").grains.size() > 10);
+}
+
+TEST_CASE("out of memory: one line naming the step, exit 1, and neither the output nor its staging left") {
+  // A deposit of 68,000 grains needs about 150 MB of address space (most of it the packing's JSON
+  // document); the limit lets the program start and fails the work. Before: an abort (SIGABRT)
+  // while the JSON document was destroyed during the unwinding, the staging folder left behind.
+  ConfpackSession s("cli_out_of_memory");
+  const fs::path err = s.dir.string() + ".err";
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    if (::chdir(s.dir.c_str()) != 0) _exit(127);
+    const int null = ::open("/dev/null", O_WRONLY);
+    const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(null, 1);
+    ::dup2(errFile, 2);
+    const rlimit limit{80u << 20, 80u << 20};
+    if (::setrlimit(RLIMIT_AS, &limit) != 0) _exit(126);
+    ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "deposit", "--length-x", "100", "--width", "100", "--height", "6",
+            "--out", "X", "-q", (char*)nullptr);
+    _exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::string message = slurp(err);
+  fs::remove(err);
+  INFO("stderr: " << message);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 1);
+  CHECK(message.find("confpack deposit: out of memory while ") != std::string::npos);
+  CHECK(lineCount(message) == 1);
+  CHECK(s.empty());  // neither X nor .X.partial-PID
+  CHECK(seconds < 5.0);
 }
