@@ -18,6 +18,7 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
+#include "backends/backend_factory.hpp"
 #include "core/packing_io.hpp"
 #include "study/run_pipeline.hpp"
 
@@ -73,6 +74,8 @@ void runRun(RunState& st) {
       start = startFromPacking(st);
     }
     cfg.validate();
+    // Here, not when the backend is built: an unknown key is bad input (exit 2), as bad JSON is.
+    backends::checkBackendOptions(cfg.backend, cfg.backendOptions);
     checkOutputTarget(st.opts.out);
   });
   runWork("run", [&] {

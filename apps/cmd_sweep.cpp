@@ -10,6 +10,7 @@
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "backends/backend_factory.hpp"
 #include "study/sweep.hpp"
 #include "study/sweep_runner.hpp"
 
@@ -36,6 +37,16 @@ void runSweepCommand(const SweepState& st) {
     spec = study::readSweepSpec(st.file);
     runs = study::expandRuns(spec);
     study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
+    // The sweep file leaves backend_options to the backend: checked here, so that a typo is bad
+    // input (exit 2) rather than a failure of every run.
+    for (const study::SweepRun& run : runs) {
+      try {
+        backends::checkBackendOptions(run.config.backend, run.config.backendOptions);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(
+            fmt::format("{}: run {} ({}): backend_options: {}", st.file.string(), run.name, run.label(), e.what()));
+      }
+    }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
     checkOutputTarget(out);
   });

@@ -18,4 +18,8 @@ const std::vector<std::string_view>& backendNames();
 std::unique_ptr<core::ContactBackend> makeBackend(std::string_view name, const core::SystemDef& system,
                                                   const nlohmann::json& options = nlohmann::json::object());
 
+/// Checks `options` as makeBackend would, without a system: a command can then refuse an unknown
+/// key or an out-of-range value as bad input, before any work. Throws std::invalid_argument.
+void checkBackendOptions(std::string_view name, const nlohmann::json& options);
+
 }  // namespace confpack::backends

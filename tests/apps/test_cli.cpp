@@ -178,6 +178,38 @@ TEST_CASE("a small deposit writes a readable packing inside the box, its config 
   CHECK(core::readPacking(s.dir / "b" / "packing.json").grains.size() > 10);
 }
 
+TEST_CASE("every subcommand refuses bad input with exit 2 (README, the exit-code table)") {
+  ConfpackSession s("cli_exit_two");
+  std::ofstream(s.dir / "file") << "not a folder";
+  std::ofstream(s.dir / "typo.json") << R"({"name": "typo", "vary": {"widht": [4]}})";
+  std::ofstream(s.dir / "options.json")
+      << R"({"name": "options", "base": {"backend_options": {"no_such_option": 1}}, "vary": {"width": [4]}})";
+  fs::create_directory(s.dir / "not-a-sweep");
+  const std::string box = "--length-x 6 --width 4 --height 4";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"run " + box + " --out o --backend-options '{\"no_such_option\": 1}'", "no_such_option"},
+      {"run " + box + " --backend bullet --out o --backend-options '{\"no_such_option\": 1}'", "no_such_option"},
+      {"run " + box + " --out o --backend-options '{not json'", "parse error"},
+      {"deposit " + box + " --out file", "'file' exists and is not a directory"},
+      {"analyze missing.json --out o", "missing.json"},
+      {"sweep typo.json --out o", "widht"},
+      {"sweep options.json --out o", "no_such_option"},
+      {"report not-a-sweep --out o", "not-a-sweep"},
+      {"reproduce --scale tiny --out file", "'file' exists and is not a directory"},
+  };
+  for (const auto& [args, mention] : cases) {
+    INFO("confpack " << args);
+    const CommandResult r = s.run(args);
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.err.find(mention) != std::string::npos);
+    CHECK_FALSE(fs::exists(s.dir / "o"));
+  }
+  // Nothing else was created either: only the inputs are there.
+  CHECK(s.entries().size() == 4);
+}
+
 TEST_CASE("out of memory: one line naming the step, exit 1, and neither the output nor its staging left") {
   // A deposit of 68,000 grains needs about 150 MB of address space (most of it the packing's JSON
   // document); the limit lets the program start and fails the work. Before: an abort (SIGABRT)
