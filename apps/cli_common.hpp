@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/packing.hpp"
 #include "core/run_config.hpp"
 
 namespace CLI {
@@ -88,6 +89,13 @@ void checkInput(std::string_view command, const std::function<void()>& checks);
 /// Runs the work of a subcommand: any std::exception becomes one line and exit code 1;
 /// core::Interrupted exit code 128 + its signal; std::bad_alloc goes on to parseAndRun.
 void runWork(std::string_view command, const std::function<void()>& work);
+
+/// `--allow-implausible` into `allow`: a packing file analysis/plausibility.hpp finds implausible is
+/// taken anyway.
+CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow);
+/// Refuses a packing read from `file` that is implausible (analysis/plausibility.hpp), unless
+/// `allow`: std::invalid_argument "FILE: implausible packing: <why> (...)", bad input.
+void checkPlausible(const core::Packing& packing, const std::filesystem::path& file, bool allow);
 
 /// Refuses an --out that cannot be a directory (an existing file), as bad input.
 void checkOutputTarget(const std::filesystem::path& out);

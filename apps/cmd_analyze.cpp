@@ -5,8 +5,9 @@
 //                     file carries contact forces, else null), the source file and the options
 //   DIR/*.csv         phi_y, z_y, homogeneity_z, homogeneity_y, orientation_cos, orientation_azimuth
 //
-// The file is read, validated and analysed before anything is written: a bad file gives one line
-// on stderr, exit code 2 and no output directory.
+// The file is read, validated, checked for plausibility (analysis/plausibility.hpp; unless
+// --allow-implausible) and analysed before anything is written: a bad file gives one line on
+// stderr, exit code 2 and no output directory.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -26,6 +27,7 @@ struct AnalyzeState {
   std::filesystem::path out;
   bool quiet = false;
   bool noLattice = false;
+  bool allowImplausible = false;
   analysis::AnalysisOptions options;
 };
 
@@ -52,6 +54,8 @@ void runAnalyze(AnalyzeState& st) {
     checkOutputTarget(st.out);
     WorkStep step("reading the packing file");
     packing = core::readPacking(st.file);
+    step.next("checking the packing's plausibility");
+    checkPlausible(packing, st.file, st.allowImplausible);
     // Analysed before any output exists: an inconsistent packing is refused as bad input.
     step.next("analysing the packing");
     result = analysis::analyze(packing, st.options);
@@ -91,6 +95,7 @@ void registerAnalyze(CLI::App& app) {
   sub->add_option("file", st->file, "Packing file (confpack-packing JSON)")->required();
   sub->add_option("--out", st->out, "Output directory (created; written all or nothing)")->required();
   sub->add_flag("--quiet,-q", st->quiet, "No summary line");
+  addAllowImplausibleFlag(*sub, st->allowImplausible);
   auto& o = st->options;
   sub->add_option("--margin", o.region.margin, "Bulk region: clearance from the floor and the free surface [d_L]")
       ->capture_default_str()

@@ -36,6 +36,7 @@ struct RunState {
   CommonOptions opts;
   std::string backendOptions;  ///< --backend-options JSON text
   std::string from;            ///< --from PACKING: start from its grains instead of a deposit
+  bool allowImplausible = false;  ///< --allow-implausible: take an implausible --from packing
   CLI::App* sub = nullptr;
 };
 
@@ -51,6 +52,7 @@ core::Deposit startFromPacking(RunState& st) {
     if (st.sub->count(name) > 0)
       throw std::invalid_argument(fmt::format("--from takes the box and the grains from the packing; drop {}", name));
   const core::Packing packing = core::readPacking(st.from);
+  checkPlausible(packing, st.from, st.allowImplausible);
   core::RunConfig& cfg = st.cfg;
   const double wallFriction = st.sub->count("--wall-friction") > 0 ? cfg.box.wallFriction : packing.box.wallFriction;
   cfg.box = packing.box;
@@ -151,6 +153,7 @@ void registerRun(CLI::App& app) {
                   "e.g. to take a run that stopped before equilibrium on to rest; the box and the grains come "
                   "from the file")
       ->type_name("PACKING");
+  addAllowImplausibleFlag(*sub, st->allowImplausible);
   sub->add_option("--backend-options", st->backendOptions,
                   "Backend settings as JSON, e.g. '{\"tolerance\": 1e-5}' (see the README for the keys)");
   sub->callback([st] { runRun(*st); });

@@ -9,10 +9,12 @@
 #include "core/packing_io.hpp"
 #include "tests/support/confpack_binary.hpp"
 #include "tests/support/lattices.hpp"
+#include "tests/support/read_file.hpp"
 
 using namespace confpack;
 namespace fs = std::filesystem;
 using confpack::testing::ConfpackSession;
+using confpack::testing::lineCount;
 
 TEST_CASE("confpack analyze writes result.json and profiles", "[apps][cli]") {
   const ConfpackSession s("cmd_analyze");
@@ -53,4 +55,72 @@ TEST_CASE("confpack analyze writes result.json and profiles", "[apps][cli]") {
   CHECK_FALSE(fs::exists(dir / "missing_out"));
   CHECK(s.run("analyze packing.json --out neg --slice -1").code == 2);
   CHECK_FALSE(fs::exists(dir / "neg"));
+}
+
+TEST_CASE("confpack analyze refuses an implausible packing by name, exit 2, unless --allow-implausible",
+          "[apps][cli]") {
+  const ConfpackSession s("cmd_analyze_implausible");
+  // A sphere of size 100 in a 5 x 5 box.
+  core::Packing big;
+  big.box.lengthX = 5.0;
+  big.box.width = 5.0;
+  big.grains.push_back(confpack::testing::sphere(100.0, core::Vec3(2.5, 2.5, 50.0)));
+  core::writePacking(big, s.dir / "big.json");
+  // Every grain of a touching lattice doubled in size: 64 spheres of volume 4 pi / 3 in
+  // 4 x 4 x 4.5 (up to the top of the highest), phi = 3.7.
+  core::Packing doubled = confpack::testing::simpleCubic(4, 4, 4);
+  doubled.box.height = 4.0;
+  for (core::Grain& g : doubled.grains) g.size *= 2.0;
+  core::writePacking(doubled, s.dir / "doubled.json");
+  // A contact between two grains 3 d apart.
+  core::Packing apart = confpack::testing::simpleCubic(8, 4, 1);
+  core::Contact c;
+  c.a = 0;
+  c.b = 3;  // centres at x = 0.5 and 3.5
+  c.normal = core::Vec3::UnitX();
+  c.points.push_back({core::Vec3(1.0, 0.5, 0.5), 0.3, core::Vec3::Zero(), 0.0});
+  apart.contacts = std::vector<core::Contact>{c};
+  core::writePacking(apart, s.dir / "apart.json");
+
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"big.json", "big.json: implausible packing: grain 0 (size 100) is larger than the box's period L_x (5)"},
+      {"doubled.json", "doubled.json: implausible packing: the grains' volume"},
+      {"apart.json", "apart.json: implausible packing: contacts[0] has a point"},
+  };
+  for (const auto& [file, message] : cases) {
+    INFO(file);
+    const auto r = s.run("analyze " + file + " --out res");
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.err.find("confpack analyze: error: " + message) != std::string::npos);
+    CHECK(r.err.find("--allow-implausible") != std::string::npos);
+    CHECK_FALSE(fs::exists(s.dir / "res"));
+  }
+  // run --from reads a packing for the same analysis: the same refusal.
+  const auto from = s.run("run --from doubled.json --out res");
+  CHECK(from.code == 2);
+  CHECK(from.err.find("doubled.json: implausible packing") != std::string::npos);
+  CHECK_FALSE(fs::exists(s.dir / "res"));
+
+  // Asked for, they are analysed all the same.
+  CHECK(s.run("analyze doubled.json --out res1 -q --allow-implausible").code == 0);
+  CHECK(s.run("analyze apart.json --out res2 -q --allow-implausible").code == 0);
+  CHECK(fs::exists(s.dir / "res2" / "result.json"));
+  CHECK(s.run("analyze --help").out.find("--allow-implausible") != std::string::npos);
+}
+
+TEST_CASE("packings written by runs of either backend are plausible", "[apps][cli]") {
+  const ConfpackSession s("cmd_analyze_real_runs");
+  for (const char* backend : {"nscd", "bullet"}) {
+    INFO(backend);
+    const std::string dir = std::string("run_") + backend;
+    const auto run = s.run("run --length-x 4 --width 4 --height 4 --time-limit 4 --wall-friction 0.3 -q --backend " +
+                           std::string(backend) + " --out " + dir);
+    REQUIRE(run.code == 0);
+    REQUIRE(core::readPacking(s.dir / dir / "packing.json").contacts->size() > 50);
+    const auto r = s.run("analyze " + dir + "/packing.json --out " + dir + "_analysis -q");
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 0);
+  }
 }
