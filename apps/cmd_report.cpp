@@ -1,4 +1,6 @@
-// `confpack report SWEEPDIR`: the study report (HTML + Markdown + figures) of a sweep folder.
+// `confpack report SWEEPDIR`: the study report (HTML + Markdown + figures) of a sweep folder,
+// written all or nothing like every output (StagedOutput): a failure, Ctrl-C or SIGTERM (which
+// also stop a hanging gnuplot) leaves the previous report as it was.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -26,18 +28,21 @@ void runReportCommand(const ReportState& st) {
     checkOutputTarget(out);
   });
   runWork("report", [&] {
-    const WorkStep step("writing the report");
+    StagedOutput output(out);
+    WorkStep step("writing the report");
     study::ReportOptions o;
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
-    const study::ReportSummary s = study::writeReport(st.sweepDir, out, o);
+    const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
+    step.next("moving the report into place");
+    output.commit();
     // A figure gnuplot failed on is said in its place in the report and here; the rest stands.
     for (const std::string& e : s.figureErrors) fmt::print(stderr, "confpack report: {}\n", e);
     const std::string drawn = !s.gnuplotUsed ? (st.noFigures ? " (not drawn: --no-figures)" : " (not drawn: gnuplot unavailable)")
                               : s.figureErrors.empty() ? ""
                                                        : fmt::format(" ({} not drawn, see above)", s.figureErrors.size());
     fmt::print("report: {} runs ({} done, {} failed, {} missing, {} not equilibrated), {} figures{}\n  {}\n  {}\n",
-               s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures, drawn, s.html.string(),
-               s.markdown.string());
+               s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures, drawn,
+               (out / s.html.filename()).string(), (out / s.markdown.filename()).string());
   });
 }
 

@@ -57,7 +57,13 @@ void runReproduceCommand(const ReproduceState& st) {
     core::writeFileAtomically(st.out / "study.json", study::reproductionSweep(st.scale).dump(2));
     summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1), study::pipelineDepositor());
     step.next("writing the report");
-    report = study::writeReport(st.out, st.out / "report");
+    // Staged like `confpack report`'s: an interrupted report leaves the previous one whole.
+    StagedOutput staged(st.out / "report");
+    report = study::writeReport(st.out, staged.dir());
+    step.next("moving the report into place");
+    staged.commit();
+    report.html = st.out / "report" / report.html.filename();
+    report.markdown = st.out / "report" / report.markdown.filename();
   });
   fmt::print("reproduce {}: {} runs ({} finished now, {} earlier, {} failed) in {:.0f} s\nreport: {}\n        {}\n",
              st.scale, summary.total, summary.ran, summary.alreadyDone, summary.failed, summary.wallSeconds,

@@ -12,6 +12,8 @@
 #include <cstring>
 #include <thread>
 
+#include "core/interrupt.hpp"
+
 extern char** environ;
 
 namespace confpack::study {
@@ -68,18 +70,27 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOpti
   const auto deadline = Clock::now() + options.timeout;
   auto pause = std::chrono::milliseconds(1);
   int status = 0;
+  const auto killChild = [&] {
+    kill(pid, SIGKILL);
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+  };
+  // Polled rather than a blocking waitpid: the stop handlers restart system calls (SA_RESTART),
+  // so a blocking wait would not return on Ctrl-C.
   for (;;) {
-    const pid_t w = waitpid(pid, &status, options.timeout.count() > 0 ? WNOHANG : 0);
+    const pid_t w = waitpid(pid, &status, WNOHANG);
     if (w == pid) break;
     if (w < 0 && errno != EINTR) {
       r.started = false;
       r.error = fmt::format("waitpid: {}", std::strerror(errno));
       return r;
     }
-    if (w == 0 && Clock::now() >= deadline) {
-      kill(pid, SIGKILL);
-      while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-      }
+    if (const int signal = core::stopSignal(); signal != 0) {
+      killChild();
+      throw core::Interrupted(signal, fmt::format("while {} ran", argv[0]));
+    }
+    if (w == 0 && options.timeout.count() > 0 && Clock::now() >= deadline) {
+      killChild();
       r.timedOut = true;
       return r;
     }

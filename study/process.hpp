@@ -27,7 +27,9 @@ struct ProcessResult {
 };
 
 /// Runs argv[0] (searched in PATH when it has no '/') with argv[1..], stdin from /dev/null, and
-/// waits for it.
+/// waits for it. A stop request (SIGINT or SIGTERM, core/interrupt.hpp) while it runs kills it
+/// (SIGKILL) and throws core::Interrupted: a program that hangs cannot hold a command past Ctrl-C
+/// or a cluster's time limit.
 ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOptions& options = {});
 
 }  // namespace confpack::study

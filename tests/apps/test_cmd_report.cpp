@@ -1,0 +1,163 @@
+// `confpack report` (apps/cmd_report.cpp) with the real binary and fake gnuplots: a figure gnuplot
+// fails on, or draws as an empty file, is named and not left behind; a report stopped by SIGTERM
+// or SIGKILL while gnuplot hangs leaves the previous report whole.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "study/sweep.hpp"
+#include "tests/support/confpack_binary.hpp"
+#include "tests/support/read_file.hpp"
+
+namespace fs = std::filesystem;
+using namespace confpack;
+using confpack::testing::ConfpackSession;
+using confpack::testing::lineCount;
+using confpack::testing::slurp;
+using nlohmann::json;
+
+namespace {
+
+/// A finished sweep folder `dir` of four runs with made-up results (no physics: the report is
+/// what is tested), enough for the phi(W) figures.
+void makeSweep(const fs::path& dir) {
+  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
+    "name": "fake", "base": { "box": { "length_x": 6, "height": 4 } },
+    "vary": { "width": [4, 8], "replicas": 2, "backend": ["nscd"] } })"));
+  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+                   const study::RunProgressFn&) {
+    const double phi = 0.64 - 0.5 / cfg.box.width + 0.001 * static_cast<double>(cfg.seed);
+    const json r = {{"n_grains", 100},
+                    {"backend", cfg.backend},
+                    {"seed", cfg.seed},
+                    {"solid_fraction", phi},
+                    {"coordination", {{"Z", 6.0 - 1.0 / cfg.box.width}}},
+                    {"equilibrium", {{"reached", true}}},
+                    {"timing", {{"wall_s", 1.0}, {"steps", 100}}}};
+    std::ofstream(runDir / "result.json") << r.dump();
+    return r;
+  };
+  auto depositor = [](const core::RunConfig& cfg) {
+    core::Deposit d;
+    core::Grain g;
+    g.position = core::Vec3(1.0, 0.5 * cfg.box.width, 0.5);
+    d.grains.push_back(g);
+    d.placeholders.push_back(g.position);
+    return d;
+  };
+  study::SweepOptions o;
+  o.quiet = true;
+  study::runSweep(spec, dir, o, runner, depositor);
+}
+
+/// An executable shell script standing in for gnuplot: `--version` succeeds, a script runs `body`.
+fs::path fakeGnuplot(const fs::path& dir, const std::string& name, const std::string& body) {
+  const fs::path p = dir / name;
+  std::ofstream(p) << "#!/bin/sh\nif [ \"$1\" = --version ]; then echo 'gnuplot 0.0 fake'; exit 0; fi\n" << body;
+  fs::permissions(p, fs::perms::owner_all);
+  return p;
+}
+
+/// Entries of `dir` whose name starts with `prefix`.
+std::vector<std::string> entriesStartingWith(const fs::path& dir, const std::string& prefix) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().starts_with(prefix)) found.push_back(e.path().filename().string());
+  return found;
+}
+
+}  // namespace
+
+TEST_CASE("report: a figure gnuplot fails on or draws as an empty file is named, and no SVG of it is kept") {
+  ConfpackSession s("cmd_report_figures");
+  makeSweep(s.dir / "sw");
+  const std::vector<std::pair<std::string, std::string>> gnuplots = {
+      {"exits 3", "echo 'cannot draw' >&2\nexit 3\n"},
+      {"empty svg", ": > \"$(basename \"$1\" .gp).svg\"\nexit 0\n"},
+      {"writes nothing", "exit 0\n"},
+  };
+  for (const auto& [name, body] : gnuplots) {
+    INFO("gnuplot that " << name);
+    const fs::path gnuplot = fakeGnuplot(s.dir, "gnuplot that " + name, body);
+    const auto r = s.run("report sw --gnuplot '" + gnuplot.string() + "'");
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 0);  // the report stands, each figure not drawn is said
+    CHECK(r.err.find("confpack report: figure phi_vs_invW: gnuplot failed: ") != std::string::npos);
+    CHECK(r.out.find("not drawn, see above") != std::string::npos);
+    const fs::path figures = s.dir / "sw" / "report" / "figures";
+    REQUIRE(fs::exists(figures / "phi_vs_invW.gp"));
+    CHECK(entriesStartingWith(figures, "phi_vs_invW.svg").empty());
+    for (const auto& e : fs::directory_iterator(figures)) CHECK(e.path().extension() != ".svg");
+    CHECK(slurp(s.dir / "sw" / "report" / "report.html").find("gnuplot failed") != std::string::npos);
+    CHECK(entriesStartingWith(s.dir / "sw", ".report.partial-").empty());
+  }
+}
+
+TEST_CASE("report: SIGTERM or SIGKILL while gnuplot hangs leaves the previous report whole") {
+  ConfpackSession s("cmd_report_interrupted");
+  makeSweep(s.dir / "sw");
+  REQUIRE(s.run("report sw --no-figures").code == 0);
+  const fs::path report = s.dir / "sw" / "report";
+  const std::string before = slurp(report / "report.html");
+  REQUIRE(before.find("</html>") != std::string::npos);
+
+  // This gnuplot says it has started (its pid in `started`), then hangs.
+  const fs::path started = s.dir / "started";
+  const fs::path gnuplot =
+      fakeGnuplot(s.dir, "hanging gnuplot", "echo $$ > '" + started.string() + "'\nexec sleep 30\n");
+  for (const int signal : {SIGTERM, SIGKILL}) {
+    INFO("signal " << signal);
+    fs::remove(started);
+    const fs::path err = s.dir.string() + ".err";
+    const pid_t pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      if (::chdir(s.dir.c_str()) != 0) _exit(127);
+      const int null = ::open("/dev/null", O_WRONLY);
+      const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      ::dup2(null, 1);
+      ::dup2(errFile, 2);
+      ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "report", "sw", "--gnuplot", gnuplot.c_str(), (char*)nullptr);
+      _exit(127);
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (slurp(started).empty() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    const std::string gnuplotPid = slurp(started);
+    REQUIRE(!gnuplotPid.empty());
+    ::kill(pid, signal);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    const std::string message = slurp(err);
+    fs::remove(err);
+    INFO("stderr: " << message);
+    if (signal == SIGTERM) {
+      REQUIRE(WIFEXITED(status));
+      CHECK(WEXITSTATUS(status) == 143);
+      CHECK(lineCount(message) == 1);
+      CHECK(message.find("confpack report: error: interrupted by SIGTERM while ") != std::string::npos);
+      // confpack killed its gnuplot on the way out, and removed its staging folder.
+      CHECK(::kill(std::stoi(gnuplotPid), 0) != 0);
+      CHECK(entriesStartingWith(s.dir / "sw", ".report.partial-").empty());
+    } else {
+      CHECK(WIFSIGNALED(status));
+      ::kill(std::stoi(gnuplotPid), SIGKILL);  // orphaned by the kill: ours to end
+    }
+    // Either way the previous report is still there, whole and unchanged.
+    CHECK(slurp(report / "report.html") == before);
+    CHECK(entriesStartingWith(report / "figures", "phi_vs_invW.svg").empty());
+  }
+  // The next report removes the folder the SIGKILL left behind.
+  REQUIRE(s.run("report sw --no-figures").code == 0);
+  CHECK(entriesStartingWith(s.dir / "sw", ".report.partial-").empty());
+}
