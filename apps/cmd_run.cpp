@@ -125,15 +125,6 @@ void registerRun(CLI::App& app) {
                   "E_k / (d^3 P) over the grains is below this")
       ->check(positiveNumber())
       ->capture_default_str();
-  sub->add_option("--relax-stiffness", st->cfg.compaction.relaxStiffness,
-                  "quasi-static: relax the fallen pile by FIRE on a penalty of this stiffness [m g / d] "
-                  "before the finisher; 0 = no relaxation")
-      ->check(nonNegativeNumber())
-      ->capture_default_str();
-  sub->add_option("--relax-tolerance", st->cfg.compaction.relaxTolerance,
-                  "quasi-static: the relaxation stops when no grain's net force exceeds this fraction of its weight")
-      ->check(positiveNumber())
-      ->capture_default_str();
   sub->add_option("--time-limit", st->cfg.compaction.timeLimit,
                   "Simulated time after which the run stops, reported as not equilibrated [t0]")
       ->check(positiveNumber())

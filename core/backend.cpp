@@ -23,8 +23,4 @@ QuasiStaticMove ContactBackend::quasiStaticStep(double, double) {
   throw std::logic_error(std::string(name()) + ": no quasi-static step");
 }
 
-RelaxationOutcome ContactBackend::relax(double, double, long) {
-  throw std::logic_error(std::string(name()) + ": no penalty relaxation");
-}
-
 }  // namespace confpack::core

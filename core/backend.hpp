@@ -85,15 +85,6 @@ struct QuasiStaticMove {
   bool clipped = false;          ///< the trust radius shortened some grain's displacement
 };
 
-/// What the penalty relaxation did (ContactBackend::relax).
-struct RelaxationOutcome {
-  long iterations = 0;         ///< FIRE iterations over all stiffness rungs [-]
-  int rungs = 0;               ///< stiffness rungs completed [-]
-  double residual = 0.0;       ///< largest |net force| / weight of a grain at the end [-]
-  double deepestOverlap = 0.0; ///< largest overlap at the end [d_L]
-  bool converged = false;      ///< the last rung reached its force tolerance
-};
-
 class ContactBackend {
  public:
   virtual ~ContactBackend() = default;
@@ -120,14 +111,6 @@ class ContactBackend {
   /// of a step (velocities dq / h, forces = impulse / h). Only backends with
   /// hasQuasiStaticStep() implement it; the others throw std::logic_error.
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);
-
-  /// Whether relax() is implemented.
-  virtual bool hasRelaxation() const { return false; }
-  /// Moves the grains to a minimum of the potential energy with a penalty on overlaps of stiffness
-  /// up to `stiffness` m g / d (backends/nscd/penalty_relaxation.hpp), until no grain's net force
-  /// exceeds `forceTolerance` of its weight or after `maxIterations`; velocities end at zero.
-  /// Only backends with hasRelaxation() implement it; the others throw std::logic_error.
-  virtual RelaxationOutcome relax(double stiffness, double forceTolerance, long maxIterations);
 };
 
 }  // namespace confpack::core

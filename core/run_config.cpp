@@ -62,10 +62,7 @@ void to_json(json& j, const CompactionDef& c) {
        {"trust_radius", c.trustRadius},
        {"settle_tolerance", c.settleTolerance},
        {"finisher_max_step", c.finisherMaxStep},
-       {"finisher_max_steps", c.finisherMaxSteps},
-       {"relax_stiffness", c.relaxStiffness},
-       {"relax_tolerance", c.relaxTolerance},
-       {"relax_max_iterations", c.relaxMaxIterations}};
+       {"finisher_max_steps", c.finisherMaxSteps}};
 }
 
 void from_json(const json& j, CompactionDef& c) {
@@ -73,7 +70,7 @@ void from_json(const json& j, CompactionDef& c) {
   onlyKeys(j, w,
            {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
             "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance",
-            "finisher_max_step", "finisher_max_steps", "relax_stiffness", "relax_tolerance", "relax_max_iterations"});
+            "finisher_max_step", "finisher_max_steps"});
   const CompactionDef d;
   c.dt = valueOr(j, w, "dt", d.dt);
   c.adaptiveDt = valueOr(j, w, "adaptive_dt", d.adaptiveDt);
@@ -96,9 +93,6 @@ void from_json(const json& j, CompactionDef& c) {
   c.settleTolerance = valueOr(j, w, "settle_tolerance", d.settleTolerance);
   c.finisherMaxStep = valueOr(j, w, "finisher_max_step", d.finisherMaxStep);
   c.finisherMaxSteps = valueOr(j, w, "finisher_max_steps", d.finisherMaxSteps);
-  c.relaxStiffness = valueOr(j, w, "relax_stiffness", d.relaxStiffness);
-  c.relaxTolerance = valueOr(j, w, "relax_tolerance", d.relaxTolerance);
-  c.relaxMaxIterations = valueOr(j, w, "relax_max_iterations", d.relaxMaxIterations);
 }
 
 void to_json(json& j, const RunConfig& c) {
@@ -176,13 +170,6 @@ void RunConfig::validate() const {
   if (k.trustRadius > 0.5)
     throw std::invalid_argument(
         fmt::format("compaction.trust_radius: must be at most 0.5 of the smallest grain (got {})", k.trustRadius));
-  positive(k.relaxTolerance, "relax_tolerance");
-  if (!(k.relaxStiffness >= 0.0) || !std::isfinite(k.relaxStiffness))
-    throw std::invalid_argument(
-        fmt::format("compaction.relax_stiffness: must be 0 (no relaxation) or a positive number (got {})", k.relaxStiffness));
-  if (k.relaxMaxIterations < 1)
-    throw std::invalid_argument(
-        fmt::format("compaction.relax_max_iterations: must be >= 1 (got {})", k.relaxMaxIterations));
   if (k.finisherMaxSteps < 1)
     throw std::invalid_argument(
         fmt::format("compaction.finisher_max_steps: must be >= 1 (got {})", k.finisherMaxSteps));

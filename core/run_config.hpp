@@ -61,15 +61,6 @@ struct CompactionDef {
   double finisherMaxStep = 1.0;
   /// Quasi-static protocol: finisher steps after which the run stops unequilibrated [-].
   int finisherMaxSteps = 3000;
-  /// Quasi-static protocol: the penalty relaxation between the fall and the finisher
-  /// (backends/nscd/penalty_relaxation.hpp) climbs to this stiffness kappa, in units of m g / d of
-  /// the smallest grain; 0 = no relaxation [-].
-  double relaxStiffness = 0.0;
-  /// Quasi-static protocol: the relaxation stops when no grain's net force exceeds this fraction
-  /// of its weight [-].
-  double relaxTolerance = 1e-3;
-  /// Quasi-static protocol: FIRE iterations after which the relaxation hands over anyway [-].
-  long relaxMaxIterations = 1000000;
 };
 
 void to_json(nlohmann::json& j, const CompactionDef& c);

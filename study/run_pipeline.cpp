@@ -221,20 +221,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   // (core/quasi_static_finisher.hpp). The equilibrium test is checked after each step that moved
   // nothing more than the settle tolerance (and every 20 steps, for the progress line); the
   // finisher stops once it holds there.
-  core::RelaxationOutcome relaxed;
-  double relaxWall = 0.0;
-  const bool relax = handOver && def.relaxStiffness > 0.0 && backend->hasRelaxation();
-  if (relax) {
-    const auto relaxStart = Clock::now();
-    relaxed = backend->relax(def.relaxStiffness, def.relaxTolerance, def.relaxMaxIterations);
-    relaxWall = secondsSince(relaxStart);
-    if (progress)
-      progress(0.0, fmt::format("{} relaxation: {} iterations, {} rungs, force {:.1e}, deepest overlap {:.1e}",
-                                backend->name(), relaxed.iterations, relaxed.rungs, relaxed.residual,
-                                relaxed.deepestOverlap));
-  }
-  // After a relaxation the pile is at rest near a minimum: the finisher starts at its longest step.
-  core::QuasiStaticFinisher finish(def, core::smallestSize(deposit.grains), relax ? def.finisherMaxStep : dt);
+  core::QuasiStaticFinisher finish(def, core::smallestSize(deposit.grains), dt);
   if (handOver) {
     for (long k = 1; k <= def.finisherMaxSteps; ++k) {
       if (core::stopSignal() != 0)
@@ -284,13 +271,6 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                              {"simulated_time", simTime},
                              {"iterations", dynamicIterations},
                              {"wall_s", dynamicWall}}}};
-  if (relax)
-    stages["relaxation"] = {{"iterations", relaxed.iterations},
-                            {"rungs", relaxed.rungs},
-                            {"residual", relaxed.residual},
-                            {"deepest_overlap", relaxed.deepestOverlap},
-                            {"converged", relaxed.converged},
-                            {"wall_s", relaxWall}};
   if (handOver)
     stages["quasi_static"] = {{"handed_over_at", handOverAt},
                               {"steps", finish.steps()},

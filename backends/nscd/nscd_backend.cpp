@@ -9,7 +9,6 @@
 #include "backends/nscd/contact_solver.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
-#include "backends/nscd/penalty_relaxation.hpp"
 
 namespace confpack::nscd {
 
@@ -157,26 +156,6 @@ class NscdBackend final : public core::ContactBackend {
     storeImpulses(h, 1.0);
     clock.charge(Phase::StoreImpulses);
     return move;
-  }
-
-  bool hasRelaxation() const override { return true; }
-
-  // The penalty relaxation (backends/nscd/penalty_relaxation.hpp) from the present poses; the
-  // grains end at rest, wrapped into the box, and the contact list is that of the next step.
-  core::RelaxationOutcome relax(double stiffness, double forceTolerance, long maxIterations) override {
-    PenaltyRelaxation relaxation(stiffness, forceTolerance, maxIterations);
-    const RelaxationBodies bodies{&invMass_, &invInertiaBody_, &radius_, &reach_};
-    const core::RelaxationOutcome out =
-        relaxation.run(box_, gravity_, bodies, narrow_, broad_, settings_.threads, position_, orientation_);
-    for (int i = 0; i < n_; ++i) {
-      position_[i] = box_.wrap(position_[i]);
-      velocity_[i] = BodyVelocity{};
-    }
-    positionMid_ = position_;
-    orientationMid_ = orientation_;
-    contacts_.clear();
-    writeStates();
-    return out;
   }
 
   // The contact problem of a step from q_m and the free velocities: pairs, contact points, rows
