@@ -1,5 +1,7 @@
 #include "core/run_config.hpp"
 
+#include "core/settings_table.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -48,51 +50,41 @@ constexpr std::string_view kBackendNames[] = {"nscd", "bullet"};
 
 std::string toString(Protocol p) { return p == Protocol::QuasiStatic ? "quasi-static" : "dynamic"; }
 
-void to_json(json& j, const CompactionDef& c) {
-  j = {{"dt", c.dt},
-       {"adaptive_dt", c.adaptiveDt},
-       {"time_limit", c.timeLimit},
-       {"check_interval", c.checkInterval},
-       {"frame_interval", c.frameInterval},
-       {"force_ratio", c.forceRatio},
-       {"moment_ratio", c.momentRatio},
-       {"kinetic_ratio", c.kineticRatio},
-       {"protocol", toString(c.protocol)},
-       {"switch_kinetic_ratio", c.switchKineticRatio},
-       {"trust_radius", c.trustRadius},
-       {"settle_tolerance", c.settleTolerance},
-       {"finisher_max_step", c.finisherMaxStep},
-       {"finisher_max_steps", c.finisherMaxSteps}};
+const SettingsTable<CompactionDef>& compactionTable() {
+  using C = CompactionDef;
+  static const SettingsTable<C> table = [] {
+    SettingsTable<C> t("compaction");
+    t.number("dt", &C::dt, Range::atLeast(0.0), "t0", "time step; 0 = the fixed step from the deposit's drop")
+        .flag("adaptive_dt", &C::adaptiveDt, "adaptive time step, never below dt")
+        .number("time_limit", &C::timeLimit, Range::leftOpen(0.0, kMaxTimeLimit), "t0",
+                "simulated time after which the run stops unequilibrated (quasi-static: the fall hands over)")
+        .integer("check_interval", &C::checkInterval, Range::atLeast(1), "-", "steps between equilibrium checks")
+        .integer("frame_interval", &C::frameInterval, Range::atLeast(0), "-",
+                 "steps between ParaView frames; 0 = first and last only")
+        .number("force_ratio", &C::forceRatio, Range::positive(), "-", "equilibrium: |sum F| < force_ratio d^2 P")
+        .number("moment_ratio", &C::momentRatio, Range::positive(), "-", "equilibrium: |sum M| < moment_ratio d^3 P")
+        .number("kinetic_ratio", &C::kineticRatio, Range::positive(), "-", "equilibrium: E_k < kinetic_ratio d^3 P")
+        .choice("protocol", &C::protocol, {{"dynamic", Protocol::Dynamic}, {"quasi-static", Protocol::QuasiStatic}},
+                "time steps to equilibrium, or time steps until the fall is over then the finisher")
+        .number("switch_kinetic_ratio", &C::switchKineticRatio, Range::positive(), "-",
+                "quasi-static: hand over when the mean kinetic ratio is below this")
+        .number("trust_radius", &C::trustRadius, Range::leftOpen(0.0, 0.5), "smallest grain size",
+                "quasi-static: largest motion of a grain's surface in one finisher step")
+        .number("settle_tolerance", &C::settleTolerance, Range::positive(), "smallest grain size",
+                "quasi-static: the finisher has converged when its last step moved no grain more")
+        .number("finisher_max_step", &C::finisherMaxStep, Range::positive(), "t0", "quasi-static: longest finisher step")
+        .integer("finisher_max_steps", &C::finisherMaxSteps, Range::atLeast(1), "-",
+                 "quasi-static: finisher steps after which the run stops unequilibrated");
+    return t;
+  }();
+  return table;
 }
 
+void to_json(json& j, const CompactionDef& c) { j = compactionTable().write(c); }
+
 void from_json(const json& j, CompactionDef& c) {
-  constexpr std::string_view w = "compaction";
-  onlyKeys(j, w,
-           {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
-            "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance",
-            "finisher_max_step", "finisher_max_steps"});
-  const CompactionDef d;
-  c.dt = valueOr(j, w, "dt", d.dt);
-  c.adaptiveDt = valueOr(j, w, "adaptive_dt", d.adaptiveDt);
-  c.timeLimit = valueOr(j, w, "time_limit", d.timeLimit);
-  c.checkInterval = valueOr(j, w, "check_interval", d.checkInterval);
-  c.frameInterval = valueOr(j, w, "frame_interval", d.frameInterval);
-  c.forceRatio = valueOr(j, w, "force_ratio", d.forceRatio);
-  c.momentRatio = valueOr(j, w, "moment_ratio", d.momentRatio);
-  c.kineticRatio = valueOr(j, w, "kinetic_ratio", d.kineticRatio);
-  const std::string protocol = valueOr(j, w, "protocol", toString(d.protocol));
-  if (protocol == "dynamic")
-    c.protocol = Protocol::Dynamic;
-  else if (protocol == "quasi-static")
-    c.protocol = Protocol::QuasiStatic;
-  else
-    throw std::invalid_argument(
-        fmt::format("{}.protocol: unknown protocol '{}' (expected dynamic or quasi-static)", w, protocol));
-  c.switchKineticRatio = valueOr(j, w, "switch_kinetic_ratio", d.switchKineticRatio);
-  c.trustRadius = valueOr(j, w, "trust_radius", d.trustRadius);
-  c.settleTolerance = valueOr(j, w, "settle_tolerance", d.settleTolerance);
-  c.finisherMaxStep = valueOr(j, w, "finisher_max_step", d.finisherMaxStep);
-  c.finisherMaxSteps = valueOr(j, w, "finisher_max_steps", d.finisherMaxSteps);
+  c = CompactionDef{};
+  compactionTable().read(j, c);
 }
 
 void to_json(json& j, const RunConfig& c) {
@@ -149,34 +141,7 @@ void RunConfig::validate() const {
   if (!(deposition.expectedSolidFraction > 0.0 && deposition.expectedSolidFraction < 1.0))
     throw std::invalid_argument(fmt::format("deposition: expected solid fraction must be in (0, 1) (got {})",
                                             deposition.expectedSolidFraction));
-  const CompactionDef& k = compaction;
-  if (!(k.dt >= 0.0) || !std::isfinite(k.dt))
-    throw std::invalid_argument(fmt::format("compaction.dt: must be >= 0, 0 meaning automatic (got {})", k.dt));
-  auto positive = [](double v, const char* name) {
-    if (!(v > 0.0) || !std::isfinite(v))
-      throw std::invalid_argument(fmt::format("compaction.{}: must be a positive number (got {})", name, v));
-  };
-  positive(k.timeLimit, "time_limit");
-  if (k.timeLimit > kMaxTimeLimit)
-    throw std::invalid_argument(fmt::format("compaction.time_limit: must be at most {:g} t0 (got {:g})", kMaxTimeLimit,
-                                            k.timeLimit));
-  positive(k.forceRatio, "force_ratio");
-  positive(k.momentRatio, "moment_ratio");
-  positive(k.kineticRatio, "kinetic_ratio");
-  positive(k.switchKineticRatio, "switch_kinetic_ratio");
-  positive(k.trustRadius, "trust_radius");
-  positive(k.settleTolerance, "settle_tolerance");
-  positive(k.finisherMaxStep, "finisher_max_step");
-  if (k.trustRadius > 0.5)
-    throw std::invalid_argument(
-        fmt::format("compaction.trust_radius: must be at most 0.5 of the smallest grain (got {})", k.trustRadius));
-  if (k.finisherMaxSteps < 1)
-    throw std::invalid_argument(
-        fmt::format("compaction.finisher_max_steps: must be >= 1 (got {})", k.finisherMaxSteps));
-  if (k.checkInterval < 1)
-    throw std::invalid_argument(fmt::format("compaction.check_interval: must be >= 1 (got {})", k.checkInterval));
-  if (k.frameInterval < 0)
-    throw std::invalid_argument(fmt::format("compaction.frame_interval: must be >= 0 (got {})", k.frameInterval));
+  compactionTable().validate(compaction);
 }
 
 }  // namespace confpack::core

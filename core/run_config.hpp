@@ -63,6 +63,11 @@ struct CompactionDef {
   int finisherMaxSteps = 3000;
 };
 
+template <class T>
+class SettingsTable;
+/// The keys of CompactionDef with units, ranges and meaning (core/settings_table.hpp): the JSON
+/// reader and writer and the validation come from it.
+const SettingsTable<CompactionDef>& compactionTable();
 void to_json(nlohmann::json& j, const CompactionDef& c);
 void from_json(const nlohmann::json& j, CompactionDef& c);
 

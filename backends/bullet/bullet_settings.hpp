@@ -19,6 +19,8 @@
 //   3e-11; frictional wall (rolling and sliding spheres) to 1e-13.
 #include <nlohmann/json.hpp>
 
+#include "core/settings_table.hpp"
+
 namespace confpack::bullet {
 
 /// Options of the bullet backend. JSON keys in brackets.
@@ -105,6 +107,8 @@ struct BulletSettings {
   void validate() const;
 };
 
+/// The keys of BulletSettings with their units, ranges and meaning (core/settings_table.hpp).
+const core::SettingsTable<BulletSettings>& settingsTable();
 void to_json(nlohmann::json& j, const BulletSettings& s);
 /// Reads the keys that are present (missing ones keep their defaults); throws
 /// std::invalid_argument for an unknown key, a value of the wrong type, or one out of range.

@@ -4,6 +4,7 @@
 // Every key of the options JSON is a field below; unknown keys are refused so that a typo never
 // silently runs with a default. The measurements behind the defaults are in docs/performance.md,
 // "nscd settings: the measurements behind the defaults".
+#include "core/settings_table.hpp"
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -110,6 +111,9 @@ struct NscdSettings {
   void validate() const;
 };
 
+/// The keys of NscdSettings with their units, ranges and meaning (core/settings_table.hpp): the
+/// JSON reader and writer, validate() and the docs' table all come from it.
+const core::SettingsTable<NscdSettings>& settingsTable();
 void to_json(nlohmann::json& j, const NscdSettings& s);
 std::string toString(SolverKind k);
 std::string toString(ExpansionKind k);
