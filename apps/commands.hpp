@@ -4,6 +4,8 @@
 // work. A callback ends with CLI::RuntimeError(code) when it fails (main returns the code; the
 // message has already been printed): 2 for bad input, 1 for a runtime failure. See
 // apps/cli_common.hpp.
+#include <string>
+
 namespace CLI {
 class App;
 }
@@ -16,5 +18,9 @@ void registerAnalyze(CLI::App& app);    ///< analyse a packing file (apps/cmd_an
 void registerSweep(CLI::App& app);      ///< run a study (apps/cmd_sweep.cpp)
 void registerReport(CLI::App& app);     ///< tables and figures of a study (apps/cmd_report.cpp)
 void registerReproduce(CLI::App& app);  ///< the confinement study at a scale (apps/cmd_reproduce.cpp)
+void registerOptions(CLI::App& app);    ///< the settings tables (apps/cmd_options.cpp)
+
+/// The Markdown table of "compaction", "nscd" or "bullet" that `confpack options` prints.
+std::string optionsListing(const std::string& part);
 
 }  // namespace confpack::app

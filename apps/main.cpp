@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   registerSweep(app);
   registerReport(app);
   registerReproduce(app);
+  registerOptions(app);
 
   // CLI11 answers a misspelt subcommand with "A subcommand is required"; name it instead.
   if (argc > 1 && argv[1][0] != '-') {

@@ -34,4 +34,10 @@ void checkBackendOptions(std::string_view name, const nlohmann::json& options) {
   }
 }
 
+std::string optionsMarkdown(std::string_view name) {
+  if (name == "nscd") return nscd::settingsTable().markdown(nscd::NscdSettings{});
+  if (name == "bullet") return bullet::settingsTable().markdown(bullet::BulletSettings{});
+  throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
+}
+
 }  // namespace confpack::backends

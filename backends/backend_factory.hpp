@@ -2,6 +2,7 @@
 // The one place that knows the backends exist.
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -21,5 +22,9 @@ std::unique_ptr<core::ContactBackend> makeBackend(std::string_view name, const c
 /// Checks `options` as makeBackend would, without a system: a command can then refuse an unknown
 /// key or an out-of-range value as bad input, before any work. Throws std::invalid_argument.
 void checkBackendOptions(std::string_view name, const nlohmann::json& options);
+
+/// The backend's options as a Markdown table (key, default, unit, accepted values, meaning), from
+/// the same description that reads them. Throws std::invalid_argument for an unknown name.
+std::string optionsMarkdown(std::string_view name);
 
 }  // namespace confpack::backends
