@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <sstream>
 
 namespace confpack::study {
@@ -19,6 +20,31 @@ std::string htmlEscape(std::string_view s) {
       default: out += c;
     }
   }
+  return out;
+}
+
+// Escaped text with its links "[text](target)" made anchors; a '[' that opens no link is text.
+std::string htmlText(std::string_view s) {
+  constexpr auto npos = std::string_view::npos;
+  std::string out;
+  std::size_t at = 0;
+  while (at < s.size()) {
+    const std::size_t open = s.find('[', at);
+    if (open == npos) break;
+    const std::size_t close = s.find("](", open);
+    const std::size_t end = close == npos ? npos : s.find(')', close);
+    const std::string_view text = end == npos ? "" : s.substr(open + 1, close - open - 1);
+    const std::string_view target = end == npos ? "" : s.substr(close + 2, end - close - 2);
+    if (end == npos || text.find('[') != npos || target.empty() || target.find_first_of(" []") != npos) {
+      out += htmlEscape(s.substr(at, open + 1 - at));
+      at = open + 1;
+      continue;
+    }
+    out += htmlEscape(s.substr(at, open - at));
+    out += fmt::format("<a href=\"{}\">{}</a>", htmlEscape(target), htmlEscape(text));
+    at = end + 1;
+  }
+  if (at < s.size()) out += htmlEscape(s.substr(at));
   return out;
 }
 
@@ -85,10 +111,10 @@ void markdownBlock(std::ostream& md, const Block& block) {
 void htmlBlock(std::ostream& html, const Block& block) {
   std::visit(Overloaded{
                  [&](const Heading& h) { html << fmt::format("<h{0}>{1}</h{0}>\n", h.level, htmlEscape(h.text)); },
-                 [&](const Paragraph& p) { html << "<p>" << htmlEscape(p.text) << "</p>\n"; },
+                 [&](const Paragraph& p) { html << "<p>" << htmlText(p.text) << "</p>\n"; },
                  [&](const BulletList& l) {
                    html << "<ul>\n";
-                   for (const auto& i : l.items) html << "<li>" << htmlEscape(i) << "</li>\n";
+                   for (const auto& i : l.items) html << "<li>" << htmlText(i) << "</li>\n";
                    html << "</ul>\n";
                  },
                  [&](const Table& t) {
@@ -98,7 +124,7 @@ void htmlBlock(std::ostream& html, const Block& block) {
                    for (const auto& row : t.rows) {
                      html << "<tr>";
                      for (const auto& c : row)
-                       html << (flagged(c) ? "<td class=\"flag\">" : "<td>") << htmlEscape(c) << "</td>";
+                       html << (flagged(c) ? "<td class=\"flag\">" : "<td>") << htmlText(c) << "</td>";
                      html << "</tr>\n";
                    }
                    html << "</table>\n";
@@ -117,6 +143,16 @@ void htmlBlock(std::ostream& html, const Block& block) {
 }
 
 }  // namespace
+
+std::string link(std::string_view text, std::string_view target) {
+  std::string encoded;
+  for (const char c : target) {
+    const auto u = static_cast<unsigned char>(c);
+    if (std::isalnum(u) || c == '/' || c == '.' || c == '-' || c == '_' || c == '~') encoded += c;
+    else encoded += fmt::format("%{:02X}", u);
+  }
+  return fmt::format("[{}]({})", text, encoded);
+}
 
 void Document::table(std::vector<std::string> head, std::vector<std::vector<std::string>> rows) {
   if (rows.empty()) {

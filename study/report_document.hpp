@@ -2,8 +2,10 @@
 // The study report as a document: a list of blocks (headings, paragraphs, bullet lists, tables,
 // figures) that the report's sections append once and that renders to a self-contained HTML page
 // (figures inlined as SVG) and to Markdown (figures linked to figures/STEM.svg). Both renderings
-// come from the same blocks, so they cannot drift apart.
+// come from the same blocks, so they cannot drift apart. Text may hold links written as in
+// Markdown, [text](target) (made by link()): Markdown keeps them, HTML makes them <a href>.
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -36,6 +38,10 @@ struct Figure {
   std::string error;
 };
 
+/// A link in the text of any block: "[text](target)", the target percent-encoded except for the
+/// characters of a relative path (letters, digits, '/', '.', '-', '_', '~').
+std::string link(std::string_view text, std::string_view target);
+
 using Block = std::variant<Heading, Paragraph, BulletList, Table, Figure>;
 
 class Document {
@@ -60,9 +66,9 @@ class Document {
 /// Markdown: cells escape '|'; other text is written as is.
 std::string renderMarkdown(const Document& doc);
 
-/// One HTML page with its style sheet; text is escaped, SVG inlined, and a cell that reports a
-/// problem (missing, failed, pending, incomplete, NOT equilibrated, a significant difference (*))
-/// is highlighted.
+/// One HTML page with its style sheet; text is escaped, links made anchors, SVG inlined, and a
+/// cell that reports a problem (missing, failed, pending, incomplete, NOT equilibrated, a
+/// significant difference (*)) is highlighted.
 std::string renderHtml(const Document& doc);
 
 }  // namespace confpack::study

@@ -104,3 +104,19 @@ TEST_CASE("document: blocks come out once each, in order, in both renderings") {
     at = p;
   }
 }
+
+TEST_CASE("document: a link is a Markdown link and an HTML anchor, its target encoded, other brackets text") {
+  CHECK(study::link("r0007", "../runs/r0007") == "[r0007](../runs/r0007)");
+  CHECK(study::link("run", "../my study/runs/r(1)") == "[run](../my%20study/runs/r%281%29)");
+  study::Document doc("t");
+  doc.paragraph("See " + study::link("tables/a.csv", "tables/a.csv") + " and W [d_L] (not a link) & more.");
+  doc.table({"run", "x_S [%]"}, {{study::link("r0000", "../runs/r0000"), "0"}});
+  const std::string md = study::renderMarkdown(doc);
+  const std::string html = study::renderHtml(doc);
+  CHECK(md.find("See [tables/a.csv](tables/a.csv) and W [d_L] (not a link) & more.") != std::string::npos);
+  CHECK(md.find("| [r0000](../runs/r0000) | 0 |") != std::string::npos);
+  CHECK(html.find("<p>See <a href=\"tables/a.csv\">tables/a.csv</a> and W [d_L] (not a link) &amp; more.</p>") !=
+        std::string::npos);
+  CHECK(html.find("<td><a href=\"../runs/r0000\">r0000</a></td>") != std::string::npos);
+  CHECK(html.find("<th>x_S [%]</th>") != std::string::npos);
+}
