@@ -150,15 +150,6 @@ std::string statText(const ReplicaStat& s) {
   return fmt::format("{:.4g} ± {:.2g} (n={})", s.mean, s.std, s.n);
 }
 
-std::string diffText(const BackendDifference& d) {
-  if (d.uncertainty) {
-    // A difference more than twice its uncertainty is flagged: the backends disagree.
-    const bool significant = std::abs(d.value) > 2.0 * *d.uncertainty && *d.uncertainty > 0.0;
-    return fmt::format("{:+.3g} ± {:.2g}{}", d.value, *d.uncertainty, significant ? " (*)" : "");
-  }
-  return fmt::format("{:+.3g} (no uncertainty: n<2)", d.value);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Profiles written by the runs (study/csv_table.hpp), averaged over replicas
 
@@ -182,34 +173,40 @@ CsvTable averageProfiles(const std::vector<CsvTable>& tables) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Sections: which result keys go where (in the order of docs/model.md's measurements)
+// Tables: which result keys go in which tables/FILE.csv (in the order of docs/model.md's
+// measurements); a key of none goes to tables/other.csv.
 
-struct Section {
-  std::string title;
+struct TableGroup {
+  std::string file;  // tables/FILE.csv
+  std::string what;  // what its keys measure, as the page lists it
   std::vector<std::string> prefixes;  // key starts with one of these
 };
 
-const std::vector<Section>& sections() {
-  static const std::vector<Section> s = {
-      {"Solid fraction", {"solid_fraction", "bulk_region", "free_surface"}},
-      {"Profile fit phi(y)", {"profile_fit"}},
-      {"Coordination", {"coordination", "hyperstaticity", "wall_contacts"}},
-      {"Interpenetration, % by volume", {"interpenetration"}},
-      {"Homogeneity", {"homogeneity"}},
-      {"Order: anisotropy and nematic order", {"anisotropy", "fabric", "nematic", "orientation"}},
-      {"Equilibrium", {"equilibrium"}},
-      {"Cost (wall time, steps, solver iterations)", {"timing", "deposit"}},
+const std::vector<TableGroup>& tableGroups() {
+  static const std::vector<TableGroup> g = {
+      {"solid_fraction",
+       "solid fraction, bulk region, free surface",
+       {"solid_fraction", "bulk_region", "free_surface"}},
+      {"profile_fit", "fit of the profile phi(y)", {"profile_fit"}},
+      {"coordination",
+       "coordination, hyperstaticity, wall contacts",
+       {"coordination", "hyperstaticity", "wall_contacts"}},
+      {"interpenetration", "interpenetration, % by volume", {"interpenetration"}},
+      {"homogeneity", "homogeneity", {"homogeneity"}},
+      {"order", "anisotropy, fabric, nematic order, orientations", {"anisotropy", "fabric", "nematic", "orientation"}},
+      {"equilibrium", "equilibrium residuals", {"equilibrium"}},
+      {"cost", "wall time, steps, solver iterations", {"timing", "deposit"}},
+      {"other", "every other quantity", {}},
   };
-  return s;
+  return g;
 }
 
-int sectionOf(const std::string& key) {
-  for (std::size_t i = 0; i < sections().size(); ++i)
-    for (const auto& p : sections()[i].prefixes)
-      if (key.rfind(p, 0) == 0) return static_cast<int>(i);
-  return -1;  // "other quantities"
+std::size_t tableGroupOf(const std::string& key) {
+  for (std::size_t i = 0; i + 1 < tableGroups().size(); ++i)
+    for (const auto& p : tableGroups()[i].prefixes)
+      if (key.rfind(p, 0) == 0) return i;
+  return tableGroups().size() - 1;
 }
-
 
 // ---------------------------------------------------------------------------------------------
 // The study as the sections see it: its runs grouped by configuration and backend.
@@ -288,7 +285,8 @@ ReportSummary countRuns(const StudyView& study) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The sections, in the order of the report
+// The sections (writeReport calls them in the order of the page: the introduction, the summary and
+// the verdict, the figures with their fits, the profiles, the runs, the tables, the cost, the method)
 
 void addIntroduction(Document& doc, const StudyView& study, const ReportSummary& summary,
                      const ReportOptions& options, bool figuresDrawn) {
@@ -303,83 +301,15 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                             fs::absolute(study.sweepDir).string(), when, CONFPACK_VERSION, summary.runs, summary.done,
                             summary.failed, summary.missing, summary.unequilibrated));
   doc.paragraph(
-      "The results come first: a summary per family and backend, then the two backends compared; the "
-      "runs, every quantity per configuration, the fits, the profiles and the cost follow.");
+      "The results come first: the summary per family and backend and the two backends compared, then the "
+      "figures with their fits and the profiles; the runs, the tables of every quantity, the cost and the "
+      "method follow.");
   if (!figuresDrawn)
     doc.paragraph(options.gnuplot.empty()
                       ? "Figures were not drawn (disabled); their CSV data and gnuplot scripts are in figures/."
                       : fmt::format("gnuplot ('{}') was not found: figures are not drawn. Their CSV data and gnuplot "
                                     "scripts are in figures/ (install gnuplot-nox and rerun `confpack report`).",
                                     options.gnuplot.string()));
-}
-
-// How to read the per-configuration tables that follow the summary and the verdict.
-void addReadingGuide(Document& doc) {
-  doc.paragraph(
-      "How to read the tables: each cell is the mean ± sample standard deviation over the replicas (seeds) that "
-      "finished, with their number n. The difference column is the first backend minus the second with the "
-      "standard error of a difference of independent means, sqrt(s1²/n1 + s2²/n2); (*) marks a difference "
-      "larger than twice its uncertainty. Both backends of one (configuration, seed) compact the same deposit. "
-      "Units: lengths in large-grain diameters d_L, times in sqrt(d_L/g), wall time in seconds.");
-}
-
-// Every run with its status; the ones that are missing, failed or not at rest first, with why.
-void addRunsSection(Document& doc, const StudyView& study) {
-  doc.heading(2, "Runs");
-  std::vector<std::vector<std::string>> problems;
-  std::vector<std::vector<std::string>> all;
-  for (const RunRecord& r : study.records) {
-    const auto value = [&](const std::string& k, const char* f) -> std::string {
-      const auto it = r.values.find(k);
-      if (it == r.values.end() || !it->second) return "";
-      return fmt::format(fmt::runtime(f), *it->second);
-    };
-    std::string status(toString(r.status));
-    std::string note;
-    if (r.status == RunStatus::Failed) note = r.marker.is_object() ? r.marker.value("error", "") : "";
-    if (unequilibrated(r)) {
-      status = "done, NOT equilibrated";
-      // A quasi-static run that is not at rest has used all its finisher steps.
-      const auto finisher = r.values.find("timing/stages/quasi_static/steps");
-      note = finisher != r.values.end() && finisher->second
-                 ? fmt::format("finisher not at rest after {:.0f} steps", *finisher->second)
-                 : "stopped at the time limit";
-    }
-    if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";
-    std::vector<std::string> row = {r.run.name, r.run.label(), status, value("solid_fraction", "{:.4f}"),
-                                    value("timing/wall_s", "{:.1f}"), note};
-    if (r.status != RunStatus::Done || !note.empty()) problems.push_back(row);
-    all.push_back(std::move(row));
-  }
-  const std::vector<std::string> head = {"run", "configuration", "status", "phi", "wall [s]", "note"};
-  if (problems.empty()) {
-    doc.paragraph("Every run finished and reached equilibrium.");
-  } else {
-    doc.paragraph("Runs that are missing, failed or did not reach equilibrium (their values are absent from the "
-                  "tables below, or, for unequilibrated runs, included but flagged here):");
-    doc.table(head, problems);
-  }
-  doc.heading(3, "All runs");
-  doc.table(head, all);
-}
-
-// One quantity per configuration, the backends side by side with their difference.
-void addQuantityTable(Document& doc, const StudyView& study, const std::string& key) {
-  std::vector<std::string> head = {"family", "x_S [%]", "W [d_L]", "mu_w"};
-  for (const auto& b : study.backends) head.push_back(b);
-  if (study.pair()) head.push_back(fmt::format("{} − {}", study.backends[0], study.backends[1]));
-  std::vector<std::vector<std::string>> rows;
-  for (const auto& [k, byBackend] : study.groups) {
-    std::vector<std::string> row = {familyOf(k.shape, k.xs), num(k.xs), widthText(k), k.periodic ? "-" : num(k.mu)};
-    std::vector<ReplicaStat> stats;
-    for (const auto& b : study.backends) {
-      stats.push_back(study.statOf(k, b, key));
-      row.push_back(byBackend.count(b) ? statText(stats.back()) : "not in study");
-    }
-    if (study.pair()) row.push_back(stats[0].n && stats[1].n ? diffText(backendDifference(stats[0], stats[1])) : "");
-    rows.push_back(std::move(row));
-  }
-  doc.table(head, rows);
 }
 
 // The fitted parameters as the fit section and the summary both print them, so the two agree.
@@ -451,13 +381,51 @@ std::vector<FitRow> confinementFits(const StudyView& study, const std::string& k
   return out;
 }
 
-// The fit table of quantity(W) = quantity_bulk - cName/W, the backends' differences of its
-// parameters and its figure.
+// A quantity fitted with the geometrical model quantity(W) = quantity_bulk - cName/W, as its
+// section names and defines it.
+struct FitQuantity {
+  std::string quantity, cName, stem;
+  std::string title, definition;
+};
+
+// The values against d_L/W with the fitted lines, the biperiodic value at d_L/W = 0: one colour per
+// series, solid for the first backend, dashed for the second.
+void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
+                  const FitQuantity& q) {
+  const std::string caption =
+      fmt::format("{} against d_L/W with the fits {}_bulk - {}/W (biperiodic at 0)", q.quantity, q.quantity, q.cName);
+  Plot p{q.stem, caption, "d_L / W", q.quantity, {}, {}, true};
+  const auto& backends = study.backends;
+  int color = 0;
+  std::map<SeriesKey, int> colors;
+  for (const FitRow& f : fits) {
+    if (!colors.count(f.series)) colors[f.series] = ++color;
+    const bool dashed = f.backend != backends[0];
+    Series s{fmt::format("{} {}", seriesText(f.series), f.backend), colors[f.series], dashed, false, f.points};
+    if (f.biperiodic)
+      s.points.insert(s.points.begin(), {0.0, f.biperiodic->mean,
+                                         f.biperiodic->n >= 2 ? f.biperiodic->std / std::sqrt(double(f.biperiodic->n))
+                                                              : 0.0});
+    p.series.push_back(std::move(s));
+    if (f.fit)
+      p.functions.push_back(fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt {} notitle", f.fit->bulk, f.fit->c,
+                                        colors[f.series], dashed ? 2 : 1));
+  }
+  doc.figure(figures.draw(p));
+}
+
+// The figure of quantity(W) = quantity_bulk - cName/W against d_L/W with the fitted lines, the
+// fit table and the backends' differences of its parameters.
 void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
-                   const std::string& quantity, const std::string& cName, const std::string& stem) {
+                   const FitQuantity& q) {
   if (fits.empty()) return;
   const auto& backends = study.backends;
-  doc.heading(3, fmt::format("Geometrical model: {}(W) = {}_bulk − {}/W", quantity, quantity, cName));
+  const std::string& quantity = q.quantity;
+  const std::string& cName = q.cName;
+  doc.heading(2, q.title);
+  doc.paragraph(q.definition);
+  addFitFigure(doc, study, figures, fits, q);
+  doc.paragraph("The fit per series (shape, x_S, mu_w) and backend over the confined widths:");
   std::vector<std::vector<std::string>> rows;
   for (const FitRow& f : fits) {
     std::vector<std::string> row = {seriesText(f.series), f.backend, std::to_string(f.points.size())};
@@ -496,25 +464,6 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
       doc.table({"series", quantity + "_bulk", cName}, diffs);
     }
   }
-  // Figure: values against d_L/W with the fitted lines; biperiodic at d_L/W = 0.
-  Plot p{stem, fmt::format("{} against d_L/W with the fits {}_bulk - {}/W (biperiodic at 0)", quantity, quantity, cName),
-         "d_L / W", quantity, {}, {}, true};
-  int color = 0;
-  std::map<SeriesKey, int> colors;
-  for (const FitRow& f : fits) {
-    if (!colors.count(f.series)) colors[f.series] = ++color;
-    const bool dashed = f.backend != backends[0];
-    Series s{fmt::format("{} {}", seriesText(f.series), f.backend), colors[f.series], dashed, false, f.points};
-    if (f.biperiodic)
-      s.points.insert(s.points.begin(), {0.0, f.biperiodic->mean,
-                                         f.biperiodic->n >= 2 ? f.biperiodic->std / std::sqrt(double(f.biperiodic->n))
-                                                              : 0.0});
-    p.series.push_back(std::move(s));
-    if (f.fit)
-      p.functions.push_back(fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt {} notitle", f.fit->bulk, f.fit->c,
-                                        colors[f.series], dashed ? 2 : 1));
-  }
-  doc.figure(figures.draw(p));
 }
 
 // lambda_L from the widest confined sample of each series (the wall effect of one wall, least
@@ -567,12 +516,16 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
       }
     }
   }
-  doc.heading(3, "lambda_L against x_S and against C");
+  doc.heading(2, "Wall ordering length lambda_L against x_S and against C");
+  doc.paragraph(
+      "lambda_L is the length, in d_L, over which the layering of the large grains decays away from a wall, "
+      "from the fit of the profile phi(y) of the widest confined sample of each family (the wall least disturbed "
+      "by the other one).");
   if (!byXs.series.empty()) doc.figure(figures.draw(byXs));
   if (!originRows.empty()) {
+    doc.figure(figures.draw(byC));
     doc.paragraph("Linear fit through the origin lambda_L = k C per backend:");
     doc.table({"backend", "points", "k = lambda_L / C", "weights"}, originRows);
-    doc.figure(figures.draw(byC));
   }
 }
 
@@ -769,122 +722,290 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
   if (!sentences.empty()) doc.bullets(sentences);
 }
 
-// Every quantity of result.json, section by section, with the fits and figures of its section.
-void addQuantitySections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits) {
-  std::vector<std::vector<std::string>> sectionKeys(sections().size() + 1);
-  for (const std::string& k : study.keys) {
-    const int s = sectionOf(k);
-    sectionKeys[s < 0 ? sections().size() : static_cast<std::size_t>(s)].push_back(k);
-  }
-  for (std::size_t s = 0; s <= sections().size(); ++s) {
-    const bool other = s == sections().size();
-    std::vector<std::string> shown;
-    std::vector<std::string> notApplicable;
-    for (const auto& k : sectionKeys[s]) (study.applies(k) ? shown : notApplicable).push_back(k);
-    if (other && shown.empty()) continue;
-    doc.heading(2, other ? "Other quantities in result.json" : sections()[s].title);
-    if (shown.empty() && notApplicable.empty()) doc.paragraph("No run of this study reported these quantities.");
-    for (const auto& k : shown) {
-      doc.heading(3, k);
-      addQuantityTable(doc, study, k);
-    }
-    if (!notApplicable.empty()) {
-      std::string list;
-      for (const auto& k : notApplicable) list += (list.empty() ? "" : ", ") + k;
-      doc.paragraph("Not applicable to any run of this study (null in every result.json): " + list + ".");
-    }
-    if (s == 0) addFitSection(doc, study, figures, fits.phi, "phi", "C", "phi_vs_invW");
-    if (s == 2) addFitSection(doc, study, figures, fits.z, "Z", "C_Z", "Z_vs_invW");
-    if (s == 1 && study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, fits.phi);
-  }
+// ---------------------------------------------------------------------------------------------
+// After the answers: the figures with their fits, then the runs and the tables behind them
+
+// The figures of the phi(W) and Z(W) fits and of lambda_L, in this order.
+void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits) {
+  addFitSection(doc, study, figures, fits.phi,
+                {"phi", "C", "phi_vs_invW", "Solid fraction phi against d_L/W",
+                 "The solid fraction phi is the share of the bulk region's volume (away from the floor and the free "
+                 "surface) filled by grains; the geometrical model phi(W) = phi_bulk − C/W splits it into phi_bulk, "
+                 "its value far from the walls, and C, the loss due to the two wall layers, in d_L."});
+  addFitSection(doc, study, figures, fits.z,
+                {"Z", "C_Z", "Z_vs_invW", "Coordination number Z against d_L/W",
+                 "The coordination number Z is the mean number of grain-grain contacts per grain of the bulk region; "
+                 "the same model Z(W) = Z_bulk − C_Z/W gives its value far from the walls, Z_bulk, and its loss "
+                 "due to the walls, C_Z, in d_L."});
+  if (study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, fits.phi);
 }
 
-// The profiles the runs wrote (CSV), averaged over replicas: one figure per file, series and
-// column, the configurations of the series as lines.
-void addProfilesSection(Document& doc, const StudyView& study, FigureWriter& figures) {
-  if (study.csvNames.empty()) return;
-  doc.heading(2, "Profiles");
-  doc.paragraph("Profiles as written by the runs (one CSV per quantity in each run folder), averaged over the "
-                "replicas; solid lines are the first backend, dashed the second.");
+// The figures of one profile file the runs wrote (CSV), averaged over replicas: one figure per
+// series and column, the configurations of the series as lines. figureIndex numbers the figures.
+void addProfileFigures(Document& doc, const StudyView& study, FigureWriter& figures, const std::string& name,
+                       int& figureIndex) {
   const auto& backends = study.backends;
-  int figureIndex = 0;
-  for (const std::string& name : study.csvNames) {
-    const std::string base = fs::path(name).stem().string();
-    for (const SeriesKey& sk : study.seriesKeys()) {
-      std::map<std::string, std::vector<Series>> byColumn;
-      std::vector<std::string> columnOrder;
-      std::string xLabel;
-      int color = 0;
-      for (const auto& [k, byBackend] : study.groups) {
-        if (seriesOf(k) != sk) continue;
-        ++color;
-        for (std::size_t bi = 0; bi < backends.size(); ++bi) {
-          if (!byBackend.count(backends[bi])) continue;
-          std::vector<CsvTable> tables;
-          for (const RunRecord* r : byBackend.at(backends[bi]))
-            if (r->status == RunStatus::Done)
-              if (auto t = readCsv(study.runDir(*r) / name)) tables.push_back(std::move(*t));
-          if (tables.empty()) continue;
-          const CsvTable avg = averageProfiles(tables);
-          xLabel = avg.columns[0];
-          // At most four value columns per profile keep the figures readable.
-          for (std::size_t c = 1; c < avg.columns.size() && c <= 4; ++c) {
-            if (!byColumn.count(avg.columns[c])) columnOrder.push_back(avg.columns[c]);
-            Series s{fmt::format("W={} {} (n={})", widthText(k), backends[bi], tables.size()), color, bi > 0, true, {}};
-            s.markers = false;
-            for (const auto& row : avg.rows)
-              if (std::isfinite(row[c])) s.points.push_back({row[0], row[c], 0.0});
-            byColumn[avg.columns[c]].push_back(std::move(s));
-          }
+  const std::string base = fs::path(name).stem().string();
+  for (const SeriesKey& sk : study.seriesKeys()) {
+    std::map<std::string, std::vector<Series>> byColumn;
+    std::vector<std::string> columnOrder;
+    std::string xLabel;
+    int color = 0;
+    for (const auto& [k, byBackend] : study.groups) {
+      if (seriesOf(k) != sk) continue;
+      ++color;
+      for (std::size_t bi = 0; bi < backends.size(); ++bi) {
+        if (!byBackend.count(backends[bi])) continue;
+        std::vector<CsvTable> tables;
+        for (const RunRecord* r : byBackend.at(backends[bi]))
+          if (r->status == RunStatus::Done)
+            if (auto t = readCsv(study.runDir(*r) / name)) tables.push_back(std::move(*t));
+        if (tables.empty()) continue;
+        const CsvTable avg = averageProfiles(tables);
+        xLabel = avg.columns[0];
+        // At most four value columns per profile keep the figures readable.
+        for (std::size_t c = 1; c < avg.columns.size() && c <= 4; ++c) {
+          if (!byColumn.count(avg.columns[c])) columnOrder.push_back(avg.columns[c]);
+          Series s{fmt::format("W={} {} (n={})", widthText(k), backends[bi], tables.size()), color, bi > 0, true, {}};
+          s.markers = false;
+          for (const auto& row : avg.rows)
+            if (std::isfinite(row[c])) s.points.push_back({row[0], row[c], 0.0});
+          byColumn[avg.columns[c]].push_back(std::move(s));
         }
       }
-      for (const std::string& col : columnOrder) {
-        Plot p{fmt::format("profile_{:03d}_{}", ++figureIndex, base),
-               fmt::format("{}: {} for {}", base, col, seriesText(sk)), xLabel, col, byColumn[col], {}, false};
-        doc.figure(figures.draw(p));
-      }
+    }
+    for (const std::string& col : columnOrder) {
+      Plot p{fmt::format("profile_{:03d}_{}", ++figureIndex, base),
+             fmt::format("{}: {} for {}", base, col, seriesText(sk)), xLabel, col, byColumn[col], {}, false};
+      doc.figure(figures.draw(p));
     }
   }
 }
 
-// Wall time, steps and solver iterations of every run, and the total wall time per backend.
-void addCostSection(Document& doc, const StudyView& study) {
-  doc.heading(2, "Cost of each run");
-  std::vector<std::string> costKeys;
-  for (const std::string& k : study.keys)
-    if (k.rfind("timing/", 0) == 0 && k.find("phases") == std::string::npos) costKeys.push_back(k);
-  std::vector<std::string> head = {"run", "configuration", "status"};
-  for (const auto& k : costKeys) head.push_back(k.substr(7));
-  std::vector<std::vector<std::string>> rows;
-  std::map<std::string, double> totalWall;
-  for (const RunRecord& r : study.records) {
-    std::vector<std::string> row = {r.run.name, r.run.label(), std::string(toString(r.status))};
-    for (const auto& k : costKeys) {
-      const auto it = r.values.find(k);
-      row.push_back(it != r.values.end() && it->second ? fmt::format("{:.4g}", *it->second) : "");
-    }
-    const auto w = r.values.find("timing/wall_s");
-    if (w != r.values.end() && w->second) totalWall[r.run.config.backend] += *w->second;
-    rows.push_back(std::move(row));
+// A profile file the runs write (analysis/analyze.hpp, writeProfiles) as its section names and
+// defines it.
+struct ProfileKind {
+  std::string file, title, definition;
+};
+
+// In the order of the report: phi(y) first.
+const std::vector<ProfileKind>& profileKinds() {
+  static const std::vector<ProfileKind> k = {
+      {"phi_y.csv", "Solid-fraction profiles phi(y)",
+       "phi(y) is the solid fraction of thin slices of the bulk region parallel to the side walls, at a distance y "
+       "(in d_L) from a wall, averaged over the two walls so that it runs from a wall to mid-gap (raw y when "
+       "biperiodic)."},
+      {"z_y.csv", "Coordination profiles Z(y)",
+       "Z(y) is the number of grain-grain contacts per bulk grain in slices 0.25 d_L thick at a distance y from the "
+       "nearer wall, in total and per contact type (simple, double, triple)."},
+      {"homogeneity_y.csv", "Fractions of large and small grains across the gap, P_L(y) and P_S(y)",
+       "P_L and P_S are the shares of large and of small grains among the bulk grains whose centre is in a layer "
+       "1 d_L thick, along y from wall to wall."},
+      {"homogeneity_z.csv", "Fractions of large and small grains with height, P_L(z) and P_S(z)",
+       "P_L and P_S are the shares of large and of small grains among the grains whose centre is in a layer "
+       "1 d_L thick, along z from the floor."},
+      {"orientation_cos.csv", "Contact orientations against the vertical",
+       "The density (mean 1) of the force-carrying contacts' normals against |n_z| = cos theta, theta the angle "
+       "to the vertical, in total and per contact type; 1 everywhere for isotropic contacts."},
+      {"orientation_azimuth.csv", "Contact orientations in azimuth",
+       "The density (mean 1) of the force-carrying contacts' normals against their azimuth folded to [0, 180) "
+       "degrees, in total and per contact type; 1 everywhere for isotropic contacts."},
+  };
+  return k;
+}
+
+// The profiles the runs wrote, one section per file in the order of profileKinds() and then any
+// other, each line a width averaged over its replicas.
+void addProfileSections(Document& doc, const StudyView& study, FigureWriter& figures) {
+  std::vector<ProfileKind> shown;
+  for (const ProfileKind& k : profileKinds())
+    if (study.csvNames.count(k.file)) shown.push_back(k);
+  for (const std::string& name : study.csvNames)
+    if (std::none_of(shown.begin(), shown.end(), [&](const ProfileKind& k) { return k.file == name; }))
+      shown.push_back({name, "Profile " + name, "A profile the runs wrote as " + name + "."});
+  int figureIndex = 0;
+  for (const ProfileKind& k : shown) {
+    doc.heading(2, k.title);
+    doc.paragraph(k.definition + " Each line is a width, averaged over its replicas: solid for the first "
+                  "backend, dashed for the second.");
+    addProfileFigures(doc, study, figures, k.file, figureIndex);
   }
-  std::string totals;
-  for (const auto& [b, t] : totalWall) totals += fmt::format("{}{}: {:.0f} s", totals.empty() ? "" : ", ", b, t);
-  if (!totals.empty()) doc.paragraph("Total compaction wall time per backend: " + totals + ".");
-  doc.table(head, rows);
+}
+
+// `target` as a '/'-separated path relative to the report folder `reportDir`, or absolute when there
+// is none. The report is written into a staging folder beside its final place, in the same parent
+// (StagedOutput, apps/cli_common.hpp), so the path still holds once the folder is moved there.
+std::string relativeLink(const fs::path& target, const fs::path& reportDir) {
+  std::error_code ec;
+  const fs::path rel = fs::relative(target, reportDir, ec);
+  return (ec || rel.empty() ? fs::absolute(target) : rel).generic_string();
+}
+
+// Every run once, the ones missing, failed or not at rest first with why, each name a link to its
+// folder in the sweep relative to the report.
+void addRunsSection(Document& doc, const StudyView& study, const fs::path& reportDir) {
+  doc.heading(2, "Runs");
+  std::vector<std::vector<std::string>> problems;
+  std::vector<std::vector<std::string>> others;
+  for (const RunRecord& r : study.records) {
+    const auto value = [&](const std::string& k, const char* f) -> std::string {
+      const auto it = r.values.find(k);
+      if (it == r.values.end() || !it->second) return "";
+      return fmt::format(fmt::runtime(f), *it->second);
+    };
+    std::string status(toString(r.status));
+    std::string note;
+    if (r.status == RunStatus::Failed) note = r.marker.is_object() ? r.marker.value("error", "") : "";
+    if (unequilibrated(r)) {
+      status = "done, NOT equilibrated";
+      // A quasi-static run that is not at rest has used all its finisher steps.
+      const auto finisher = r.values.find("timing/stages/quasi_static/steps");
+      note = finisher != r.values.end() && finisher->second
+                 ? fmt::format("finisher not at rest after {:.0f} steps", *finisher->second)
+                 : "stopped at the time limit";
+    }
+    if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";
+    std::vector<std::string> row = {link(r.run.name, relativeLink(study.runDir(r), reportDir)),
+                                    r.run.label(),
+                                    status,
+                                    value("solid_fraction", "{:.4f}"),
+                                    value("timing/wall_s", "{:.1f}"),
+                                    note};
+    (r.status != RunStatus::Done || !note.empty() ? problems : others).push_back(std::move(row));
+  }
+  if (problems.empty())
+    doc.paragraph("Every run finished and reached equilibrium. Each name links to the run's folder.");
+  else
+    doc.paragraph(fmt::format(
+        "{} runs are missing, failed or did not reach equilibrium: they come first, with why. Missing and failed "
+        "runs are absent from the fits and tables; unequilibrated runs are included. Each name links to the "
+        "run's folder.",
+        problems.size()));
+  problems.insert(problems.end(), std::make_move_iterator(others.begin()), std::make_move_iterator(others.end()));
+  doc.table({"run", "configuration", "status", "phi", "wall [s]", "note"}, problems);
+}
+
+// A number of a table file: full precision, so that reading it back gives the same double.
+std::string exact(double v) { return fmt::format("{:.17g}", v); }
+
+// The CSV of one table group: a row per (quantity, configuration), per backend the mean, the
+// sample standard deviation and the number of replicas that finished, and the difference of the
+// first two backends with its uncertainty. Empty cells: no value (std and the uncertainty need
+// two replicas).
+void writeQuantityTable(const fs::path& path, const StudyView& study, const std::vector<std::string>& keys) {
+  std::vector<std::string> head = {"key", "family", "x_S", "W", "mu_w", "biperiodic"};
+  for (const auto& b : study.backends)
+    for (const char* what : {"_mean", "_std", "_n"}) head.push_back(b + what);
+  const std::string diffName = study.pair() ? study.backends[0] + "_minus_" + study.backends[1] : "";
+  if (study.pair()) {
+    head.push_back(diffName);
+    head.push_back(diffName + "_uncertainty");
+  }
+  std::vector<std::vector<std::string>> rows;
+  for (const std::string& key : keys)
+    for (const auto& [k, _] : study.groups) {
+      std::vector<std::string> row = {key,          familyOf(k.shape, k.xs), exact(k.xs), exact(k.width),
+                                      exact(k.mu), k.periodic ? "1" : "0"};
+      std::vector<ReplicaStat> stats;
+      for (const auto& b : study.backends) {
+        const ReplicaStat& st = stats.emplace_back(study.statOf(k, b, key));
+        row.push_back(st.n ? exact(st.mean) : "");
+        row.push_back(st.n >= 2 ? exact(st.std) : "");
+        row.push_back(std::to_string(st.n));
+      }
+      if (study.pair()) {
+        const bool both = stats[0].n && stats[1].n;
+        const BackendDifference d = backendDifference(stats[0], stats[1]);
+        row.push_back(both ? exact(d.value) : "");
+        row.push_back(both && d.uncertainty ? exact(*d.uncertainty) : "");
+      }
+      rows.push_back(std::move(row));
+    }
+  writeCsv(path, head, rows);
+}
+
+// Every quantity of result.json per configuration, in tables/FILE.csv (one file per table group),
+// and the page's paragraph that lists them.
+void addQuantityTables(Document& doc, const StudyView& study, const fs::path& reportDir) {
+  std::vector<std::vector<std::string>> groupKeys(tableGroups().size());
+  std::vector<std::string> notApplicable;
+  for (const std::string& k : study.keys)
+    (study.applies(k) ? groupKeys[tableGroupOf(k)] : notApplicable).push_back(k);
+  std::string files;
+  for (std::size_t g = 0; g < tableGroups().size(); ++g) {
+    if (groupKeys[g].empty()) continue;
+    const std::string file = "tables/" + tableGroups()[g].file + ".csv";
+    fs::create_directories(reportDir / "tables");
+    writeQuantityTable(reportDir / file, study, groupKeys[g]);
+    files += fmt::format("{}{} ({})", files.empty() ? "" : ", ", link(file, file), tableGroups()[g].what);
+  }
+  doc.heading(2, "Tables");
+  if (files.empty()) {
+    doc.paragraph("No run of this study has finished: there is no quantity to tabulate.");
+    return;
+  }
+  std::string text = fmt::format(
+      "Every quantity of result.json per configuration: {}. One row per quantity (key) and configuration (family, "
+      "x_S, W, mu_w, biperiodic 1 or 0); per backend the mean, the sample standard deviation and the number n of "
+      "replicas that finished",
+      files);
+  if (study.pair())
+    text += fmt::format(", then {} − {} with its uncertainty sqrt(s1²/n1 + s2²/n2)", study.backends[0],
+                        study.backends[1]);
+  text += "; full precision.";
+  if (!notApplicable.empty()) {
+    std::string list;
+    for (const auto& k : notApplicable) list += (list.empty() ? "" : ", ") + k;
+    text += " Not applicable to any run of this study (null in every result.json): " + list + ".";
+  }
+  doc.paragraph(text);
+}
+
+// What the study cost per backend; each run's wall time is in the run table.
+void addCostSection(Document& doc, const StudyView& study) {
+  doc.heading(2, "Cost");
+  std::vector<std::vector<std::string>> rows;
+  for (const std::string& b : study.backends) {
+    std::vector<double> wall, steps, perStep;
+    const auto collect = [](const RunRecord& r, const std::string& key, std::vector<double>& into) {
+      const auto it = r.values.find(key);
+      if (it != r.values.end() && it->second) into.push_back(*it->second);
+    };
+    for (const RunRecord& r : study.records) {
+      if (r.status != RunStatus::Done || r.run.config.backend != b) continue;
+      collect(r, "timing/wall_s", wall);
+      collect(r, "timing/steps", steps);
+      collect(r, "timing/iterations_per_step", perStep);
+    }
+    const auto mean = [](const std::vector<double>& v, const char* f) {
+      return v.empty() ? std::string("-") : fmt::format(fmt::runtime(f), replicaStat(v).mean);
+    };
+    double total = 0.0;
+    for (double w : wall) total += w;
+    rows.push_back({b, std::to_string(wall.size()), wall.empty() ? "-" : fmt::format("{:.0f}", total),
+                    mean(wall, "{:.1f}"), mean(steps, "{:.0f}"), mean(perStep, "{:.3g}")});
+  }
+  const bool timed = std::any_of(study.keys.begin(), study.keys.end(),
+                                 [](const std::string& k) { return tableGroups()[tableGroupOf(k)].file == "cost"; });
+  doc.paragraph(std::string("Compaction per backend over its finished runs (wall time in seconds)") +
+                (timed ? "; every timing quantity per configuration is in tables/cost.csv." : "."));
+  doc.table({"backend", "finished runs", "total wall [s]", "mean wall per run [s]", "mean steps",
+             "mean solver iterations per step"},
+            rows);
 }
 
 void addMethodSection(Document& doc, const StudyView& study) {
   doc.heading(2, "Method");
   doc.bullets({
-      "Study definition: " + study.sweepDir.string() + "/sweep.json (the sweep file and the expanded run table); "
-      "each run's fully resolved configuration is in runs/<name>/config.json and its result.json.",
-      "Mean and standard deviation are over the replicas (seeds) that finished; missing runs are listed above and "
-      "excluded from the means.",
-      "Geometrical model (docs/model.md): linear least squares in 1/W over the confined widths (GSL); weighted by the "
-      "replicas' standard error of the mean when every width has at least two differing replicas, unweighted "
-      "otherwise (its errors are then estimated from the scatter). The biperiodic value is shown next to the "
-      "fitted bulk value as a check.",
-      "Backend differences: first minus second backend, uncertainty sqrt(s1²/n1 + s2²/n2).",
+      "The study is defined in " + (study.sweepDir / "sweep.json").string() +
+          "; each run's resolved configuration and result are in its folder (config.json, result.json).",
+      "Means and standard deviations are over the replicas (seeds) that finished; missing and failed runs are "
+      "excluded, unequilibrated ones included and flagged in the run table.",
+      "Fits of the geometrical model (docs/model.md): linear least squares in 1/W over the confined widths, "
+      "weighted by the replicas' standard errors of the mean when every width has two or more differing replicas, "
+      "unweighted otherwise; the biperiodic value is a check of the fitted bulk value.",
+      "Backend differences are first minus second backend; (*) marks a difference larger than twice its "
+      "uncertainty. Both backends of one (configuration, seed) compact the same deposit. Units: lengths in large-grain diameters d_L, times in sqrt(d_L/g), wall time in seconds.",
   });
 }
 
@@ -904,10 +1025,10 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   const StudySummary results = summarize(study, fits);
   addSummarySection(doc, study, results);
   addVerdictSection(doc, study, results);
-  addReadingGuide(doc);
-  addRunsSection(doc, study);
-  addQuantitySections(doc, study, figures, fits);
-  addProfilesSection(doc, study, figures);
+  addFitFigureSections(doc, study, figures, fits);
+  addProfileSections(doc, study, figures);
+  addRunsSection(doc, study, outDir);
+  addQuantityTables(doc, study, outDir);
   addCostSection(doc, study);
   addMethodSection(doc, study);
 

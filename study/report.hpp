@@ -4,13 +4,14 @@
 // linked). It leads with the results: a summary per family (shape, x_S, mu_w) and backend (phi_bulk
 // and C of the phi(W) fit, its quality, Z_bulk and C_Z, the interpenetration, the runs at
 // equilibrium) and a cross-solver verdict (each of those numbers nscd against Bullet, with the
-// combined standard error and whether they differ by more than twice it). Then come every quantity
-// of result.json tabulated per configuration (shape, x_S, W, mu_w),
-// the two backends side by side as mean +- standard deviation over the replicas, their difference
-// with its uncertainty, the geometrical-model fits phi(W) = phi_bulk - C/W and Z(W) = Z_bulk -
-// C_Z/W per backend, lambda_L against x_S and against C, the profiles of the runs, and the cost of
-// every run. Runs that are missing, failed or did not reach equilibrium are listed as such, never
-// dropped silently.
+// combined standard error and whether they differ by more than twice it). Then the figures with
+// their fits: phi and Z against d_L/W with the geometrical-model fits phi(W) = phi_bulk - C/W and
+// Z(W) = Z_bulk - C_Z/W per backend, lambda_L against x_S and against C, the profiles phi(y) and
+// the others the runs wrote. Then every run once (the missing, failed or unequilibrated ones first,
+// never dropped silently, each linked to its folder), the list of the tables, the cost and the
+// method. Every quantity of result.json per configuration (shape, x_S, W, mu_w) is not on the page
+// but in tables/GROUP.csv: per backend the mean, standard deviation and number of the replicas,
+// and the difference of the two backends with its uncertainty, at full precision.
 //
 // Figures: for each one a CSV with its data, a gnuplot script and, when gnuplot is installed, the
 // SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts; a
@@ -79,7 +80,8 @@ struct ReportSummary {
   std::filesystem::path html, markdown;
 };
 
-/// Writes report.html, report.md and figures/ (CSV, .gp, .svg) into outDir.
+/// Writes report.html, report.md, figures/ (CSV, .gp, .svg) and tables/ (CSV) into outDir. The
+/// run links are relative to outDir: a staging folder must sit beside the report's final place.
 ReportSummary writeReport(const std::filesystem::path& sweepDir, const std::filesystem::path& outDir,
                           const ReportOptions& options = {});
 

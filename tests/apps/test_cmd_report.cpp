@@ -1,6 +1,7 @@
 // `confpack report` (apps/cmd_report.cpp) with the real binary and fake gnuplots: a figure gnuplot
 // fails on, or draws as an empty file, is named and not left behind; a report stopped by SIGTERM
-// or SIGKILL while gnuplot hangs leaves the previous report whole.
+// or SIGKILL while gnuplot hangs leaves the previous report whole; the run links and the tables,
+// written in the staging folder, hold in the report's final folder.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -100,6 +101,30 @@ TEST_CASE("report: a figure gnuplot fails on or draws as an empty file is named,
     for (const auto& e : fs::directory_iterator(figures)) CHECK(e.path().extension() != ".svg");
     CHECK(slurp(s.dir / "sw" / "report" / "report.html").find("gnuplot failed") != std::string::npos);
     CHECK(entriesStartingWith(s.dir / "sw", ".report.partial-").empty());
+  }
+}
+
+TEST_CASE("report: the links to the run folders and the tables hold once the report is moved into place") {
+  ConfpackSession s("cmd_report_links");
+  makeSweep(s.dir / "sw");
+  for (const std::string& out : {std::string("sw/report"), std::string("other/place/rep")}) {
+    INFO(out);
+    const std::string options = out == "sw/report" ? "" : " --out " + out;
+    REQUIRE(s.run("report sw --no-figures" + options).code == 0);
+    const fs::path report = s.dir / out;
+    const std::string md = slurp(report / "report.md");
+    std::size_t links = 0;
+    for (std::size_t at = md.find("| [r"); at != std::string::npos; at = md.find("| [r", at + 1)) {
+      const std::size_t open = md.find("](", at), close = md.find(')', open);
+      const std::string name = md.substr(at + 3, open - at - 3), target = md.substr(open + 2, close - open - 2);
+      INFO(name << " -> " << target);
+      CHECK(fs::equivalent(report / target, s.dir / "sw" / "runs" / name));
+      ++links;
+    }
+    CHECK(links == 4);
+    CHECK(md.find("[tables/solid_fraction.csv](tables/solid_fraction.csv)") != std::string::npos);
+    CHECK(fs::exists(report / "tables" / "solid_fraction.csv"));
+    CHECK(entriesStartingWith(report.parent_path(), "." + report.filename().string() + ".partial-").empty());
   }
 }
 

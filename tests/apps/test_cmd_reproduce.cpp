@@ -27,8 +27,14 @@ TEST_CASE("reproduce --scale tiny: the whole chain to a report") {
   const std::string md = slurp(dir / "tiny" / "report" / "report.md");
   const std::string html = slurp(dir / "tiny" / "report" / "report.html");
   CHECK(md.find("# confpack study report: tiny") != std::string::npos);
-  CHECK(md.find("| r0005 |") != std::string::npos);
-  CHECK(md.find("### solid_fraction") != std::string::npos);
+  // The run table links each run's folder from the report's final place (it was written staged).
+  CHECK(md.find("| [r0005](../runs/r0005) |") != std::string::npos);
+  CHECK(fs::is_directory(dir / "tiny" / "report" / "../runs/r0005"));
+  // Every quantity per configuration is in tables/, not on the page.
+  CHECK(slurp(dir / "tiny" / "report" / "tables" / "solid_fraction.csv").find("\nsolid_fraction,") !=
+        std::string::npos);
+  CHECK(md.find("[tables/solid_fraction.csv](tables/solid_fraction.csv)") != std::string::npos);
+  CHECK(md.find("### solid_fraction") == std::string::npos);
   CHECK(md.find("nscd − bullet") != std::string::npos);
   CHECK(html.find("</html>") != std::string::npos);
   for (int i = 0; i < 6; ++i) {

@@ -1,15 +1,21 @@
 // Study report: statistics over replicas, backend differences, the phi(W) fit on synthetic data
-// with known phi_bulk and C, missing/failed runs shown as such, and the summary and cross-solver
-// verdict that lead the report.
+// with known phi_bulk and C, missing/failed runs shown as such, the summary and cross-solver
+// verdict that lead the report, the figures before the run table, the run table once with links to
+// the run folders, and the per-configuration tables in tables/*.csv, read back.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include "study/csv_table.hpp"
 #include "study/report.hpp"
 #include "study/sweep.hpp"
 #include "tests/support/read_file.hpp"
@@ -95,6 +101,53 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
   return dir;
 }
 
+// A table of the report's tables/ folder, read back with the CSV reader.
+study::CsvTable readTable(const fs::path& reportDir, const std::string& file) {
+  auto t = study::readCsv(reportDir / "tables" / file);
+  REQUIRE(t);
+  return *t;
+}
+
+// The value of `column` in the row of `key` at width W (confined, or biperiodic); NaN for an empty
+// cell, a failed REQUIRE when there is no such row.
+double tableValue(const study::CsvTable& t, const std::string& key, double width, bool biperiodic,
+                  const std::string& column) {
+  const auto at = [&](const std::string& name) {
+    const auto it = std::find(t.columns.begin(), t.columns.end(), name);
+    REQUIRE(it != t.columns.end());
+    return static_cast<std::size_t>(it - t.columns.begin());
+  };
+  const std::size_t keyAt = at("key"), wAt = at("W"), periodicAt = at("biperiodic"), valueAt = at(column);
+  for (std::size_t i = 0; i < t.rows.size(); ++i)
+    if (t.text[i][keyAt] == key && t.rows[i][wAt] == width && (t.rows[i][periodicAt] == 1.0) == biperiodic)
+      return t.rows[i][valueAt];
+  FAIL("no row " << key << " W=" << width);
+  return 0.0;
+}
+
+// The keys of a table file, once each.
+std::set<std::string> tableKeys(const study::CsvTable& t) {
+  std::set<std::string> keys;
+  for (const auto& row : t.text) keys.insert(row[0]);
+  return keys;
+}
+
+// The Markdown run table's links: the rows from "| run |" to the end of the table, as (name, target).
+std::vector<std::pair<std::string, std::string>> runLinks(const std::string& md) {
+  std::vector<std::pair<std::string, std::string>> links;
+  const std::size_t head = md.find("| run | configuration |");
+  if (head == std::string::npos) return links;
+  std::istringstream in(md.substr(head));
+  std::string line;
+  std::getline(in, line);  // head
+  std::getline(in, line);  // |---|
+  while (std::getline(in, line) && line.rfind("| [", 0) == 0) {
+    const std::size_t close = line.find("](");
+    links.emplace_back(line.substr(3, close - 3), line.substr(close + 2, line.find(')', close) - close - 2));
+  }
+  return links;
+}
+
 }  // namespace
 
 TEST_CASE("replica statistics and backend differences") {
@@ -148,17 +201,44 @@ TEST_CASE("report of a synthetic study: fits recover phi_bulk and C, tables side
   // Backend difference of the fitted parameters: 0.01 and 0.1.
   CHECK(md.find("| +0.0100 ± ") != std::string::npos);
   CHECK(md.find("| +0.100 ± ") != std::string::npos);
-  // Per-configuration cell: mean +- std over 3 replicas; W = 10 nscd phi = 0.64 - 0.05 = 0.59.
-  CHECK(md.find("0.59 ± 0.002 (n=3)") != std::string::npos);
-  // Difference at W = 5: (0.64 - 0.1) - (0.63 - 0.08) = -0.01, uncertainty sqrt(2 delta^2 / 3) = 0.00163.
-  CHECK(md.find("| 0.54 ± 0.002 (n=3) | 0.55 ± 0.002 (n=3) | -0.01 ± 0.0016 (*) |") != std::string::npos);
-  // Quantities present in result.json all have tables; nulls are reported as not applicable.
-  for (const char* k : {"### solid_fraction", "### coordination/Z", "### coordination/rattler_fraction",
-                        "### interpenetration_percent/exact", "### anisotropy", "### equilibrium/max_force_ratio",
-                        "### profile_fit/lambda_L", "### timing/wall_s"})
-    CHECK(md.find(k) != std::string::npos);
+  // Per-configuration values, in tables/: mean +- std over 3 replicas; W = 10 nscd phi = 0.64 - 0.05 = 0.59.
+  const fs::path report = dir / "report";
+  const study::CsvTable phi = readTable(report, "solid_fraction.csv");
+  CHECK(tableValue(phi, "solid_fraction", 10, false, "nscd_mean") == Approx(0.59));
+  CHECK(tableValue(phi, "solid_fraction", 10, false, "nscd_std") == Approx(kDelta));
+  CHECK(tableValue(phi, "solid_fraction", 10, false, "nscd_n") == 3);
+  CHECK(tableValue(phi, "solid_fraction", 12, true, "bullet_mean") == Approx(0.63));
+  // Difference at W = 5: (0.64 - 0.1) - (0.63 - 0.08) = -0.01, uncertainty sqrt(2 delta^2 / 3).
+  CHECK(tableValue(phi, "solid_fraction", 5, false, "nscd_minus_bullet") == Approx(-0.01));
+  CHECK(tableValue(phi, "solid_fraction", 5, false, "nscd_minus_bullet_uncertainty") ==
+        Approx(std::sqrt(2.0 * kDelta * kDelta / 3.0)));
+  // Every quantity present in result.json is in the table of its group, none on the page as a heading.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> groups = {
+      {"solid_fraction.csv", {"solid_fraction"}},
+      {"coordination.csv", {"coordination/Z", "coordination/rattler_fraction"}},
+      {"interpenetration.csv", {"interpenetration_percent/exact"}},
+      {"order.csv", {"anisotropy"}},
+      {"equilibrium.csv", {"equilibrium/max_force_ratio", "equilibrium/reached"}},
+      {"profile_fit.csv", {"profile_fit/lambda_L", "profile_fit/phi_bulk"}},
+      {"cost.csv", {"timing/wall_s", "timing/steps"}},
+      {"other.csv", {"n_grains"}}};
+  for (const auto& [file, keys] : groups) {
+    INFO(file);
+    const std::set<std::string> inFile = tableKeys(readTable(report, file));
+    for (const std::string& k : keys) CHECK(inFile.count(k) == 1);
+    CHECK(md.find("[tables/" + file + "](tables/" + file + ")") != std::string::npos);
+    CHECK(html.find("<a href=\"tables/" + file + "\">") != std::string::npos);
+  }
+  for (const auto& [key, _] : study::flattenResult(json::parse(slurp(dir / "runs" / "r0001" / "result.json")))) {
+    INFO(key);
+    CHECK(md.find("# " + key + "\n") == std::string::npos);
+    CHECK(html.find(">" + key + "</h") == std::string::npos);
+  }
+  CHECK(md.find("\n### ") == std::string::npos);
+  // Nulls in every run are named as not applicable, and have no rows.
+  CHECK(md.find("Not applicable to any run of this study (null in every result.json): ") != std::string::npos);
   CHECK(md.find("nematic/bulk") != std::string::npos);
-  CHECK(md.find("Not applicable") != std::string::npos);
+  CHECK(tableKeys(readTable(report, "order.csv")).count("nematic/bulk") == 0);
   CHECK(md.find("Every run finished") != std::string::npos);
   // Figures with their data next to them; the HTML inlines the SVG.
   CHECK(fs::exists(dir / "report" / "figures" / "phi_vs_invW.csv"));
@@ -168,7 +248,7 @@ TEST_CASE("report of a synthetic study: fits recover phi_bulk and C, tables side
     CHECK(html.find("<svg") != std::string::npos);
     CHECK(md.find("![") != std::string::npos);
   }
-  CHECK(md.find("Profiles") != std::string::npos);
+  CHECK(md.find("## Solid-fraction profiles phi(y)") != std::string::npos);
   if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
 }
 
@@ -180,16 +260,35 @@ TEST_CASE("report shows failed and missing runs as such") {
   CHECK(s.done == 26);
   const std::string md = slurp(s.markdown);
   CHECK(md.find("solver diverged") != std::string::npos);
-  CHECK(md.find("| r0000 |") != std::string::npos);
+  CHECK(md.find("| [r0000](../runs/r0000) |") != std::string::npos);
   CHECK(md.find("missing: not run or interrupted") != std::string::npos);
   // Each unequilibrated run says what stopped it.
   CHECK(md.find("nscd | done, NOT equilibrated | 0.5920 | 1.5 | finisher not at rest after 3000 steps |") !=
         std::string::npos);
   CHECK(md.find("bullet | done, NOT equilibrated | 0.5920 | 1.5 | stopped at the time limit |") != std::string::npos);
-  // bullet at W = 20 has no replica: the cell reads "missing".
-  CHECK(md.find("| MSP | 0 | 20 | 0 | 0.615 ± 0.002 (n=3) | missing |") != std::string::npos);
+  // The problem runs lead the run table: r0000 (interrupted), 3 failed, 2 not at rest, then the 24 others.
+  const auto links = runLinks(md);
+  REQUIRE(links.size() == 30);
+  const std::string table = md.substr(md.find("| run | configuration |"));
+  for (std::size_t i = 0; i < links.size(); ++i) {
+    INFO(links[i].first);
+    const std::size_t row = table.find("| [" + links[i].first + "](");
+    const std::string line = table.substr(row, table.find('\n', row) - row);
+    const bool problem = line.find("| done |") == std::string::npos;
+    CHECK(problem == (i < 6));
+  }
+  CHECK(links.front().first == "r0000");
+  // bullet at W = 20 has no replica: no mean, n = 0.
+  const study::CsvTable phi = readTable(dir / "report", "solid_fraction.csv");
+  CHECK(tableValue(phi, "solid_fraction", 20, false, "nscd_mean") == Approx(0.615));
+  CHECK(tableValue(phi, "solid_fraction", 20, false, "nscd_n") == 3);
+  CHECK(std::isnan(tableValue(phi, "solid_fraction", 20, false, "bullet_mean")));
+  CHECK(tableValue(phi, "solid_fraction", 20, false, "bullet_n") == 0);
+  CHECK(std::isnan(tableValue(phi, "solid_fraction", 20, false, "nscd_minus_bullet")));
   // nscd at W = 4 lost seed 1 (r0000): n = 2 there, mean of seeds 2 and 3.
-  CHECK(md.find("0.516 ± 0.0014 (n=2)") != std::string::npos);
+  CHECK(tableValue(phi, "solid_fraction", 4, false, "nscd_n") == 2);
+  CHECK(tableValue(phi, "solid_fraction", 4, false, "nscd_mean") == Approx(0.516));
+  CHECK(tableValue(phi, "solid_fraction", 4, false, "nscd_std") == Approx(kDelta / std::sqrt(2.0)));
   // The fits still run on the widths that have data (bullet: 3 widths).
   CHECK(md.find("| MSP x_S=0 mu_w=0 | bullet | 3 | 0.6300 ± ") != std::string::npos);
   fs::remove_all(dir);
@@ -247,10 +346,10 @@ std::vector<std::string> rowCells(const std::string& md, const std::string& pref
   return cells;
 }
 
-// The verdict section of a report: from its heading to the reading guide.
+// The verdict section of a report: from its heading to the next section's.
 std::string verdictOf(const std::string& md) {
   const std::size_t at = md.find("## Cross-solver verdict");
-  return at == std::string::npos ? std::string() : md.substr(at, md.find("How to read the tables", at) - at);
+  return at == std::string::npos ? std::string() : md.substr(at, md.find("\n## ", at) - at);
 }
 
 }  // namespace
@@ -260,14 +359,32 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
   const study::ReportSummary s = study::writeReport(dir, dir / "report");
   const std::string md = slurp(s.markdown);
   const std::string html = slurp(s.html);
-  // Summary, then verdict, then the run table, in both renderings.
+  // Summary, then verdict, then the figures (phi first), then the run table, then the cost, in both renderings.
   const std::size_t summaryAt = md.find("## Summary"), verdictAt = md.find("## Cross-solver verdict"),
-                    runsAt = md.find("## Runs");
+                    phiAt = md.find("## Solid fraction phi against d_L/W"), runsAt = md.find("## Runs"),
+                    costAt = md.find("## Cost");
   REQUIRE(summaryAt != std::string::npos);
   CHECK(summaryAt < verdictAt);
-  CHECK(verdictAt < runsAt);
-  CHECK(html.find("<h2>Summary") < html.find("<h2>Cross-solver verdict</h2>"));
-  CHECK(html.find("<h2>Cross-solver verdict</h2>") < html.find("<h2>Runs</h2>"));
+  CHECK(verdictAt < phiAt);
+  CHECK(phiAt < md.find("](figures/phi_vs_invW.", phiAt));
+  CHECK(md.find("](figures/phi_vs_invW.", phiAt) < md.find("## Coordination number Z against d_L/W"));
+  CHECK(md.find("## Coordination number Z against d_L/W") < md.find("## Wall ordering length lambda_L"));
+  CHECK(md.find("## Wall ordering length lambda_L") < md.find("## Solid-fraction profiles phi(y)"));
+  CHECK(md.find("## Solid-fraction profiles phi(y)") < runsAt);
+  CHECK(runsAt < costAt);
+  CHECK(costAt != std::string::npos);
+  const std::vector<std::string> htmlOrder = {"<h2>Summary", "<h2>Cross-solver verdict</h2>",
+                                              "<h2>Solid fraction phi against d_L/W</h2>", "<h2>Runs</h2>",
+                                              "<h2>Cost</h2>"};
+  for (std::size_t i = 0; i + 1 < htmlOrder.size(); ++i) {
+    INFO(htmlOrder[i]);
+    REQUIRE(html.find(htmlOrder[i]) != std::string::npos);
+    CHECK(html.find(htmlOrder[i]) < html.find(htmlOrder[i + 1]));
+  }
+  // Each section of a figure is named after its quantity and defines it, with no section number.
+  CHECK(md.find("## Solid fraction phi against d_L/W\n\nThe solid fraction phi is ") != std::string::npos);
+  CHECK(md.find("## Coordination number Z against d_L/W\n\nThe coordination number Z is ") != std::string::npos);
+  CHECK(md.find("SPEC") == std::string::npos);
   struct Expected {
     std::string backend, phiBulk, c;
   };
@@ -276,8 +393,8 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
     INFO(backend);
     // The fit section's rows (phi first, Z second), on the synthetic law.
     const std::string fitPrefix = "| MSP x_S=0 mu_w=0 | " + backend + " | 4 | ";
-    const auto phiFit = rowCells(md, fitPrefix, runsAt);
-    const auto zFit = rowCells(md, fitPrefix, md.find(fitPrefix, runsAt) + 1);
+    const auto phiFit = rowCells(md, fitPrefix, phiAt);
+    const auto zFit = rowCells(md, fitPrefix, md.find(fitPrefix, phiAt) + 1);
     REQUIRE(phiFit.size() > 5);
     REQUIRE(zFit.size() > 5);
     CHECK_THAT(phiFit[3], Catch::StartsWith(e.phiBulk + " ± "));
@@ -342,5 +459,65 @@ TEST_CASE("summary and verdict say which runs were not at equilibrium or did not
                                       "partly of unequilibrated piles."));
   CHECK_THAT(verdict, Catch::Contains("1 of bullet's 12 finished runs did not reach equilibrium"));
   CHECK_THAT(verdict, Catch::Contains("3 of bullet's 15 runs did not finish."));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("the run table appears once, each run name a link to its folder relative to the report") {
+  const fs::path dir = makeStudy("runlinks", true);
+  for (const fs::path& out : {dir / "report", dir / "elsewhere" / "deeper"}) {
+    INFO(out);
+    const std::string md = slurp(study::writeReport(dir, out).markdown);
+    const std::string html = slurp(out / "report.html");
+    CHECK(md.find("| run | configuration |") == md.rfind("| run | configuration |"));
+    CHECK(md.find("## Runs") == md.rfind("## Runs"));
+    const auto links = runLinks(md);
+    REQUIRE(links.size() == 30);
+    std::set<std::string> names;
+    for (const auto& [name, target] : links) {
+      INFO(name << " -> " << target);
+      names.insert(name);
+      CHECK(fs::path(target).is_relative());
+      CHECK(fs::is_directory(out / target));
+      CHECK(fs::equivalent(out / target, dir / "runs" / name));
+      // Listed once: in the run table and nowhere else as a link.
+      CHECK(md.find("[" + name + "](") == md.rfind("[" + name + "]("));
+      CHECK(html.find("<a href=\"" + target + "\">" + name + "</a>") != std::string::npos);
+    }
+    CHECK(names.size() == 30);
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json") {
+  const fs::path dir = makeStudy("tables", true);
+  const fs::path report = dir / "report";
+  study::writeReport(dir, report);
+  // The values of the finished runs, from their own folders: (key, backend, W, biperiodic) -> values.
+  std::map<std::tuple<std::string, std::string, double, bool>, std::vector<double>> values;
+  for (const auto& e : fs::directory_iterator(dir / "runs")) {
+    if (!fs::exists(e.path() / study::kDoneMarker)) continue;
+    const json cfg = json::parse(slurp(e.path() / "config.json"));
+    const json result = json::parse(slurp(e.path() / "result.json"));
+    const double w = cfg["box"]["width"].get<double>();
+    const bool periodic = cfg["box"]["periodic_y"].get<bool>();
+    const std::string backend = cfg["backend"].get<std::string>();
+    values[{"solid_fraction", backend, w, periodic}].push_back(result["solid_fraction"].get<double>());
+    values[{"coordination/Z", backend, w, periodic}].push_back(result["coordination"]["Z"].get<double>());
+    values[{"timing/wall_s", backend, w, periodic}].push_back(result["timing"]["wall_s"].get<double>());
+  }
+  REQUIRE(values.size() == 3 * 2 * 5 - 3);  // bullet at W = 20 failed for every seed
+  const std::map<std::string, std::string> fileOf = {{"solid_fraction", "solid_fraction.csv"},
+                                                     {"coordination/Z", "coordination.csv"},
+                                                     {"timing/wall_s", "cost.csv"}};
+  for (const auto& [where, v] : values) {
+    const auto& [key, backend, w, periodic] = where;
+    INFO(key << " " << backend << " W=" << w << (periodic ? " biperiodic" : ""));
+    double mean = 0.0;
+    for (double x : v) mean += x;
+    mean /= static_cast<double>(v.size());
+    const study::CsvTable t = readTable(report, fileOf.at(key));
+    CHECK(tableValue(t, key, w, periodic, backend + "_n") == static_cast<double>(v.size()));
+    CHECK(tableValue(t, key, w, periodic, backend + "_mean") == Approx(mean).epsilon(1e-14));
+  }
   fs::remove_all(dir);
 }
