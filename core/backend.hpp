@@ -25,6 +25,7 @@ struct SystemDef {
   std::vector<Grain> grains;          ///< initial poses; velocities start at zero
   Vec3 gravity = Vec3(0.0, 0.0, -1.0);///< [g]
   double density = 1.0;               ///< grain density rho
+  int threads = 1;                    ///< OpenMP threads the backend may use (RunConfig::threads) [-]
 };
 
 struct BodyState {

@@ -103,10 +103,9 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   core::SystemDef system;
   system.box = cfg.box;
   system.grains = deposit.grains;
-  // --threads reaches the backend as its "threads" setting unless the options name their own.
-  nlohmann::json options = cfg.backendOptions.is_null() ? nlohmann::json::object() : cfg.backendOptions;
-  if (options.is_object() && !options.contains("threads")) options["threads"] = cfg.threads;
-  auto backend = backends::makeBackend(cfg.backend, system, options);
+  system.threads = cfg.threads;
+  auto backend = backends::makeBackend(cfg.backend, system,
+                                       cfg.backendOptions.is_null() ? nlohmann::json::object() : cfg.backendOptions);
   const core::CompactionDef& def = cfg.compaction;
 
   CompactionOutcome out;

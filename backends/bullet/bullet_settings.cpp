@@ -38,8 +38,7 @@ const core::SettingsTable<BulletSettings>& settingsTable() {
                  "perturb only while the wall manifold has fewer points than this")
         .flag("randomize_order", &S::randomizeOrder, "random row order in every sweep (not bitwise reproducible)")
         .integer("manifolds_per_grain", &S::manifoldsPerGrain, Range::atLeast(1), "-",
-                 "preallocated manifolds per grain")
-        .integer("threads", &S::threads, Range::atLeast(1), "-", "accepted and recorded; Bullet runs on one thread");
+                 "preallocated manifolds per grain");
     return t;
   }();
   return table;

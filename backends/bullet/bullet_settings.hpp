@@ -99,9 +99,6 @@ struct BulletSettings {
   /// ["manifolds_per_grain"] size of Bullet's preallocated manifold and algorithm pools, per
   /// grain [-], >= 1. Pools that overflow fall back to the heap (slower, still correct).
   int manifoldsPerGrain = 4;
-  /// ["threads"] worker threads [-], >= 1. Debian's Bullet is not built thread-safe, so the
-  /// world runs on one thread; the value is accepted and recorded.
-  int threads = 1;
 
   /// Throws std::invalid_argument naming the field if a value is out of range.
   void validate() const;

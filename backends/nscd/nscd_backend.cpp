@@ -342,7 +342,10 @@ class NscdBackend final : public core::ContactBackend {
 }  // namespace
 
 std::unique_ptr<core::ContactBackend> makeNscdBackend(const core::SystemDef& system, const nlohmann::json& options) {
-  return std::make_unique<NscdBackend>(system, settingsFromJson(options));
+  NscdSettings settings = settingsFromJson(options);
+  if (system.threads < 1) throw std::invalid_argument("nscd: threads must be >= 1");
+  settings.threads = system.threads;
+  return std::make_unique<NscdBackend>(system, settings);
 }
 
 }  // namespace confpack::nscd

@@ -34,7 +34,6 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
         .number("damping", &S::damping, Range::atLeast(0.0), "sqrt(g / d_L)", "damping rate of slow grains in contact")
         .numberOrNone("damping_speed", &S::dampingSpeed, Range::positive(), "sqrt(g d_L)",
                       "grains faster than this are not damped")
-        .integer("threads", &S::threads, Range::atLeast(1), "-", "most OpenMP threads of a phase (--threads sets it)")
         .rule([](const S& s) {
           if (s.minIterations > s.maxIterations)
             throw std::invalid_argument(fmt::format("nscd.min_iterations: must be at most max_iterations ({}) (got {})",

@@ -39,8 +39,10 @@ using confpack::testing::withBottomAt;
 /// enough contact rows for MPRGP's passes (among them the warm start's impulses) to run on the team.
 void requireSameRun(const core::SystemDef& s, int steps, double dt, bool teamRows) {
   // A capped solver keeps the test fast; convergence is not the point, identical iterates are.
-  auto one = nscd::makeNscdBackend(s, {{"threads", 1}, {"max_iterations", 10}});
-  auto two = nscd::makeNscdBackend(s, {{"threads", 2}, {"max_iterations", 10}});
+  core::SystemDef onTwo = s;
+  onTwo.threads = 2;
+  auto one = nscd::makeNscdBackend(s, {{"max_iterations", 10}});
+  auto two = nscd::makeNscdBackend(onTwo, {{"max_iterations", 10}});
   for (int k = 0; k < steps; ++k) {
     one->step(dt);
     two->step(dt);
@@ -289,8 +291,10 @@ TEST_CASE("nscd mprgp: two threads give the bits of one on a pile large enough f
   // at once (seated on three supports each): more than the 4,096 unknowns from which the solver's
   // passes run in parallel (mprgp_solver.cpp).
   const core::SystemDef s = touchingSpheres(14.0, 14.0, true, 1500, 5);
-  auto one = nscd::makeNscdBackend(s, {{"threads", 1}, {"max_iterations", 30}});
-  auto two = nscd::makeNscdBackend(s, {{"threads", 2}, {"max_iterations", 30}});
+  core::SystemDef onTwo = s;
+  onTwo.threads = 2;
+  auto one = nscd::makeNscdBackend(s, {{"max_iterations", 30}});
+  auto two = nscd::makeNscdBackend(onTwo, {{"max_iterations", 30}});
   for (int k = 0; k < 4; ++k) {
     one->step(2e-3);
     two->step(2e-3);

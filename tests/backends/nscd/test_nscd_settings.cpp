@@ -17,8 +17,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
   for (const char* key : {"theta", "expansion", "preconditioner", "tolerance", "max_iterations", "min_iterations",
-                          "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed",
-                          "threads"})
+                          "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed"})
     CHECK(resolved.contains(key));
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
@@ -34,6 +33,12 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"expansion", "cg"}}), Catch::Contains("expansion"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"preconditioner", "ic"}}), Catch::Contains("preconditioner"));
   CHECK_THROWS_AS(nscd::makeNscdBackend(s, nlohmann::json::array()), std::invalid_argument);
+  // Threads come from the run configuration (SystemDef), once, not from the options.
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"threads", 2}}), Catch::Contains("nscd.threads: unknown key"));
+  CHECK_FALSE(resolved.contains("threads"));
+  core::SystemDef none = s;
+  none.threads = 0;
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(none, {}), Catch::Contains("threads"));
   // A box too short for the grains' periodic images is refused, not silently wrong.
   core::SystemDef tiny = boxSystem(1.5, 10.0, false, 0.0);
   tiny.grains.push_back(sphere(1.0, Vec3(0.5, 5.0, 0.5)));
