@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -30,6 +31,22 @@ using confpack::testing::CommandResult;
 using confpack::testing::ConfpackSession;
 using confpack::testing::lineCount;
 using confpack::testing::slurp;
+
+/// Runs each (arguments, what the message must mention) in `s` and requires the refusal the
+/// README promises: exit 2, one line on stderr mentioning it, nothing on stdout.
+void requireRefused(const ConfpackSession& s, const std::vector<std::pair<std::string, std::string>>& cases,
+                    const std::function<void()>& nothingCreated) {
+  for (const auto& [args, mention] : cases) {
+    INFO("confpack " << args);
+    const CommandResult r = s.run(args);
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.err.find(mention) != std::string::npos);
+    CHECK(r.out.empty());
+    nothingCreated();
+  }
+}
 
 }  // namespace
 
@@ -94,16 +111,7 @@ TEST_CASE("bad input is refused with one line, exit 2 and no output directory") 
       {"", "subcommand"},
       {"frobnicate", "frobnicate"},
   };
-  for (const auto& [args, mention] : cases) {
-    INFO("confpack " << args);
-    const CommandResult r = s.run(args);
-    INFO("stderr: " << r.err);
-    CHECK(r.code == 2);
-    CHECK(lineCount(r.err) == 1);
-    CHECK(r.err.find(mention) != std::string::npos);
-    CHECK(r.out.empty());
-    CHECK(s.entries().empty());  // nothing created, not even the directory
-  }
+  requireRefused(s, cases, [&] { CHECK(s.entries().empty()); });  // not even the directory
   // An --out that is a file: refused as bad input, the file untouched.
   std::ofstream(s.dir / "file") << "keep";
   const CommandResult r = s.run("deposit --length-x 6 --width 4 --height 4 --out file");
@@ -197,15 +205,7 @@ TEST_CASE("every subcommand refuses bad input with exit 2 (README, the exit-code
       {"report not-a-sweep --out o", "not-a-sweep"},
       {"reproduce --scale tiny --out file", "'file' exists and is not a directory"},
   };
-  for (const auto& [args, mention] : cases) {
-    INFO("confpack " << args);
-    const CommandResult r = s.run(args);
-    INFO("stderr: " << r.err);
-    CHECK(r.code == 2);
-    CHECK(lineCount(r.err) == 1);
-    CHECK(r.err.find(mention) != std::string::npos);
-    CHECK_FALSE(fs::exists(s.dir / "o"));
-  }
+  requireRefused(s, cases, [&] { CHECK_FALSE(fs::exists(s.dir / "o")); });
   // Nothing else was created either: only the inputs are there.
   CHECK(s.entries().size() == 4);
 }

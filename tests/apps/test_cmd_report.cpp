@@ -19,6 +19,7 @@
 #include "study/sweep.hpp"
 #include "tests/support/confpack_binary.hpp"
 #include "tests/support/read_file.hpp"
+#include "tests/support/study_stubs.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;
@@ -48,17 +49,9 @@ void makeSweep(const fs::path& dir) {
     std::ofstream(runDir / "result.json") << r.dump();
     return r;
   };
-  auto depositor = [](const core::RunConfig& cfg) {
-    core::Deposit d;
-    core::Grain g;
-    g.position = core::Vec3(1.0, 0.5 * cfg.box.width, 0.5);
-    d.grains.push_back(g);
-    d.placeholders.push_back(g.position);
-    return d;
-  };
   study::SweepOptions o;
   o.quiet = true;
-  study::runSweep(spec, dir, o, runner, depositor);
+  study::runSweep(spec, dir, o, runner, testing::oneGrainDeposit);
 }
 
 /// An executable shell script standing in for gnuplot: `--version` succeeds, a script runs `body`.

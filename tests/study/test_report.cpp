@@ -19,6 +19,7 @@
 #include "study/report.hpp"
 #include "study/sweep.hpp"
 #include "tests/support/read_file.hpp"
+#include "tests/support/study_stubs.hpp"
 
 namespace fs = std::filesystem;
 using namespace confpack;
@@ -83,17 +84,9 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
     for (int i = 0; i < 10; ++i) csv << 0.1 * i << ',' << 0.6 + 0.01 * std::cos(6.0 * i) << '\n';
     return r;
   };
-  auto depositor = [](const core::RunConfig& cfg) {
-    core::Deposit d;
-    core::Grain g;
-    g.position = core::Vec3(1.0, 0.5 * cfg.box.width, 0.5);
-    d.grains.push_back(g);
-    d.placeholders.push_back(g.position);
-    return d;
-  };
   study::SweepOptions o;
   o.quiet = true;
-  study::runSweep(spec, dir, o, runner, depositor);
+  study::runSweep(spec, dir, o, runner, testing::oneGrainDeposit);
   if (withFailures) {
     // One run interrupted: its folder exists without a done marker.
     fs::remove(dir / "runs" / "r0000" / study::kDoneMarker);
