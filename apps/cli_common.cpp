@@ -105,6 +105,10 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
       ->capture_default_str();
   auto* out = sub.add_option("--out", opts.out, "Output directory (created; written all or nothing)")->type_name("DIR");
   if (outRequired) out->required();
+  sub.add_option("--max-grains", cfg.deposition.maxGrains,
+                 "Refuse a deposit of more grains than this (a guard against a mistyped box)")
+      ->check(unsignedInteger())
+      ->capture_default_str();
   sub.add_option("--threads", cfg.threads, "Worker threads")
       ->type_name("N")
       ->check(CLI::Range(1, 4096))

@@ -20,7 +20,7 @@ void registerReport(CLI::App& app);     ///< tables and figures of a study (apps
 void registerReproduce(CLI::App& app);  ///< the confinement study at a scale (apps/cmd_reproduce.cpp)
 void registerOptions(CLI::App& app);    ///< the settings tables (apps/cmd_options.cpp)
 
-/// The Markdown table of "compaction", "nscd" or "bullet" that `confpack options` prints.
+/// The Markdown table of "deposition", "compaction", "nscd" or "bullet" that `confpack options` prints.
 std::string optionsListing(const std::string& part);
 
 }  // namespace confpack::app

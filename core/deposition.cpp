@@ -42,37 +42,33 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/settings_table.hpp"
 #include "core/spatial_grid.hpp"
 
 namespace confpack::core {
 
-void DepositionDef::validate() const {
-  if (!(expectedSolidFraction > 0.0 && expectedSolidFraction <= 1.0))
-    throw std::invalid_argument(fmt::format(
-        "deposition: expected_solid_fraction must be in (0, 1] (got {})", expectedSolidFraction));
+const SettingsTable<DepositionDef>& depositionTable() {
+  using D = DepositionDef;
+  static const SettingsTable<D> table = [] {
+    SettingsTable<D> t("deposition");
+    t.number("expected_solid_fraction", &D::expectedSolidFraction, Range::leftOpen(0.0, 1.0), "-",
+             "solid fraction expected after compaction; with the height it sets the volume of grains drawn")
+        .integer("grain_count", &D::grainCount, Range::atLeast(0.0), "-",
+                 "grains to deposit; 0 = from the height and expected_solid_fraction")
+        .integer("max_grains", &D::maxGrains, Range::atLeast(1.0), "-",
+                 "largest number of grains a run may deposit (a guard against a mistyped box)");
+    return t;
+  }();
+  return table;
 }
 
-void to_json(nlohmann::json& j, const DepositionDef& d) {
-  j = {{"expected_solid_fraction", d.expectedSolidFraction}, {"grain_count", d.grainCount}};
-}
+void DepositionDef::validate() const { depositionTable().validate(*this); }
+
+void to_json(nlohmann::json& j, const DepositionDef& d) { j = depositionTable().write(d); }
 
 void from_json(const nlohmann::json& j, DepositionDef& d) {
-  if (!j.is_object())
-    throw std::invalid_argument(fmt::format("deposition: expected a JSON object (got {})", j.dump()));
   DepositionDef out;
-  if (auto it = j.find("expected_solid_fraction"); it != j.end()) {
-    if (!it->is_number())
-      throw std::invalid_argument(
-          fmt::format("deposition: expected_solid_fraction must be a number (got {})", it->dump()));
-    out.expectedSolidFraction = it->get<double>();
-  }
-  if (auto it = j.find("grain_count"); it != j.end()) {
-    // A negative count would silently wrap to a huge std::size_t: refuse it here.
-    if (!it->is_number_integer() || (it->is_number_integer() && !it->is_number_unsigned() && it->get<long long>() < 0))
-      throw std::invalid_argument(
-          fmt::format("deposition: grain_count must be a non-negative integer (got {})", it->dump()));
-    out.grainCount = it->get<std::size_t>();
-  }
+  depositionTable().read(j, out);
   d = out;
 }
 

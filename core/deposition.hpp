@@ -21,10 +21,19 @@ struct DepositionDef {
   double expectedSolidFraction = 0.60;
   /// Number of grains to deposit; 0 = derive it from the box height and expectedSolidFraction.
   std::size_t grainCount = 0;
+  /// Largest number of grains a run may deposit [-]: a guard against a box typed a thousand times
+  /// too large, refused before any work instead of failing out of memory. 1e6 is 33 times the
+  /// paper's largest pile (30,400 grains), beyond what a run brings to rest in a day here.
+  std::size_t maxGrains = 1'000'000;
 
   /// Throws std::invalid_argument naming the bad field.
   void validate() const;
 };
+
+template <class T>
+class SettingsTable;
+/// The keys of DepositionDef (core/settings_table.hpp).
+const SettingsTable<DepositionDef>& depositionTable();
 
 void to_json(nlohmann::json& j, const DepositionDef& d);
 void from_json(const nlohmann::json& j, DepositionDef& d);

@@ -141,7 +141,22 @@ void RunConfig::validate() const {
   if (!(deposition.expectedSolidFraction > 0.0 && deposition.expectedSolidFraction < 1.0))
     throw std::invalid_argument(fmt::format("deposition: expected solid fraction must be in (0, 1) (got {})",
                                             deposition.expectedSolidFraction));
+  deposition.validate();
   compactionTable().validate(compaction);
+  const double grains = estimatedGrainCount();
+  if (grains > static_cast<double>(deposition.maxGrains))
+    throw std::invalid_argument(fmt::format(
+        "deposition: about {:.3g} grains for this box, more than max_grains ({}); check the box's size, or raise "
+        "the limit with --max-grains (deposition.max_grains)",
+        grains, deposition.maxGrains));
+}
+
+double RunConfig::estimatedGrainCount() const {
+  if (deposition.grainCount > 0) return static_cast<double>(deposition.grainCount);
+  const double volume = deposition.expectedSolidFraction * box.lengthX * box.width * box.height;
+  const double small = population.smallFraction / 100.0;
+  return volume * (1.0 - small) / population.meanGrainVolume(population.largeSize) +
+         (small > 0.0 ? volume * small / population.meanGrainVolume(population.smallSize) : 0.0);
 }
 
 }  // namespace confpack::core

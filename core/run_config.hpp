@@ -81,8 +81,11 @@ struct RunConfig {
   std::uint64_t seed = 1;                                    ///< every random stream derives from it
   int threads = 1;                                           ///< worker threads (OpenMP) [-]
 
-  /// Throws std::invalid_argument with one clear message naming the bad field.
+  /// Throws std::invalid_argument with one clear message naming the bad field, and refuses a
+  /// deposit of more than deposition.max_grains grains (estimatedGrainCount()).
   void validate() const;
+  /// grain_count, or the grains the box's target height holds at the expected solid fraction.
+  double estimatedGrainCount() const;
 };
 
 void to_json(nlohmann::json& j, const RunConfig& c);

@@ -96,3 +96,19 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   CHECK_THROWS_WITH(json::parse(R"({"compaction": {"time_limt": 3}})").get<core::RunConfig>(),
                     Catch::Contains("compaction.time_limt: unknown key"));
 }
+
+TEST_CASE("the run configuration refuses a deposit larger than max_grains, from the box's volume") {
+  core::RunConfig c;
+  c.box.lengthX = 20.0;
+  c.box.width = 10.0;
+  c.box.height = 16.0;
+  // phi L_x W h / (pi d^3 / 6): 3,667 spheres of unit diameter (the size spread adds 0.3 %).
+  CHECK(c.estimatedGrainCount() == Approx(0.6 * 20.0 * 10.0 * 16.0 / (M_PI / 6.0)).epsilon(0.005));
+  c.box.lengthX = c.box.width = 1e6;
+  CHECK_THROWS_WITH(c.validate(), Catch::Contains("more than max_grains (1000000)"));
+  c.deposition.maxGrains = std::size_t{1} << 62;
+  CHECK_NOTHROW(c.validate());
+  c.deposition.grainCount = 50;  // an explicit count is what is checked
+  c.deposition.maxGrains = 49;
+  CHECK_THROWS_WITH(c.validate(), Catch::Contains("about 50 grains"));
+}
