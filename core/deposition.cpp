@@ -51,7 +51,7 @@ const SettingsTable<DepositionDef>& depositionTable() {
   using D = DepositionDef;
   static const SettingsTable<D> table = [] {
     SettingsTable<D> t("deposition");
-    t.number("expected_solid_fraction", &D::expectedSolidFraction, Range::leftOpen(0.0, 1.0), "-",
+    t.number("expected_solid_fraction", &D::expectedSolidFraction, Range::open(0.0, 1.0), "-",
              "solid fraction expected after compaction; with the height it sets the volume of grains drawn")
         .integer("grain_count", &D::grainCount, Range::atLeast(0.0), "-",
                  "grains to deposit; 0 = from the height and expected_solid_fraction")

@@ -138,9 +138,6 @@ void RunConfig::validate() const {
   if (!backendOptions.is_object())
     throw std::invalid_argument(fmt::format("backend_options: must be a JSON object (got {})", backendOptions.dump()));
   if (threads < 1) throw std::invalid_argument(fmt::format("threads: must be >= 1 (got {})", threads));
-  if (!(deposition.expectedSolidFraction > 0.0 && deposition.expectedSolidFraction < 1.0))
-    throw std::invalid_argument(fmt::format("deposition: expected solid fraction must be in (0, 1) (got {})",
-                                            deposition.expectedSolidFraction));
   deposition.validate();
   compactionTable().validate(compaction);
   const double grains = estimatedGrainCount();

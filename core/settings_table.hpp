@@ -163,9 +163,6 @@ class SettingsTable {
     return s;
   }
 
-  /// Throws "<where>.<key>: <what>" (for rules).
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const { fail(where_, key, what); }
-
  private:
   SettingsTable& add(const char* key, const char* unit, std::string accepted, const char* help,
                      std::function<void(const nlohmann::json&, T&)> read, std::function<nlohmann::json(const T&)> write,

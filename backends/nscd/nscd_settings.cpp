@@ -46,9 +46,6 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
 
 void NscdSettings::validate() const { settingsTable().validate(*this); }
 
-std::string toString(SolverKind k) { return k == SolverKind::Mprgp ? "mprgp" : "nlgs"; }
-std::string toString(ExpansionKind k) { return k == ExpansionKind::ProjectedCg ? "projected_cg" : "gradient"; }
-std::string toString(PreconditionerKind k) { return k == PreconditionerKind::SymmetricGaussSeidel ? "sgs" : "none"; }
 
 void to_json(nlohmann::json& j, const NscdSettings& s) { j = settingsTable().write(s); }
 

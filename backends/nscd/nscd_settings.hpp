@@ -115,9 +115,6 @@ struct NscdSettings {
 /// JSON reader and writer, validate() and the docs' table all come from it.
 const core::SettingsTable<NscdSettings>& settingsTable();
 void to_json(nlohmann::json& j, const NscdSettings& s);
-std::string toString(SolverKind k);
-std::string toString(ExpansionKind k);
-std::string toString(PreconditionerKind k);
 /// Defaults of the solver-dependent settings (tolerance, max_iterations) for `kind`.
 NscdSettings defaultsFor(SolverKind kind);
 /// Reads the keys that are present (missing ones keep their defaults); throws

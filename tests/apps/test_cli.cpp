@@ -107,7 +107,7 @@ TEST_CASE("bad input is refused with one line, exit 2 and no output directory") 
       {"run " + valid + " --switch-kinetic-ratio 0", "--switch-kinetic-ratio"},
       {"run " + valid + " --time-limit 1e20", "time_limit"},  // once 0 steps and exit 0 (step count overflow)
       {"deposit --length-x 6", "--out"},                                      // missing --out
-      // 3.6e11 grains: once allocated until "std::bad_alloc"; now refused before any work.
+      // about 6.9e12 grains: once allocated until "std::bad_alloc"; now refused before any work.
       {"deposit --length-x 1e6 --width 1e6 --height 6 --out out", "max_grains"},
       {"deposit " + valid + " --max-grains 10", "max_grains (10)"},
       {"deposit " + valid + " --shape pinacoid --pinacoid-E 3", "pinacoid"},  // no ridge: refused by validate()

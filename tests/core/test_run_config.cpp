@@ -86,7 +86,10 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   refused([](core::RunConfig& c) { c.compaction.finisherMaxSteps = 0; }, "compaction.finisher_max_steps");
   CHECK_THROWS_WITH(json::parse(R"({"compaction": {"protocol": "static"}})").get<core::RunConfig>(),
                     Catch::Contains("compaction.protocol: must be \"dynamic\" or \"quasi-static\" (got \"static\")"));
-  refused([](core::RunConfig& c) { c.deposition.expectedSolidFraction = 1.2; }, "expected solid fraction");
+  refused([](core::RunConfig& c) { c.deposition.expectedSolidFraction = 1.2; }, "deposition.expected_solid_fraction");
+  // One range, checked once: a solid fraction of 1 leaves no room to deposit into.
+  refused([](core::RunConfig& c) { c.deposition.expectedSolidFraction = 1.0; },
+          "deposition.expected_solid_fraction: must be in (0, 1) (got 1)");
   refused([](core::RunConfig& c) { c.backendOptions = json::array(); }, "backend_options");
   CHECK_THROWS_WITH(json::parse(R"({"sed": 3})").get<core::RunConfig>(), Catch::Contains("config.sed: unknown key"));
   CHECK_THROWS_WITH(json::parse(R"({"seed": -3})").get<core::RunConfig>(), Catch::Contains("config.seed"));
