@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "analysis/geometric_contacts.hpp"
 
@@ -98,6 +99,13 @@ std::optional<std::string> implausibility(const core::Packing& packing, const Pl
   if (Reason r = solidFractionAboveOne(packing)) return r;
   if (Reason r = contactPointAstray(packing, def)) return r;
   return deepOverlap(packing, def);
+}
+
+void checkPlausible(const core::Packing& packing, const std::filesystem::path& file, bool allow) {
+  if (allow) return;
+  if (const auto why = implausibility(packing))
+    throw std::invalid_argument(
+        fmt::format("{}: implausible packing: {} (--allow-implausible takes it anyway)", file.string(), *why));
 }
 
 }  // namespace confpack::analysis

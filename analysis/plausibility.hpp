@@ -18,6 +18,7 @@
 //   Bullet), so such a point belongs to another packing.
 // Overlap depths are those of the geometric contacts (analysis/geometric_contacts.hpp: exact for
 // spheres, the exact narrow phase for pinacoids).
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -33,5 +34,10 @@ struct PlausibilityDef {
 /// Why the packing is implausible (the first reason found; grains by index, lengths in d_L), or
 /// nullopt when it is plausible.
 std::optional<std::string> implausibility(const core::Packing& packing, const PlausibilityDef& def = {});
+
+/// Refuses a packing read from `file` that is implausible, unless `allow` (`confpack analyze` and
+/// `run --from`, and the Python module's analyze): std::invalid_argument
+/// "FILE: implausible packing: <why> (--allow-implausible takes it anyway)".
+void checkPlausible(const core::Packing& packing, const std::filesystem::path& file, bool allow);
 
 }  // namespace confpack::analysis

@@ -18,7 +18,6 @@
 #include <omp.h>
 #endif
 
-#include "analysis/plausibility.hpp"
 #include "backends/backend_factory.hpp"
 #include "core/interrupt.hpp"
 #include "core/packing_io.hpp"
@@ -271,13 +270,6 @@ CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow) {
                       "fraction above 1, an overlap deeper than 0.05 of the smaller grain's size, a contact point "
                       "more than 0.1 d beyond its grain (refused by default: such a file is a mistake, and its "
                       "numbers would look like results)");
-}
-
-void checkPlausible(const core::Packing& packing, const fs::path& file, bool allow) {
-  if (allow) return;
-  if (const auto why = analysis::implausibility(packing))
-    throw std::invalid_argument(
-        fmt::format("{}: implausible packing: {} (--allow-implausible takes it anyway)", file.string(), *why));
 }
 
 void checkOutputTarget(const fs::path& out) {

@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "analysis/analyze.hpp"
+#include "analysis/plausibility.hpp"
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "core/packing_io.hpp"
@@ -55,7 +56,7 @@ void runAnalyze(AnalyzeState& st) {
     WorkStep step("reading the packing file");
     packing = core::readPacking(st.file);
     step.next("checking the packing's plausibility");
-    checkPlausible(packing, st.file, st.allowImplausible);
+    analysis::checkPlausible(packing, st.file, st.allowImplausible);
     // Analysed before any output exists: an inconsistent packing is refused as bad input.
     step.next("analysing the packing");
     result = analysis::analyze(packing, st.options);

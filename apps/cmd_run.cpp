@@ -15,6 +15,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "analysis/plausibility.hpp"
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
@@ -52,7 +53,7 @@ core::Deposit startFromPacking(RunState& st) {
     if (st.sub->count(name) > 0)
       throw std::invalid_argument(fmt::format("--from takes the box and the grains from the packing; drop {}", name));
   const core::Packing packing = core::readPacking(st.from);
-  checkPlausible(packing, st.from, st.allowImplausible);
+  analysis::checkPlausible(packing, st.from, st.allowImplausible);
   core::RunConfig& cfg = st.cfg;
   const double wallFriction = st.sub->count("--wall-friction") > 0 ? cfg.box.wallFriction : packing.box.wallFriction;
   cfg.box = packing.box;
