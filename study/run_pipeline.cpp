@@ -315,17 +315,23 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
   return r;
 }
 
+FinishedRun runProtocol(const core::RunConfig& cfg, const std::filesystem::path& vtkDir, const RunProgressFn& progress,
+                        const core::Deposit* shared) {
+  const core::Deposit dep = shared ? *shared : core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  CompactionOutcome out = compact(cfg, dep, vtkDir, progress);
+  analysis::Analysis measured = analysis::analyze(out.packing, analysisOptions());
+  nlohmann::json result = makeResult(cfg, dep, out, measured);
+  return {std::move(out.packing), std::move(measured), std::move(result)};
+}
+
 nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
                            const RunProgressFn& progress, const core::Deposit* shared) {
-  const core::Deposit dep = shared ? *shared : core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const CompactionOutcome out = compact(cfg, dep, outDir / "vtk", progress);
-  const analysis::Analysis measured = analysis::analyze(out.packing, analysisOptions());
-  nlohmann::json result = makeResult(cfg, dep, out, measured);
-  core::writePacking(out.packing, outDir / "packing.json");
-  analysis::writeProfiles(outDir, measured,
+  const FinishedRun run = runProtocol(cfg, outDir / "vtk", progress, shared);
+  core::writePacking(run.packing, outDir / "packing.json");
+  analysis::writeProfiles(outDir, run.measured,
                           {{"seed", cfg.seed}, {"backend", cfg.backend}, {"version", CONFPACK_VERSION}});
-  core::writeFileAtomically(outDir / "result.json", result.dump(2));
-  return result;
+  core::writeFileAtomically(outDir / "result.json", run.result.dump(2));
+  return run.result;
 }
 
 }  // namespace confpack::study

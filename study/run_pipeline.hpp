@@ -105,6 +105,18 @@ analysis::AnalysisOptions analysisOptions();
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
                           const analysis::Analysis& measured);
 
+/// A run done in memory: the final packing, its measurements and result.json's content.
+struct FinishedRun {
+  core::Packing packing;       ///< final poses with the last step's contacts and forces
+  analysis::Analysis measured; ///< its measurements (the profiles come from here)
+  nlohmann::json result;       ///< result.json (makeResult)
+};
+
+/// Deposit (unless `shared` is given) + compact + analyse, writing nothing but the ParaView frames
+/// into `vtkDir` when it is not empty. runAndWrite and the Python module's run call it.
+FinishedRun runProtocol(const core::RunConfig& cfg, const std::filesystem::path& vtkDir = {},
+                        const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr);
+
 /// Deposit (unless `shared` is given: sweeps compact one deposit with both backends) + compact +
 /// analyse, writing into `outDir` (which must exist): result.json, packing.json (final, with
 /// contacts), profiles (*.csv), vtk/. Files are written atomically; result.json last, so its
