@@ -1,0 +1,77 @@
+"""deposit, run and the configuration from Python equal the command line's for the same seed;
+progress calls back, and Ctrl-C (SIGINT) stops a run with KeyboardInterrupt."""
+import json
+import os
+import signal
+
+import numpy as np
+import pytest
+
+import confpack
+from conftest import TIME_LIMIT, TINY, TINY_CONFIG, run_cli
+from test_analyze import assert_same_profiles
+
+
+def tiny(**compaction):
+    return {**TINY_CONFIG, "compaction": {"time_limit": TIME_LIMIT, **compaction}}
+
+
+def test_deposit_equals_the_cli(cli_deposit, tmp_path):
+    packing = confpack.deposit(TINY_CONFIG)
+    packing.write(tmp_path / "packing.json")
+    assert (tmp_path / "packing.json").read_bytes() == (cli_deposit / "packing.json").read_bytes()
+    assert confpack.resolve_config(TINY_CONFIG) == json.loads((cli_deposit / "config.json").read_text())
+
+
+def test_default_config_is_resolved():
+    config = confpack.default_config()
+    assert config == confpack.resolve_config({}) == confpack.resolve_config(None)
+    assert set(config) == {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed",
+                           "threads"}
+
+
+def test_run_equals_the_cli(cli_run, tmp_path):
+    backend, out = cli_run
+    calls = []
+    result = confpack.run(tiny(), backend=backend, progress=lambda fraction, status: calls.append((fraction, status)))
+    # The same final packing, byte for byte, and the same numbers.
+    result["packing"].write(tmp_path / "packing.json")
+    assert (tmp_path / "packing.json").read_bytes() == (out / "packing.json").read_bytes()
+    cli_result = json.loads((out / "result.json").read_text())
+    assert_same_profiles(result.pop("profiles"), out)
+    result.pop("packing")
+    assert set(result) == set(cli_result)
+    for key in result:
+        if key != "timing":  # wall times differ from run to run
+            assert result[key] == cli_result[key], key
+    assert result["timing"]["steps"] == cli_result["timing"]["steps"]
+    assert result["config"]["backend"] == backend
+    assert calls and all(0.0 <= f <= 1.0 and isinstance(s, str) for f, s in calls)
+
+
+def test_ctrl_c_stops_a_run():
+    def interrupt(fraction, status):
+        os.kill(os.getpid(), signal.SIGINT)  # what Ctrl-C in a terminal or a notebook does
+
+    with pytest.raises(KeyboardInterrupt):
+        confpack.run(tiny(check_interval=10), progress=interrupt)
+    # The module is usable after the interruption.
+    assert confpack.run(tiny(), backend="bullet")["n_grains"] > 0
+
+
+def test_an_error_in_the_callback_stops_the_run():
+    class Stop(Exception):
+        pass
+
+    def fail(fraction, status):
+        raise Stop(status)
+
+    with pytest.raises(Stop):
+        confpack.run(tiny(), progress=fail)
+    with pytest.raises(Stop):
+        confpack.deposit(TINY_CONFIG, progress=fail)
+
+
+def test_numpy_scalars_are_numbers():
+    config = {"box": {"length_x": np.float64(3), "width": np.int64(3), "height": 7.0}, "seed": np.uint64(3)}
+    assert confpack.resolve_config(config) == confpack.resolve_config(TINY_CONFIG)
