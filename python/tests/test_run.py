@@ -3,6 +3,9 @@ progress calls back, and Ctrl-C (SIGINT) stops a run with KeyboardInterrupt."""
 import json
 import os
 import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -75,3 +78,27 @@ def test_an_error_in_the_callback_stops_the_run():
 def test_numpy_scalars_are_numbers():
     config = {"box": {"length_x": np.float64(3), "width": np.int64(3), "height": 7.0}, "seed": np.uint64(3)}
     assert confpack.resolve_config(config) == confpack.resolve_config(TINY_CONFIG)
+
+
+def test_ctrl_c_from_outside_stops_the_compaction(tmp_path):
+    # A real SIGINT while the compaction runs in C++ without the GIL and without a callback: the
+    # run stops at its next equilibrium check, long before its 400 t0.
+    script = (
+        "import sys, confpack\n"
+        f"config = {{**{TINY_CONFIG!r}, 'compaction': {{'time_limit': 400}}}}\n"
+        "print('started', flush=True)\n"
+        "try:\n"
+        "    confpack.run(config)\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted', flush=True)\n"
+        "    sys.exit(3)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                             env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert child.stdout.readline().strip() == "started"
+    time.sleep(0.5)  # into the compaction
+    start = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    out, _ = child.communicate(timeout=30)
+    assert child.returncode == 3 and out.strip() == "interrupted"
+    assert time.monotonic() - start < 5
