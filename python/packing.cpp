@@ -51,6 +51,18 @@ py::array readOnlyView(std::vector<py::ssize_t> shape, std::vector<py::ssize_t> 
   return a;
 }
 
+/// An (n, K) array whose row i fill(grain i, row) writes.
+template <py::ssize_t K, class F>
+py::array grainRows(const std::vector<core::Grain>& grains, F fill) {
+  py::array_t<double> a({static_cast<py::ssize_t>(grains.size()), K});
+  double* row = a.mutable_data();
+  for (const core::Grain& g : grains) {
+    fill(g, row);
+    row += K;
+  }
+  return a;
+}
+
 /// Strings as a numpy array of str.
 py::array stringArray(const std::vector<std::string_view>& names) {
   py::list list;
@@ -74,42 +86,38 @@ std::vector<std::string> strings(const py::object& values, py::ssize_t count, co
 struct PyContacts {
   std::vector<core::Contact> contacts;
 
-  std::size_t pointCount() const {
-    std::size_t n = 0;
-    for (const auto& c : contacts) n += c.points.size();
-    return n;
-  }
   /// Grain (or wall) ids of one end of every contact.
   py::array ids(int core::Contact::*end) const {
     std::vector<long> v;
     for (const auto& c : contacts) v.push_back(c.*end);
     return toArray(v);
   }
+  /// value(contact) of every contact: a double or a Vec3 each.
   template <class F>
-  py::array perContact(py::ssize_t columns, F value) const {
-    const auto m = static_cast<py::ssize_t>(contacts.size());
-    py::array_t<double> a = columns == 0 ? py::array_t<double>(m) : py::array_t<double>({m, columns});
-    double* out = a.mutable_data();
-    for (const auto& c : contacts) out = value(c, out);
-    return a;
+  py::array perContact(F value) const {
+    std::vector<decltype(value(core::Contact{}))> v;
+    for (const auto& c : contacts) v.push_back(value(c));
+    return column(v);
   }
+  /// value(point) of every point, contact after contact.
   template <class F>
-  py::array perPoint(py::ssize_t columns, F value) const {
-    const auto n = static_cast<py::ssize_t>(pointCount());
-    py::array_t<double> a = columns == 0 ? py::array_t<double>(n) : py::array_t<double>({n, columns});
-    double* out = a.mutable_data();
+  py::array perPoint(F value) const {
+    std::vector<decltype(value(core::ContactPoint{}))> v;
     for (const auto& c : contacts)
-      for (const auto& p : c.points) out = value(p, out);
+      for (const auto& p : c.points) v.push_back(value(p));
+    return column(v);
+  }
+
+ private:
+  static py::array column(const std::vector<double>& v) { return toArray(v); }
+  static py::array column(const std::vector<core::Vec3>& v) {
+    py::array_t<double> a({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}});
+    auto o = a.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (py::ssize_t k = 0; k < 3; ++k) o(static_cast<py::ssize_t>(i), k) = v[i][k];
     return a;
   }
 };
-
-double* put(double* out, const core::Vec3& v) {
-  out[0] = v.x();
-  out[1] = v.y();
-  out[2] = v.z();
-  return out + 3;
-}
 
 PyContacts makeContacts(const Ints& a, const Ints& b, const Doubles& normals, const Doubles& points,
                         const std::optional<Ints>& pointOffsets, const py::object& types,
@@ -231,22 +239,15 @@ void bindPacking(py::module_& m) {
                                return stringArray(v);
                              })
       .def_property_readonly("normals",
-                             [](const PyContacts& c) {
-                               return c.perContact(3, [](const core::Contact& x, double* o) { return put(o, x.normal); });
-                             })
-      .def_property_readonly("normal_forces",
-                             [](const PyContacts& c) {
-                               return c.perContact(0, [](const core::Contact& x, double* o) {
-                                 *o = x.normalForce();
-                                 return o + 1;
-                               });
-                             })
+                             [](const PyContacts& c) { return c.perContact([](const core::Contact& x) { return x.normal; }); })
+      .def_property_readonly(
+          "normal_forces", [](const PyContacts& c) { return c.perContact([](const core::Contact& x) { return x.normalForce(); }); })
       .def_property_readonly("tangent_forces",
                              [](const PyContacts& c) {
-                               return c.perContact(3, [](const core::Contact& x, double* o) {
+                               return c.perContact([](const core::Contact& x) {
                                  core::Vec3 t = core::Vec3::Zero();
                                  for (const auto& p : x.points) t += p.tangentForce;
-                                 return put(o, t);
+                                 return t;
                                });
                              })
       .def_property_readonly("point_offsets",
@@ -256,26 +257,15 @@ void bindPacking(py::module_& m) {
                                return toArray(v);
                              })
       .def_property_readonly(
-          "points",
-          [](const PyContacts& c) {
-            return c.perPoint(3, [](const core::ContactPoint& p, double* o) { return put(o, p.position); });
-          })
+          "points", [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.position; }); })
       .def_property_readonly("point_forces",
                              [](const PyContacts& c) {
-                               return c.perPoint(0, [](const core::ContactPoint& p, double* o) {
-                                 *o = p.normalForce;
-                                 return o + 1;
-                               });
+                               return c.perPoint([](const core::ContactPoint& p) { return p.normalForce; });
                              })
-      .def_property_readonly("point_gaps",
-                             [](const PyContacts& c) {
-                               return c.perPoint(0, [](const core::ContactPoint& p, double* o) {
-                                 *o = p.gap;
-                                 return o + 1;
-                               });
-                             })
+      .def_property_readonly(
+          "point_gaps", [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.gap; }); })
       .def_property_readonly("point_tangent_forces", [](const PyContacts& c) {
-        return c.perPoint(3, [](const core::ContactPoint& p, double* o) { return put(o, p.tangentForce); });
+        return c.perPoint([](const core::ContactPoint& p) { return p.tangentForce; });
       });
 
   py::class_<PyPacking>(m, "Packing",
@@ -306,17 +296,13 @@ void bindPacking(py::module_& m) {
                              })
       .def_property_readonly("orientations",
                              [](const PyPacking& p) {
-                               const auto n = static_cast<py::ssize_t>(p.packing.grains.size());
-                               py::array_t<double> a({n, py::ssize_t{4}});
-                               auto o = a.mutable_unchecked<2>();
-                               for (py::ssize_t i = 0; i < n; ++i) {
-                                 const core::Quat& q = p.packing.grains[i].orientation;
-                                 o(i, 0) = q.w();
-                                 o(i, 1) = q.x();
-                                 o(i, 2) = q.y();
-                                 o(i, 3) = q.z();
-                               }
-                               return a;
+                               return grainRows<4>(p.packing.grains, [](const core::Grain& g, double* row) {
+                                 const core::Quat& q = g.orientation;
+                                 row[0] = q.w();
+                                 row[1] = q.x();
+                                 row[2] = q.y();
+                                 row[3] = q.z();
+                               });
                              })
       .def_property_readonly("shapes",
                              [](const PyPacking& p) {
@@ -327,18 +313,13 @@ void bindPacking(py::module_& m) {
       .def_property_readonly("pinacoid_params",
                              [](const PyPacking& p) {
                                // G / L, E / L, alpha_deg per grain; NaN for spheres, which have none.
-                               const auto n = static_cast<py::ssize_t>(p.packing.grains.size());
-                               py::array_t<double> a({n, py::ssize_t{3}});
-                               auto o = a.mutable_unchecked<2>();
-                               for (py::ssize_t i = 0; i < n; ++i) {
-                                 const core::Grain& g = p.packing.grains[i];
+                               return grainRows<3>(p.packing.grains, [](const core::Grain& g, double* row) {
                                  const bool pinacoid = g.shape == core::ShapeKind::Pinacoid;
                                  const double nan = std::numeric_limits<double>::quiet_NaN();
-                                 o(i, 0) = pinacoid ? g.params.widthRatio : nan;
-                                 o(i, 1) = pinacoid ? g.params.heightRatio : nan;
-                                 o(i, 2) = pinacoid ? g.params.alphaDeg : nan;
-                               }
-                               return a;
+                                 row[0] = pinacoid ? g.params.widthRatio : nan;
+                                 row[1] = pinacoid ? g.params.heightRatio : nan;
+                                 row[2] = pinacoid ? g.params.alphaDeg : nan;
+                               });
                              })
       .def_property_readonly("contacts",
                              [](const PyPacking& p) -> std::optional<PyContacts> {
