@@ -6,7 +6,6 @@
 // copied into arrays when asked for. A packing made from arrays is validated by the packing file's
 // own rules (core::validatePacking), so that what Python builds always writes and reads back.
 #include <fmt/format.h>
-
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
@@ -34,12 +33,12 @@ std::string shapeText(const py::array& a) {
 
 /// Refuses an argument array whose shape is not (rows, columns), or (rows,) when columns is 0.
 void requireShape(const py::array& a, const char* name, py::ssize_t rows, py::ssize_t columns) {
-  const bool ok = columns == 0 ? a.ndim() == 1 && a.shape(0) == rows
-                               : a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == columns;
+  const bool ok =
+      columns == 0 ? a.ndim() == 1 && a.shape(0) == rows : a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == columns;
   if (!ok)
-    throw std::invalid_argument(columns == 0 ? fmt::format("{}: expected shape ({},) (got {})", name, rows, shapeText(a))
-                                             : fmt::format("{}: expected shape ({}, {}) (got {})", name, rows, columns,
-                                                           shapeText(a)));
+    throw std::invalid_argument(
+        columns == 0 ? fmt::format("{}: expected shape ({},) (got {})", name, rows, shapeText(a))
+                     : fmt::format("{}: expected shape ({}, {}) (got {})", name, rows, columns, shapeText(a)));
 }
 
 /// A read-only array over memory that `owner` keeps alive.
@@ -72,7 +71,8 @@ py::array stringArray(const std::vector<std::string_view>& names) {
 
 /// The strings of a sequence (a numpy array of str, a list, or one string for every element).
 std::vector<std::string> strings(const py::object& values, py::ssize_t count, const char* name) {
-  if (py::isinstance<py::str>(values)) return std::vector<std::string>(static_cast<std::size_t>(count), values.cast<std::string>());
+  if (py::isinstance<py::str>(values))
+    return std::vector<std::string>(static_cast<std::size_t>(count), values.cast<std::string>());
   std::vector<std::string> out;
   for (const py::handle v : values) out.push_back(py::str(v).cast<std::string>());
   if (static_cast<py::ssize_t>(out.size()) != count)
@@ -163,7 +163,8 @@ PyContacts makeContacts(const Ints& a, const Ints& b, const Doubles& normals, co
       if (pointForces) cp.normalForce = pointForces->at(p);
       if (pointGaps) cp.gap = pointGaps->at(p);
       if (pointTangentForces)
-        cp.tangentForce = core::Vec3(pointTangentForces->at(p, 0), pointTangentForces->at(p, 1), pointTangentForces->at(p, 2));
+        cp.tangentForce =
+            core::Vec3(pointTangentForces->at(p, 0), pointTangentForces->at(p, 1), pointTangentForces->at(p, 2));
       c.points.push_back(cp);
     }
   }
@@ -190,8 +191,8 @@ PyPacking makePacking(const core::BoxDef& box, const Doubles& positions, const D
     g.position = core::Vec3(positions.at(i, 0), positions.at(i, 1), positions.at(i, 2));
     if (orientations) {
       // Taken as given: validatePacking refuses one that is not unit, as the writer does.
-      g.orientation = core::Quat(orientations->at(i, 0), orientations->at(i, 1), orientations->at(i, 2),
-                                 orientations->at(i, 3));
+      g.orientation =
+          core::Quat(orientations->at(i, 0), orientations->at(i, 1), orientations->at(i, 2), orientations->at(i, 3));
     }
     if (pinacoidParams && g.shape == core::ShapeKind::Pinacoid)
       g.params = {pinacoidParams->at(i, 0), pinacoidParams->at(i, 1), pinacoidParams->at(i, 2)};
@@ -218,8 +219,8 @@ void bindPacking(py::module_& m) {
       .def_readonly("wall_friction", &core::BoxDef::wallFriction)
       .def_readonly("height", &core::BoxDef::height)
       .def("__repr__", [](const core::BoxDef& b) {
-        return fmt::format("Box(length_x={}, width={}, periodic_y={}, wall_friction={}, height={})", b.lengthX,
-                           b.width, b.periodicY ? "True" : "False", b.wallFriction, b.height);
+        return fmt::format("Box(length_x={}, width={}, periodic_y={}, wall_friction={}, height={})", b.lengthX, b.width,
+                           b.periodicY ? "True" : "False", b.wallFriction, b.height);
       });
 
   py::class_<PyContacts>(m, "Contacts",
@@ -238,10 +239,11 @@ void bindPacking(py::module_& m) {
                                for (const auto& x : c.contacts) v.push_back(core::toString(x.type));
                                return stringArray(v);
                              })
-      .def_property_readonly("normals",
-                             [](const PyContacts& c) { return c.perContact([](const core::Contact& x) { return x.normal; }); })
       .def_property_readonly(
-          "normal_forces", [](const PyContacts& c) { return c.perContact([](const core::Contact& x) { return x.normalForce(); }); })
+          "normals", [](const PyContacts& c) { return c.perContact([](const core::Contact& x) { return x.normal; }); })
+      .def_property_readonly(
+          "normal_forces",
+          [](const PyContacts& c) { return c.perContact([](const core::Contact& x) { return x.normalForce(); }); })
       .def_property_readonly("tangent_forces",
                              [](const PyContacts& c) {
                                return c.perContact([](const core::Contact& x) {
@@ -253,17 +255,19 @@ void bindPacking(py::module_& m) {
       .def_property_readonly("point_offsets",
                              [](const PyContacts& c) {
                                std::vector<long> v{0};
-                               for (const auto& x : c.contacts) v.push_back(v.back() + static_cast<long>(x.points.size()));
+                               for (const auto& x : c.contacts)
+                                 v.push_back(v.back() + static_cast<long>(x.points.size()));
                                return toArray(v);
                              })
       .def_property_readonly(
-          "points", [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.position; }); })
-      .def_property_readonly("point_forces",
-                             [](const PyContacts& c) {
-                               return c.perPoint([](const core::ContactPoint& p) { return p.normalForce; });
-                             })
+          "points",
+          [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.position; }); })
       .def_property_readonly(
-          "point_gaps", [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.gap; }); })
+          "point_forces",
+          [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.normalForce; }); })
+      .def_property_readonly(
+          "point_gaps",
+          [](const PyContacts& c) { return c.perPoint([](const core::ContactPoint& p) { return p.gap; }); })
       .def_property_readonly("point_tangent_forces", [](const PyContacts& c) {
         return c.perPoint([](const core::ContactPoint& p) { return p.tangentForce; });
       });
@@ -283,9 +287,9 @@ void bindPacking(py::module_& m) {
                              [](py::handle self) {
                                const auto& grains = self.cast<const PyPacking&>().packing.grains;
                                const auto n = static_cast<py::ssize_t>(grains.size());
-                               return readOnlyView<double>({n, 3},
-                                                           {static_cast<py::ssize_t>(sizeof(core::Grain)), sizeof(double)},
-                                                           n ? grains[0].position.data() : nullptr, self);
+                               return readOnlyView<double>(
+                                   {n, 3}, {static_cast<py::ssize_t>(sizeof(core::Grain)), sizeof(double)},
+                                   n ? grains[0].position.data() : nullptr, self);
                              })
       .def_property_readonly("sizes",
                              [](py::handle self) {
@@ -330,14 +334,18 @@ void bindPacking(py::module_& m) {
           "write", [](const PyPacking& p, const std::filesystem::path& path) { core::writePacking(p.packing, path); },
           "path"_a, "Writes the packing file atomically (docs/packing-format.md); reading it back gives the same bits.")
       .def("__repr__", [](const PyPacking& p) {
-        return fmt::format("<confpack.Packing: {} grains, {}{}>", p.packing.grains.size(),
-                           p.packing.contacts ? fmt::format("{} contacts", p.packing.contacts->size()) : "no contact list",
-                           p.source.empty() ? "" : ", from " + p.source);
+        return fmt::format(
+            "<confpack.Packing: {} grains, {}{}>", p.packing.grains.size(),
+            p.packing.contacts ? fmt::format("{} contacts", p.packing.contacts->size()) : "no contact list",
+            p.source.empty() ? "" : ", from " + p.source);
       });
 
   m.def(
       "read_packing",
-      [](const std::filesystem::path& path) { return PyPacking{core::readPacking(path), path.string()}; }, "path"_a,
+      [](const std::filesystem::path& path) {
+        return PyPacking{core::readPacking(path), path.string()};
+      },
+      "path"_a,
       "Reads and validates a packing file (docs/packing-format.md); a bad file raises ValueError naming the "
       "file, the element and the field.");
 }

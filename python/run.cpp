@@ -9,7 +9,6 @@
 // (PyErr_CheckSignals) or an exception of the user's callback unwinds the C++ work, which holds
 // nothing that outlives it, and surfaces as that Python exception (KeyboardInterrupt).
 #include <fmt/format.h>
-
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
@@ -126,8 +125,8 @@ void bindRun(py::module_& m) {
         PyPacking out;
         {
           const py::gil_scoped_release release;
-          const core::Deposit pile =
-              core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
+          const core::Deposit pile = core::deposit(
+              cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
                 report(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
                        fmt::format("{}/{} placeholders", done, total));
               });
@@ -148,7 +147,8 @@ void bindRun(py::module_& m) {
         std::optional<study::FinishedRun> run;
         {
           const py::gil_scoped_release release;
-          run = study::runProtocol(cfg, {}, [&](double fraction, const std::string& status) { report(fraction, status); });
+          run = study::runProtocol(cfg, {},
+                                   [&](double fraction, const std::string& status) { report(fraction, status); });
         }
         return py::make_tuple(run->result.dump(), profiles(run->measured), PyPacking{std::move(run->packing), {}});
       },
