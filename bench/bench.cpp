@@ -179,16 +179,58 @@ double logLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
   return sxy / sxx;
 }
 
+/// The scaling series' box for about n spheres: W = 10 and h = 16 of `def`'s base, the periodic
+/// length stretched so that n grains fit.
+core::RunConfig stretchedConfig(const BenchDef& def, int n) {
+  core::RunConfig cfg = baseConfig(def, core::ShapeKind::Sphere);
+  cfg.deposition.grainCount = static_cast<std::size_t>(n);
+  cfg.box.lengthX = n * cfg.population.meanGrainVolume(cfg.population.largeSize) /
+                    (cfg.deposition.expectedSolidFraction * cfg.box.width * cfg.box.height);
+  return cfg;
+}
+
+/// Time to equilibrium against n: nscd compacts each size to rest (or def.timeLimit) with the
+/// bench's protocol and time step; `exponents` gets the least-squares slopes of log(wall time) and
+/// log(CPU time) against log(n) over the points that reached equilibrium (null below two).
+nlohmann::json restSeries(const BenchDef& def, nlohmann::json& exponents,
+                          const std::function<void(const std::string&)>& log, const study::RunProgressFn& progress) {
+  nlohmann::json points = nlohmann::json::array();
+  std::vector<double> logN, logWall, logCpu;
+  for (int n : def.restSizes) {
+    core::RunConfig cfg = stretchedConfig(def, n);
+    const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+    const BackendRun run = runBackend(cfg, "nscd", dep, labelled(progress, fmt::format("rest n={}", dep.grains.size())));
+    const double wall = run.json["wall_s"].get<double>();
+    const double cpu = run.outcome.history.empty() ? 0.0 : run.outcome.history.back().stepCpuSeconds;
+    points.push_back({{"n_grains", dep.grains.size()},
+                      {"length_x", cfg.box.lengthX},
+                      {"equilibrium_reached", run.outcome.reached},
+                      {"wall_s", wall},
+                      {"step_cpu_s", cpu},
+                      {"steps", run.json["steps"]},
+                      {"stages", run.json["stages"]}});
+    if (run.outcome.reached) {
+      logN.push_back(std::log(static_cast<double>(dep.grains.size())));
+      logWall.push_back(std::log(wall));
+      logCpu.push_back(std::log(cpu));
+    }
+    if (log)
+      log(fmt::format("  rest n={}: {} after {:.1f} s ({} steps)", dep.grains.size(),
+                      run.outcome.reached ? "at rest" : "NOT at rest", wall, run.json["steps"].get<long>()));
+  }
+  const bool fit = logN.size() >= 2;
+  exponents = {{"wall", fit ? nlohmann::json(logLogSlope(logN, logWall)) : nlohmann::json(nullptr)},
+               {"cpu", fit ? nlohmann::json(logLogSlope(logN, logCpu)) : nlohmann::json(nullptr)},
+               {"points_at_rest", logN.size()}};
+  return points;
+}
+
 nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
                              const std::function<void(const std::string&)>& log, const study::RunProgressFn& progress) {
   nlohmann::json points = nlohmann::json::array();
   std::map<std::string, std::vector<double>> logN, logT, logTPerSweep, logCpu;
   for (int n : def.scalingSizes) {
-    core::RunConfig cfg = baseConfig(def, core::ShapeKind::Sphere);
-    // Keep W = 10 and h = 16 and stretch the periodic length so that n grains fit.
-    cfg.deposition.grainCount = static_cast<std::size_t>(n);
-    cfg.box.lengthX = n * cfg.population.meanGrainVolume(cfg.population.largeSize) /
-                      (cfg.deposition.expectedSolidFraction * cfg.box.width * cfg.box.height);
+    core::RunConfig cfg = stretchedConfig(def, n);
     cfg.compaction.timeLimit = 1e9;
     const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
     // Let the pile fall and load for scalingFall (rounded up to whole windows of scalingSteps),
@@ -258,7 +300,7 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
 }  // namespace
 
 const std::vector<std::string>& benchCaseNames() {
-  static const std::vector<std::string> names = {"msp-w10", "mpp-w10", "scaling"};
+  static const std::vector<std::string> names = {"msp-w10", "mpp-w10", "scaling", "rest"};
   return names;
 }
 
@@ -275,9 +317,13 @@ nlohmann::json runBench(const BenchDef& def, const std::function<void(const std:
       nlohmann::json exponents;
       cases[name] = scalingSeries(def, exponents, log, progress);
       cases["scaling_exponent"] = exponents;  // t_step ~ n^k, least squares in log-log
+    } else if (name == "rest") {
+      nlohmann::json exponents;
+      cases[name] = restSeries(def, exponents, log, progress);
+      cases["rest_exponent"] = exponents;  // t_rest ~ n^k over the points at rest
     }
     else
-      throw std::invalid_argument(fmt::format("unknown bench case '{}' (expected msp-w10, mpp-w10 or scaling)", name));
+      throw std::invalid_argument(fmt::format("unknown bench case '{}' (expected msp-w10, mpp-w10, scaling or rest)", name));
   }
   return {{"machine", machineInfo()}, {"cases", cases}};
 }

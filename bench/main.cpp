@@ -60,7 +60,7 @@ void runBenchCommand(BenchState& st) {
     if (!st.cases.empty()) st.def.cases = st.cases;
     for (const std::string& c : st.def.cases)
       if (std::find(benchCaseNames().begin(), benchCaseNames().end(), c) == benchCaseNames().end())
-        throw std::invalid_argument(fmt::format("unknown case '{}' (expected msp-w10, mpp-w10 or scaling)", c));
+        throw std::invalid_argument(fmt::format("unknown case '{}' (expected msp-w10, mpp-w10, scaling or rest)", c));
     if (std::filesystem::is_directory(st.out))
       throw std::invalid_argument(fmt::format("--out {} is a directory; give a file name", st.out.string()));
   });
@@ -79,7 +79,9 @@ void runBenchCommand(BenchState& st) {
 
 /// The options of confpack-bench, on the program's own (root) command.
 void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
-  auto* cases = sub->add_option("--case", st->cases, "Cases to run: msp-w10, mpp-w10, scaling (default: all)");
+  auto* cases = sub->add_option("--case", st->cases,
+                                "Cases to run: msp-w10, mpp-w10, scaling, rest (time to equilibrium against n, "
+                                "nscd only) (default: msp-w10, mpp-w10, scaling)");
   sub->add_option("--out", st->out, "Output file (micro.json with --micro)")->capture_default_str();
   auto* timeLimit = sub->add_option("--time-limit", st->def.timeLimit, "Simulated time limit of each compaction [t0]")
                         ->check(positiveNumber())
@@ -98,12 +100,14 @@ void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
           ->capture_default_str();
   auto* scalingSizes = sub->add_option("--scaling-sizes", st->def.scalingSizes, "Grain counts of the scaling series")
                            ->check(positiveNumber());
+  auto* restSizes =
+      sub->add_option("--rest-sizes", st->def.restSizes, "Grain counts of the rest series")->check(positiveNumber());
   sub->add_option("--seed", st->def.seed, "Seed of the deposits (and of the micro-benchmark poses)")
       ->capture_default_str();
   auto* threads =
       sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
   auto* adaptive = sub->add_flag("--adaptive-dt", st->def.adaptiveDt,
-                                 "msp-w10 and mpp-w10 on the adaptive time step (as run --adaptive-dt), both backends");
+                                 "msp-w10, mpp-w10 and the rest series on the adaptive time step (as run --adaptive-dt)");
   auto* protocol = app::addProtocolOption(*sub, st->def.protocol);
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   auto* micro = sub->add_flag("--micro", st->micro,
@@ -111,7 +115,8 @@ void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
                               "narrow phase per pair type, one Gauss-Seidel sweep)");
   // The whole-run options mean nothing to the micro-benchmarks (which time one core): refuse them
   // rather than ignore them.
-  for (CLI::Option* o : {cases, timeLimit, scale, scalingSteps, scalingFall, scalingSizes, threads, adaptive, protocol})
+  for (CLI::Option* o :
+       {cases, timeLimit, scale, scalingSteps, scalingFall, scalingSizes, restSizes, threads, adaptive, protocol})
     micro->excludes(o);
   sub->add_option("--micro-filter", st->microDef.filter, "Regex selecting micro-benchmarks by name")
       ->needs(micro)

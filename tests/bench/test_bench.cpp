@@ -65,3 +65,34 @@ TEST_CASE("bench --case scaling times loaded piles with both backends and fits t
     CHECK(std::isfinite(cases["scaling_exponent"]["cpu"][backend].get<double>()));
   }
 }
+
+// The rest series: time to equilibrium against n, nscd only, in the scaling series' box. Its
+// exponent is the least-squares slope through the points at rest, recomputed here from them.
+TEST_CASE("bench --case rest compacts each size to equilibrium and fits t_rest ~ n^k through the points at rest") {
+  ConfpackSession s("bench_rest", CONFPACK_BENCH_BINARY);
+  const CommandResult r =
+      s.run("--case rest --scale 0.4 --rest-sizes 200 400 --protocol quasi-static --time-limit 40 --out r.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("bench: case rest\n") != std::string::npos);
+  const json cases = json::parse(confpack::testing::slurp(s.dir / "r.json"))["cases"];
+  const json& points = cases["rest"];
+  REQUIRE(points.size() == 2);
+  double logN[2], logT[2];
+  for (int k = 0; k < 2; ++k) {
+    const json& p = points[k];
+    INFO("point " << k);
+    CHECK(p["equilibrium_reached"] == true);
+    CHECK(p["stages"].contains("quasi_static"));  // the protocol asked for
+    const double n = p["n_grains"].get<double>();
+    CHECK(std::abs(n - 200.0 * (k + 1)) < 0.1 * 200.0 * (k + 1));  // the stretched box holds about n
+    logN[k] = std::log(n);
+    logT[k] = std::log(p["wall_s"].get<double>());
+    CHECK(p["step_cpu_s"].get<double>() > 0.0);
+  }
+  const json& e = cases["rest_exponent"];
+  CHECK(e["points_at_rest"] == 2);
+  // Through two points the least-squares slope is the slope of the line between them.
+  CHECK(e["wall"].get<double>() == Approx((logT[1] - logT[0]) / (logN[1] - logN[0])).epsilon(1e-12));
+  CHECK(std::isfinite(e["cpu"].get<double>()));
+}
