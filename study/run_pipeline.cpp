@@ -212,6 +212,9 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     handOver = true;
     handOverAt = "time_limit";
   }
+  // How far the fall had got when the finisher took over: a pile handed over while still falling
+  // (at the time limit) ends looser than one handed over at rest-like speeds (docs/model.md).
+  const double handOverKineticRatio = haveEq ? eq.meanKineticRatio : 0.0;
   const long dynamicSteps = steps;
   const long dynamicIterations = totalIterations;
   const double dynamicWall = secondsSince(start);
@@ -272,6 +275,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                              {"wall_s", dynamicWall}}}};
   if (handOver)
     stages["quasi_static"] = {{"handed_over_at", handOverAt},
+                              {"mean_kinetic_ratio_at_hand_over", handOverKineticRatio},
                               {"steps", finish.steps()},
                               {"clipped_steps", finish.clippedSteps()},
                               {"iterations", totalIterations - dynamicIterations},

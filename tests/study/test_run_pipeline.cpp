@@ -149,6 +149,7 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
   // It handed over before the time limit, at a check whose kinetic ratio was below the switch.
   CHECK(stages["dynamic"]["simulated_time"].get<double>() < cfg.compaction.timeLimit);
   CHECK(stages["quasi_static"]["handed_over_at"] == "switch_kinetic_ratio");
+  CHECK(stages["quasi_static"]["mean_kinetic_ratio_at_hand_over"].get<double>() < cfg.compaction.switchKineticRatio);
   // Frictionless side walls: the floor carries the whole weight (rho = g = 1). With friction the
   // walls may carry part of it, never more than all of it.
   const double weight = core::totalVolume(dep.grains);
@@ -167,6 +168,8 @@ TEST_CASE("quasi-static protocol: at the time limit the finisher takes over and 
   INFO(stages.dump());
   REQUIRE(stages.contains("quasi_static"));
   CHECK(stages["quasi_static"]["handed_over_at"] == "time_limit");
+  // Still falling: result.json says how far from the switch the fall was.
+  CHECK(stages["quasi_static"]["mean_kinetic_ratio_at_hand_over"].get<double>() > cfg.compaction.switchKineticRatio);
   REQUIRE(out.reached);
   CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-8));
 }
