@@ -126,6 +126,10 @@ void registerRun(CLI::App& app) {
                   "E_k / (d^3 P) over the grains is below this")
       ->check(positiveNumber())
       ->capture_default_str();
+  sub->add_option("--fall-time-limit", st->cfg.compaction.fallTimeLimit,
+                  "quasi-static: the longest fall before the finisher takes over [t0]; 0 = --time-limit")
+      ->check(nonNegativeNumber())
+      ->capture_default_str();
   sub->add_option("--time-limit", st->cfg.compaction.timeLimit,
                   "Simulated time after which the run stops, reported as not equilibrated [t0]")
       ->check(positiveNumber())

@@ -58,6 +58,8 @@ const SettingsTable<CompactionDef>& compactionTable() {
         .flag("adaptive_dt", &C::adaptiveDt, "adaptive time step, never below dt")
         .number("time_limit", &C::timeLimit, Range::leftOpen(0.0, kMaxTimeLimit), "t0",
                 "simulated time after which the run stops unequilibrated (quasi-static: the fall hands over)")
+        .number("fall_time_limit", &C::fallTimeLimit, Range::closed(0.0, kMaxTimeLimit), "t0",
+                "quasi-static: the longest fall before the finisher takes over; 0 = time_limit")
         .integer("check_interval", &C::checkInterval, Range::atLeast(1), "-", "steps between equilibrium checks")
         .integer("frame_interval", &C::frameInterval, Range::atLeast(0), "-",
                  "steps between ParaView frames; 0 = first and last only")

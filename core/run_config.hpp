@@ -36,6 +36,10 @@ struct CompactionDef {
   /// protocol, after which the finisher takes over if the fall has not ended before. At most
   /// kMaxTimeLimit.
   double timeLimit = 400.0;
+  /// Quasi-static protocol: the longest fall before the finisher takes over [t0]; 0 = time_limit.
+  /// Apart from time_limit so that a study can give nscd's fall the time it needs and still stop
+  /// Bullet, which has no finisher, at time_limit. At most kMaxTimeLimit.
+  double fallTimeLimit = 0.0;
   int checkInterval = 200;          ///< steps between equilibrium checks [-]
   int frameInterval = 0;            ///< steps between ParaView frames; 0 = first and last only [-]
   double forceRatio = 1e-4;         ///< equilibrium: |sum F| < forceRatio d^2 P [-]

@@ -112,9 +112,10 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   out.dt = def.dt > 0.0 ? def.dt : defaultTimeStep(cfg, deposit);
   out.dtLargest = out.dt;
   const bool adaptive = def.adaptiveDt;
-  const double timeLimit = def.timeLimit;
   // Bullet has no finisher: its runs stay dynamic, and result.json says which protocol ran.
   const bool finisher = def.protocol == core::Protocol::QuasiStatic && backend->hasQuasiStaticStep();
+  // With the finisher, the dynamic steps are the fall, bounded by fall_time_limit when given.
+  const double timeLimit = finisher && def.fallTimeLimit > 0.0 ? def.fallTimeLimit : def.timeLimit;
   out.protocol = finisher ? core::Protocol::QuasiStatic : core::Protocol::Dynamic;
   // A fixed step runs ceil(limit / dt) steps, its time counted as steps x dt (no round-off drift);
   // an adaptive one sums its steps until the sum reaches the limit.
@@ -210,7 +211,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   const char* handOverAt = handOver ? "switch_kinetic_ratio" : nullptr;
   if (finisher && !handOver && !eq.reached) {
     handOver = true;
-    handOverAt = "time_limit";
+    handOverAt = def.fallTimeLimit > 0.0 ? "fall_time_limit" : "time_limit";
   }
   // How far the fall had got when the finisher took over: a pile handed over while still falling
   // (at the time limit) ends looser than one handed over at rest-like speeds (docs/model.md).

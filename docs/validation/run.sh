@@ -6,6 +6,8 @@
 #   docs/validation/run.sh OUT_DIR [SEEDS] [PILE ...]
 # SEEDS defaults to "1 2 3 4 5 6 7 8 9 10"; PILE to msp-bi6 (the 493-sphere biperiodic pile).
 # A run already present (its result.json) is kept, so the script resumes after an interruption.
+# QS_FLAGS adds flags to the quasi-static runs only, e.g. QS_FLAGS=--adaptive-dt for a fall on the
+# adaptive step (use another OUT_DIR: runs already there are kept whatever their flags).
 # Then: python3 docs/validation/compare.py OUT_DIR
 set -euo pipefail
 out=${1:?usage: docs/validation/run.sh OUT_DIR [SEEDS] [PILE ...]}
@@ -41,6 +43,8 @@ for pile in "${piles[@]}"; do
       # takes the adaptive step, the same Moreau-Jean dynamics with longer steps once the grains
       # are slow (README, "Time step").
       [[ ($pile == msp-w5 || $pile == bsp25-*) && $protocol == dynamic ]] && extra=(--adaptive-dt)
+      # shellcheck disable=SC2206
+      [[ $protocol == quasi-static ]] && extra=(${QS_FLAGS:-})
       # shellcheck disable=SC2086
       "$confpack" run $flags --seed "$seed" --protocol "$protocol" "${extra[@]}" --quiet --out "$dir"
     done

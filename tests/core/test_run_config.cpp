@@ -49,7 +49,7 @@ TEST_CASE("the run configuration round-trips through JSON") {
        {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed", "threads"})
     CHECK(j.contains(k));
   for (const char* k :
-       {"dt", "adaptive_dt", "time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
+       {"dt", "adaptive_dt", "time_limit", "fall_time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
         "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance", "finisher_max_step",
         "finisher_max_steps"})
     CHECK(j.at("compaction").contains(k));

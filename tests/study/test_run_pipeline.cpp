@@ -174,6 +174,31 @@ TEST_CASE("quasi-static protocol: at the time limit the finisher takes over and 
   CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-8));
 }
 
+// fall_time_limit bounds nscd's fall and leaves time_limit to Bullet, which has no finisher: one
+// study can give nscd's piles the fall they need and stop Bullet early (reproduce --scale quick).
+TEST_CASE("quasi-static protocol: fall_time_limit bounds nscd's fall, time_limit Bullet's run") {
+  for (const std::string backend : {"nscd", "bullet"}) {
+    INFO(backend);
+    core::RunConfig cfg = smallBox(backend, 0.0);
+    cfg.compaction.timeLimit = 0.5;
+    cfg.compaction.fallTimeLimit = 3.0;  // the grains are still falling onto the pile at 3 t0
+    const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+    const study::CompactionOutcome out = study::compact(cfg, dep);
+    const auto& stages = out.timing["stages"];
+    INFO(stages.dump());
+    const double fell = stages["dynamic"]["simulated_time"].get<double>();
+    if (backend == "nscd") {
+      CHECK(fell == Approx(3.0).margin(out.dt));
+      CHECK(stages["quasi_static"]["handed_over_at"] == "fall_time_limit");
+      CHECK(out.reached);
+    } else {
+      CHECK(fell == Approx(0.5).margin(out.dt));
+      CHECK_FALSE(stages.contains("quasi_static"));
+      CHECK_FALSE(out.reached);
+    }
+  }
+}
+
 // The finisher from a pile still settling, with every long step capping grains: the overlaps a
 // capped grain leaves must be removed, not grow (with the trust radius alone, this pile never
 // came to rest in 3,000 steps and its grains sank into one another).
