@@ -321,6 +321,33 @@ TEST_CASE("reading a broken or missing file gives one clear message") {
   fs::remove_all(dir);
 }
 
+TEST_CASE("a refusal echoes a long key or a deeply nested value only in part") {
+  // Issue 23, failure 8: a 10 MB unknown key was echoed in full; a value nested 100,000 deep was
+  // written out by a recursive dump().
+  json j = toJson(samplePacking());
+  j[std::string(10'000'000, 'k')] = 1;
+  std::string message;
+  try {
+    (void)packingFromJson(j, "packing.json");
+  } catch (const std::invalid_argument& e) {
+    message = e.what();
+  }
+  CHECK_THAT(message, Catch::StartsWith("packing.json: kkkk") && Catch::Contains("...: unknown key"));
+  CHECK(message.size() < 300);
+  json deep = 1;
+  for (int i = 0; i < 100000; ++i) deep = json::array({std::move(deep)});
+  j = toJson(samplePacking());
+  j["box"]["width"] = std::move(deep);
+  message.clear();
+  try {
+    (void)packingFromJson(j, "packing.json");
+  } catch (const std::invalid_argument& e) {
+    message = e.what();
+  }
+  CHECK_THAT(message, Catch::StartsWith("packing.json: box.width: must be a finite number (got [[[["));
+  CHECK(message.size() < 200);
+}
+
 TEST_CASE("writing refuses a packing that would not read back and leaves nothing behind") {
   const fs::path dir = confpack::testing::freshDir("packing_io_refuse");
   Packing p = samplePacking();
