@@ -93,8 +93,9 @@ void runWork(std::string_view command, const std::function<void()>& work);
 /// `--allow-implausible` into `allow`: a packing file analysis/plausibility.hpp finds implausible is
 /// taken anyway.
 CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow);
-/// Refuses a packing read from `file` that is implausible (analysis/plausibility.hpp), unless
-/// `allow`: std::invalid_argument "FILE: implausible packing: <why> (...)", bad input.
+/// Refuses a packing read from `file` that mixes spheres and pinacoids (not supported), or that is
+/// implausible (analysis/plausibility.hpp) unless `allow`: std::invalid_argument "FILE: implausible
+/// packing: <why> (...)", bad input.
 void checkPlausible(const core::Packing& packing, const std::filesystem::path& file, bool allow);
 
 /// Refuses an --out that cannot be a directory (an existing file), as bad input.

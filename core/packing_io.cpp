@@ -120,8 +120,14 @@ json toJsonVec(const Vec3& v) {
   return json::array({v.x(), v.y(), v.z()});
 }
 
-Vec3 unitOrFail(Vec3 v, std::string_view source, const std::string& where) {
-  const double n = v.norm();
+/// A direction (normal, quaternion) of unit length. Components near DBL_MAX overflow the plain
+/// norm to infinity (dividing by it gave [0, 0, 0, 0], then refused as "norm 0"); the scaled
+/// norm is only taken then, so that finite norms, and the bits of what they normalise, stay as
+/// they were.
+template <class Vector>
+Vector unitOrFail(Vector v, std::string_view source, const std::string& where) {
+  double n = v.norm();
+  if (std::isinf(n)) n = v.stableNorm();
   if (!(n > kMinNorm)) fail(source, where, fmt::format("cannot be normalised (norm {})", n));
   if (std::abs(n - 1.0) > kUnitTolerance) v /= n;
   return v;
@@ -151,11 +157,9 @@ Grain readGrain(const json& j, std::string_view source, std::size_t index) {
   if (!q.is_array() || q.size() != 4)
     fail(source, r.field("orientation"), fmt::format("must be [w, x, y, z] (got {})", jsonExcerpt(q)));
   const std::string qw = r.field("orientation");
-  Eigen::Vector4d c(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"), r.toNumber(q[2], qw + "[2]"),
-                    r.toNumber(q[3], qw + "[3]"));
-  const double n = c.norm();
-  if (!(n > kMinNorm)) fail(source, qw, fmt::format("cannot be normalised (norm {})", n));
-  if (std::abs(n - 1.0) > kUnitTolerance) c /= n;
+  const Eigen::Vector4d c = unitOrFail(Eigen::Vector4d(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"),
+                                                        r.toNumber(q[2], qw + "[2]"), r.toNumber(q[3], qw + "[3]")),
+                                       source, qw);
   g.orientation = Quat(c[0], c[1], c[2], c[3]);
   return g;
 }

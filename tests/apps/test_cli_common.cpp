@@ -176,3 +176,21 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
   CHECK(entriesOf(root) == std::vector<std::string>{"file", "r.json"});
   fs::remove_all(root);
 }
+
+TEST_CASE("a packing mixing spheres and pinacoids is refused naming the file and the grain, even if allowed") {
+  // Issue 23, failure 8: analyze refused it from inside the analysis, without the file's name.
+  confpack::core::Packing p;
+  p.box.lengthX = p.box.width = 5.0;
+  for (int i = 0; i < 3; ++i) {
+    confpack::core::Grain g;
+    g.position = confpack::core::Vec3(1.0 + i, 1.0, 0.5);
+    p.grains.push_back(g);
+  }
+  CHECK_NOTHROW(confpack::app::checkPlausible(p, "mono.json", false));
+  p.grains[2].shape = confpack::core::ShapeKind::Pinacoid;
+  const char* message =
+      "mixed.json: grains[2].shape: pinacoid, but grains[0] is a sphere: a packing mixing spheres and pinacoids is "
+      "not supported";
+  CHECK_THROWS_WITH(confpack::app::checkPlausible(p, "mixed.json", false), message);
+  CHECK_THROWS_WITH(confpack::app::checkPlausible(p, "mixed.json", true), message);
+}

@@ -348,6 +348,19 @@ TEST_CASE("a refusal echoes a long key or a deeply nested value only in part") {
   CHECK(message.size() < 200);
 }
 
+TEST_CASE("a direction whose components overflow the norm is normalised, not called \"norm 0\"") {
+  // Issue 23, failure 8: [1e308, 1e308, 0, 0] has a norm beyond DBL_MAX; dividing by the
+  // infinite norm gave [0, 0, 0, 0], refused as "must be a unit quaternion (norm 0)".
+  json j = toJson(samplePacking());
+  j["grains"][0]["orientation"] = {1e308, 1e308, 0.0, 0.0};
+  const Packing p = packingFromJson(j);
+  CHECK(p.grains[0].orientation.w() == Approx(std::sqrt(0.5)));
+  CHECK(p.grains[0].orientation.x() == Approx(std::sqrt(0.5)));
+  CHECK(p.grains[0].orientation.norm() == Approx(1.0));
+  j["grains"][0]["orientation"] = {0.0, 0.0, 0.0, 0.0};
+  requireRefused(j, "grains[0].orientation: cannot be normalised (norm 0)");
+}
+
 TEST_CASE("writing refuses a packing that would not read back and leaves nothing behind") {
   const fs::path dir = confpack::testing::freshDir("packing_io_refuse");
   Packing p = samplePacking();
