@@ -6,10 +6,62 @@
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
+#include <vector>
 
 namespace confpack::core {
 
 using nlohmann::json;
+
+namespace {
+// Where the parser stopped, as a field path ("grains[0].size"): the text is parsed again with a
+// callback that follows the containers, up to the value nlohmann could not read (its out_of_range
+// error carries no position). Only after such a failure, so a good document is parsed once.
+std::string failurePath(std::string_view text) {
+  struct Level {
+    bool array;
+    std::string key;
+    long index = -1;
+  };
+  std::vector<Level> levels;
+  auto elementStarts = [&] {
+    if (!levels.empty() && levels.back().array) ++levels.back().index;
+  };
+  try {
+    [[maybe_unused]] const json kept =
+        json::parse(text.begin(), text.end(), [&](int, json::parse_event_t event, json& parsed) {
+          switch (event) {
+            case json::parse_event_t::object_start:
+            case json::parse_event_t::array_start:
+              elementStarts();
+              levels.push_back({event == json::parse_event_t::array_start, {}});
+              break;
+            case json::parse_event_t::object_end:
+            case json::parse_event_t::array_end:
+              if (!levels.empty()) levels.pop_back();
+              break;
+            case json::parse_event_t::key:
+              if (!levels.empty()) levels.back().key = parsed.get<std::string>();
+              break;
+            case json::parse_event_t::value:
+              elementStarts();
+              break;
+          }
+          return true;  // a discarded container would hide its values' events
+        });
+  } catch (const json::exception&) {
+  }
+  // An outer array's index counts the container being read; the innermost array's, the elements
+  // read before the one that failed.
+  std::string path;
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    if (levels[i].array)
+      path += fmt::format("[{}]", levels[i].index + (i + 1 == levels.size() ? 1 : 0));
+    else
+      path += fmt::format("{}{}", path.empty() ? "" : ".", textExcerpt(levels[i].key));
+  }
+  return path;
+}
+}  // namespace
 
 json parseJsonText(std::string_view text, std::string_view source) {
   // nlohmann's message quotes the token it last read, which can be the rest of the file (an
@@ -20,8 +72,9 @@ json parseJsonText(std::string_view text, std::string_view source) {
   } catch (const json::parse_error& e) {
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", source, textExcerpt(e.what(), kMessageLimit)));
   } catch (const json::out_of_range& e) {  // a number beyond a double, e.g. 1e400
-    throw std::invalid_argument(fmt::format("{}: a number out of the range of a double: {}", source,
-                                            textExcerpt(e.what(), kMessageLimit)));
+    const std::string path = failurePath(text);
+    throw std::invalid_argument(fmt::format("{}: {}a number out of the range of a double: {}", source,
+                                            path.empty() ? "" : path + ": ", textExcerpt(e.what(), kMessageLimit)));
   }
 }
 
