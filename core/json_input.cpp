@@ -52,14 +52,16 @@ std::string failurePath(std::string_view text) {
   }
   // An outer array's index counts the container being read; the innermost array's, the elements
   // read before the one that failed.
+  // Deep nesting or long keys: the path is cut like any echoed input.
+  constexpr std::size_t kPathLimit = 120;
   std::string path;
-  for (std::size_t i = 0; i < levels.size(); ++i) {
+  for (std::size_t i = 0; i < levels.size() && path.size() <= kPathLimit; ++i) {
     if (levels[i].array)
       path += fmt::format("[{}]", levels[i].index + (i + 1 == levels.size() ? 1 : 0));
     else
       path += fmt::format("{}{}", path.empty() ? "" : ".", textExcerpt(levels[i].key));
   }
-  return path;
+  return textExcerpt(path, kPathLimit);
 }
 }  // namespace
 

@@ -39,6 +39,14 @@ TEST_CASE("parseJsonText refuses bad JSON naming its source, and numbers beyond 
              Catch::StartsWith("in.json: grains[1].position[1]: a number out of the range of a double: "
                                "[json.exception.out_of_range.406] number overflow parsing '-1e999'"));
   CHECK_THAT(refusal("[[1, 2], [3, 4, 5e500]]"), Catch::StartsWith("in.json: [1][2]: a number out of the range"));
+  // Found by fuzz_packing: 5e500 under many levels of long keys gave a path of thousands of
+  // characters; it is cut like any echoed input.
+  std::string deep;
+  for (int i = 0; i < 100; ++i) deep += "{\"" + std::string(50, 'q') + "\": ";
+  deep += "5e500" + std::string(100, '}');
+  const std::string message = refusal(deep);
+  CHECK_THAT(message, Catch::StartsWith("in.json: " + std::string(50, 'q') + "." + std::string(50, 'q')));
+  CHECK(message.size() < 400);
   CHECK_THAT(refusal(""), Catch::StartsWith("in.json: not valid JSON"));
 }
 
