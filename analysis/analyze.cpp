@@ -22,7 +22,8 @@ void AnalysisOptions::validate() const {
   profileFit.validate();
   if (!(boundaryDistance >= 0.0) || !std::isfinite(boundaryDistance))
     throw std::invalid_argument(fmt::format("analysis: boundary_distance must be >= 0 (got {})", boundaryDistance));
-  if (!(maxCells >= 1.0)) throw std::invalid_argument(fmt::format("analysis: max_cells must be >= 1 (got {})", maxCells));
+  if (!(maxCells >= 1.0))
+    throw std::invalid_argument(fmt::format("analysis: max_cells must be >= 1 (got {})", maxCells));
   if (!(density > 0.0) || !std::isfinite(density))
     throw std::invalid_argument(fmt::format("analysis: density must be positive (got {})", density));
 }
@@ -30,7 +31,8 @@ void AnalysisOptions::validate() const {
 double estimatedCells(const core::Packing& packing, const AnalysisOptions& options, std::string* what) {
   const double grains = static_cast<double>(packing.grains.size());
   const core::BoxDef& box = packing.box;
-  const double surface = std::ceil(box.lengthX / options.region.cellSize) * std::ceil(box.width / options.region.cellSize);
+  const double surface =
+      std::ceil(box.lengthX / options.region.cellSize) * std::ceil(box.width / options.region.cellSize);
   // phi(y) takes every grain's slab volumes over every slice (solidFractionProfile).
   const std::pair<double, std::string> counts[] = {
       {std::max(grains, 1.0) * std::ceil(box.width / options.profile.slice),

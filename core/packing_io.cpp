@@ -407,7 +407,8 @@ Packing packingFromJson(const json& j, std::string_view source) {
   if (!j.contains("version")) fail(source, "version", "missing");
   if (!j["version"].is_number_integer() || j["version"].get<std::int64_t>() != kPackingVersion)
     fail(source, "version",
-         fmt::format("unsupported version {} (this build reads version {})", jsonExcerpt(j["version"]), kPackingVersion));
+         fmt::format("unsupported version {} (this build reads version {})", jsonExcerpt(j["version"]),
+                     kPackingVersion));
   top.onlyKeys({"format", "version", "box", "grains", "contacts", "metadata"});
 
   Packing p;

@@ -124,7 +124,8 @@ void from_json(const json& j, RunConfig& c) {
     throw std::invalid_argument(fmt::format("{}.seed: must be an integer >= 0 (got {})", w, jsonExcerpt(j.at("seed"))));
   c.seed = valueOr(j, w, "seed", d.seed);
   if (j.contains("threads") && !j.at("threads").is_number_integer())
-    throw std::invalid_argument(fmt::format("{}.threads: must be an integer (got {})", w, jsonExcerpt(j.at("threads"))));
+    throw std::invalid_argument(
+        fmt::format("{}.threads: must be an integer (got {})", w, jsonExcerpt(j.at("threads"))));
   c.threads = valueOr(j, w, "threads", d.threads);
 }
 
@@ -134,7 +135,8 @@ void RunConfig::validate() const {
   if (std::find(kBackendNames.begin(), kBackendNames.end(), backend) == kBackendNames.end())
     throw std::invalid_argument(fmt::format("backend: unknown backend '{}' (expected nscd or bullet)", backend));
   if (!backendOptions.is_object())
-    throw std::invalid_argument(fmt::format("backend_options: must be a JSON object (got {})", jsonExcerpt(backendOptions)));
+    throw std::invalid_argument(
+        fmt::format("backend_options: must be a JSON object (got {})", jsonExcerpt(backendOptions)));
   if (threads < 1) throw std::invalid_argument(fmt::format("threads: must be >= 1 (got {})", threads));
   deposition.validate();
   compactionTable().validate(compaction);

@@ -85,7 +85,8 @@ class SettingsTable {
   SettingsTable& integer(const char* key, Int T::*member, Range range, const char* unit, const char* help) {
     return add(key, unit, range.text(), help,
                [w = where_, key, member, range](const nlohmann::json& j, T& t) {
-                 if (!j.is_number_integer()) fail(w, key, fmt::format("must be an integer (got {})", jsonExcerpt(j, 40)));
+                 if (!j.is_number_integer())
+                   fail(w, key, fmt::format("must be an integer (got {})", jsonExcerpt(j, 40)));
                  const long double v = j.is_number_unsigned() ? static_cast<long double>(j.get<std::uint64_t>())
                                                               : static_cast<long double>(j.get<std::int64_t>());
                  if (v < static_cast<long double>(std::numeric_limits<Int>::min()) ||

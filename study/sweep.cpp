@@ -94,12 +94,14 @@ SweepGroup parseGroup(const json& g, const std::string& where, std::string_view 
         } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
           out.widths.push_back({v.get<double>(), false});
         } else {
-          bad(source, field, fmt::format("expected a positive number or \"biperiodic\" (got {})", core::jsonExcerpt(v)));
+          bad(source, field,
+              fmt::format("expected a positive number or \"biperiodic\" (got {})", core::jsonExcerpt(v)));
         }
       }
     } else if (key == "shape") {
       for (const json& v : list) {
-        if (!v.is_string()) bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v)));
+        if (!v.is_string())
+          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v)));
         try {
           out.shapes.push_back(core::shapeFromString(v.get<std::string>()));
         } catch (const std::invalid_argument&) {
@@ -270,7 +272,8 @@ SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t m
                                               "groups", "description"};
   for (const auto& [key, v] : doc.items())
     if (!known.count(key))
-      bad(source, core::textExcerpt(key), "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups)");
+      bad(source, core::textExcerpt(key),
+          "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups)");
   if (doc.contains("format") && doc.at("format") != kSweepFormat)
     bad(source, "format", fmt::format("expected \"{}\"", kSweepFormat));
   if (doc.contains("version") && doc.at("version") != kSweepVersion)

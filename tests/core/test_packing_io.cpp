@@ -317,7 +317,8 @@ TEST_CASE("reading a broken or missing file gives one clear message") {
     std::ofstream f(dir / "huge.json");
     f << R"({"format": "confpack-packing", "version": 1, "grains": [{"position": [1e400, 0, 0]}]})";
   }
-  CHECK_THROWS_WITH(readPacking(dir / "huge.json"), Catch::Contains("huge.json: grains[0].position[0]: a number out of the range of a double"));
+  CHECK_THROWS_WITH(readPacking(dir / "huge.json"),
+                    Catch::Contains("huge.json: grains[0].position[0]: a number out of the range of a double"));
   fs::remove_all(dir);
 }
 

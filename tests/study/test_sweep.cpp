@@ -179,9 +179,10 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
 TEST_CASE("a sweep listing more runs than the limit is refused before any run is listed") {
   // Issue 23, failure 6: "replicas": 100000000 needed more than 4 GB just to list the runs.
   const auto start = std::chrono::steady_clock::now();
-  CHECK_THROWS_WITH(study::parseSweepSpec(json::parse(R"({"vary": {"width": [4, 5], "replicas": 100000000}})"), "s.json"),
-                    "s.json: vary: lists 2e+08 runs, more than the limit of 100000 (check the lists and replicas, "
-                    "or raise the limit with --max-runs)");
+  CHECK_THROWS_WITH(
+      study::parseSweepSpec(json::parse(R"({"vary": {"width": [4, 5], "replicas": 100000000}})"), "s.json"),
+      "s.json: vary: lists 2e+08 runs, more than the limit of 100000 (check the lists and replicas, "
+      "or raise the limit with --max-runs)");
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
   // The limit counts the product of a group's lists (replicas before they are listed), and the
   // groups' sum; duplicates count too.
