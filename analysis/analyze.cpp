@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -21,12 +22,40 @@ void AnalysisOptions::validate() const {
   profileFit.validate();
   if (!(boundaryDistance >= 0.0) || !std::isfinite(boundaryDistance))
     throw std::invalid_argument(fmt::format("analysis: boundary_distance must be >= 0 (got {})", boundaryDistance));
+  if (!(maxCells >= 1.0))
+    throw std::invalid_argument(fmt::format("analysis: max_cells must be >= 1 (got {})", maxCells));
   if (!(density > 0.0) || !std::isfinite(density))
     throw std::invalid_argument(fmt::format("analysis: density must be positive (got {})", density));
 }
 
+double estimatedCells(const core::Packing& packing, const AnalysisOptions& options, std::string* what) {
+  const double grains = static_cast<double>(packing.grains.size());
+  const core::BoxDef& box = packing.box;
+  const double surface =
+      std::ceil(box.lengthX / options.region.cellSize) * std::ceil(box.width / options.region.cellSize);
+  // phi(y) takes every grain's slab volumes over every slice (solidFractionProfile).
+  const std::pair<double, std::string> counts[] = {
+      {std::max(grains, 1.0) * std::ceil(box.width / options.profile.slice),
+       fmt::format("{} grains x phi(y) slices of {:g} d_L", packing.grains.size(), options.profile.slice)},
+      {std::ceil(box.width / options.coordination.slice),
+       fmt::format("Z(y) slices of {:g} d_L", options.coordination.slice)},
+      {surface, fmt::format("free-surface cells of {:g} d_L", options.region.cellSize)}};
+  const auto* most = &counts[0];
+  for (const auto& c : counts)
+    if (c.first > most->first) most = &c;
+  if (what) *what = most->second;
+  return most->first;
+}
+
 Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
   options.validate();
+  std::string what;
+  const double cells = estimatedCells(packing, options, &what);
+  if (!(cells <= options.maxCells))
+    throw std::invalid_argument(fmt::format(
+        "analysis: about {:.3g} cells ({}), more than max_cells ({:g}); check the slice or cell size, or raise the "
+        "limit with --max-cells",
+        cells, what, options.maxCells));
   Analysis a;
   a.grains = static_cast<int>(packing.grains.size());
   bool large = false, small = false;

@@ -21,21 +21,35 @@ std::vector<NeighbourPair> neighbourPairs(const core::Packing& packing, double e
     zMax = std::max(zMax, grains[i].position.z());
   }
   const double cell = 2.0 * maxR + std::max(0.0, extra);
-  // Fewer than 3 cells along a periodic axis would make a cell its own neighbour twice: use one.
-  auto periodicCount = [&](double len) {
-    const int c = static_cast<int>(std::floor(len / cell));
-    return c >= 3 ? c : 1;
-  };
-  const int nx = periodicCount(box.lengthX);
-  const int ny = box.periodicY ? periodicCount(box.width) : std::max(1, static_cast<int>(std::floor(box.width / cell)));
-  const int nz = std::max(1, static_cast<int>(std::floor((zMax - zMin) / cell)) + 1);
+  // Cell counts in double: a box (or a pile) far larger than its grains, say 1e16 d wide, must
+  // neither overflow an int nor allocate a grid of that size (a 1e5 x 1e5 box of 170 grains took
+  // 2 GB). A real pile has a few grains per cell; past kMaxCellsPerGrain cells per grain the axis
+  // with the most cells is coarsened, which finds the same pairs among more candidates. Fewer than
+  // 3 cells along a periodic axis would make a cell its own neighbour twice: use one.
+  constexpr double kMaxCellsPerGrain = 64.0;
+  auto periodicCount = [](double c) { return c >= 3.0 ? c : 1.0; };
+  double fx = periodicCount(std::floor(box.lengthX / cell));
+  double fy = box.periodicY ? periodicCount(std::floor(box.width / cell)) : std::max(1.0, std::floor(box.width / cell));
+  const double fz0 = std::max(1.0, std::floor((zMax - zMin) / cell) + 1.0);
+  double fz = fz0;
+  while (fx * fy * fz > kMaxCellsPerGrain * n + 1024.0) {
+    if (fx >= fy && fx >= fz)
+      fx = periodicCount(std::floor(fx / 2.0));
+    else if (fy >= fz)
+      fy = box.periodicY ? periodicCount(std::floor(fy / 2.0)) : std::max(1.0, std::floor(fy / 2.0));
+    else
+      fz = std::max(1.0, std::floor(fz / 2.0));
+  }
+  const int nx = static_cast<int>(fx), ny = static_cast<int>(fy), nz = static_cast<int>(fz);
   const double cx = box.lengthX / nx, cy = box.width / ny;
+  // Along z the cells keep the side `cell` unless coarsened (then the grains' extent over nz).
+  const double cz = fz == fz0 ? cell : cell * std::ceil(fz0 / fz);
 
   auto cellOf = [&](const core::Vec3& x) {
     const core::Vec3 p = box.wrap(x);
-    const int ix = std::clamp(static_cast<int>(std::floor(p.x() / cx)), 0, nx - 1);
-    const int iy = std::clamp(static_cast<int>(std::floor(p.y() / cy)), 0, ny - 1);
-    const int iz = std::clamp(static_cast<int>(std::floor((p.z() - zMin) / cell)), 0, nz - 1);
+    const int ix = static_cast<int>(std::clamp(std::floor(p.x() / cx), 0.0, fx - 1.0));
+    const int iy = static_cast<int>(std::clamp(std::floor(p.y() / cy), 0.0, fy - 1.0));
+    const int iz = static_cast<int>(std::clamp(std::floor((p.z() - zMin) / cz), 0.0, fz - 1.0));
     return std::array<int, 3>{ix, iy, iz};
   };
   const std::size_t cellCount = static_cast<std::size_t>(nx) * ny * nz;

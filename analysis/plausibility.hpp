@@ -35,7 +35,8 @@ struct PlausibilityDef {
 /// nullopt when it is plausible.
 std::optional<std::string> implausibility(const core::Packing& packing, const PlausibilityDef& def = {});
 
-/// Refuses a packing read from `file` that is implausible, unless `allow` (`confpack analyze` and
+/// Refuses a packing read from `file` that mixes spheres and pinacoids (not supported, whatever
+/// `allow`), or that is implausible, unless `allow` (`confpack analyze` and
 /// `run --from`, and the Python module's analyze): std::invalid_argument
 /// "FILE: implausible packing: <why> (--allow-implausible takes it anyway)".
 void checkPlausible(const core::Packing& packing, const std::filesystem::path& file, bool allow);

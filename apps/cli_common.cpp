@@ -13,7 +13,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <stdexcept>
 #include <system_error>
+#include <utility>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -311,7 +313,9 @@ void removeStaleStaging(const fs::path& target) {
 }
 }  // namespace
 
-StagedOutput::StagedOutput(const fs::path& target) : target_(normalisedTarget(target)) {
+StagedOutput::StagedOutput(const fs::path& target, RenameFn rename)
+    : target_(normalisedTarget(target)),
+      rename_(rename ? std::move(rename) : [](const fs::path& from, const fs::path& to) { fs::rename(from, to); }) {
   // Parents that do not exist yet are ours: remember them so a failure removes them too.
   for (fs::path p = target_.parent_path(); !p.empty() && !fs::exists(p); p = p.parent_path()) {
     createdParents_.push_back(p);
@@ -325,7 +329,7 @@ StagedOutput::StagedOutput(const fs::path& target) : target_(normalisedTarget(ta
 }
 
 StagedOutput::~StagedOutput() {
-  if (committed_) return;
+  if (committed_ || keepStaging_) return;
   // remove_all allocates (directory entries) and may throw std::bad_alloc even with an error_code;
   // out of a destructor that would terminate the program (SIGABRT) in the middle of the unwinding
   // of an out-of-memory failure. The work's memory is released by then (it lives in scopes inside
@@ -341,16 +345,55 @@ StagedOutput::~StagedOutput() {
 
 void StagedOutput::commit() {
   if (!fs::exists(target_)) {
-    fs::rename(staging_, target_);
-  } else {
-    for (const auto& entry : fs::directory_iterator(staging_)) {
-      const fs::path dest = target_ / entry.path().filename();
-      // A directory (vtk/) cannot be renamed over a non-empty one: the old one goes first.
-      if (entry.is_directory() && fs::exists(dest)) fs::remove_all(dest);
-      fs::rename(entry.path(), dest);
-    }
-    fs::remove(staging_);
+    rename_(staging_, target_);
+    committed_ = true;
+    return;
   }
+  // Into an existing target, entry by entry. Each old entry is moved aside into the staging
+  // directory before the new one takes its name (a directory, vtk/, cannot be renamed over a
+  // non-empty one anyway), so that a failure midway can undo every move made so far.
+  const fs::path aside = staging_ / ".replaced";
+  fs::create_directory(aside);
+  std::vector<fs::path> names;
+  for (const auto& entry : fs::directory_iterator(staging_))
+    if (entry.path() != aside) names.push_back(entry.path().filename());
+  struct Move {
+    fs::path name;
+    bool replaced;  ///< an old entry of that name was moved aside
+    bool placed;    ///< the new entry is in the target
+  };
+  std::vector<Move> moves;
+  try {
+    for (const fs::path& name : names) {
+      Move& m = moves.emplace_back(Move{name, false, false});
+      if (fs::exists(fs::symlink_status(target_ / name))) {
+        rename_(target_ / name, aside / name);
+        m.replaced = true;
+      }
+      rename_(staging_ / name, target_ / name);
+      m.placed = true;
+    }
+  } catch (const std::exception& e) {
+    // Undo, last move first: the new entry back into staging, the old one back in place.
+    bool restored = true;
+    for (auto m = moves.rbegin(); m != moves.rend(); ++m) {
+      try {
+        if (m->placed) rename_(target_ / m->name, staging_ / m->name);
+        if (m->replaced) rename_(aside / m->name, target_ / m->name);
+      } catch (const std::exception&) {
+        restored = false;
+      }
+    }
+    keepStaging_ = !restored;
+    throw std::runtime_error(
+        restored ? fmt::format("moving the output into {} failed, its old files are back in place: {}",
+                               target_.string(), e.what())
+                 : fmt::format("moving the output into {} failed and could not be undone; the old files that "
+                               "were replaced are in {}: {}",
+                               target_.string(), aside.string(), e.what()));
+  }
+  fs::remove_all(aside);
+  fs::remove(staging_);
   committed_ = true;
 }
 

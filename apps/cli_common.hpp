@@ -102,11 +102,16 @@ void applyThreads(int threads);
 /// An output directory that appears complete or not at all. Files are written into a hidden
 /// staging directory next to the target (same file system, so renames are atomic); commit() moves
 /// them in place: the whole directory in one rename when the target does not exist yet, else entry
-/// by entry (each entry atomically). Without commit() (an exception unwinds), the staging
-/// directory and any parent directories created for it are removed.
+/// by entry, each old entry first moved aside into the staging directory. When a rename fails
+/// midway, commit() moves the new entries back out and the old ones back in before it throws: the
+/// target then holds its old files, none of the new ones. Without commit() (an exception unwinds),
+/// the staging directory and any parent directories created for it are removed.
 class StagedOutput {
  public:
-  explicit StagedOutput(const std::filesystem::path& target);
+  /// How an entry is moved (std::filesystem::rename; a test injects failures).
+  using RenameFn = std::function<void(const std::filesystem::path& from, const std::filesystem::path& to)>;
+
+  explicit StagedOutput(const std::filesystem::path& target, RenameFn rename = {});
   ~StagedOutput();
   StagedOutput(const StagedOutput&) = delete;
   StagedOutput& operator=(const StagedOutput&) = delete;
@@ -121,7 +126,9 @@ class StagedOutput {
   std::filesystem::path target_;
   std::filesystem::path staging_;
   std::vector<std::filesystem::path> createdParents_;  ///< deepest first
+  RenameFn rename_;
   bool committed_ = false;
+  bool keepStaging_ = false;  ///< a failed commit could not put the old files back: they are in it
 };
 
 /// Writes `j` (indented) to `path` atomically.

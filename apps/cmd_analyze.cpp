@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <memory>
 
 #include "analysis/analyze.hpp"
@@ -43,7 +44,8 @@ nlohmann::json optionsJson(const analysis::AnalysisOptions& o) {
           {"gap_tolerance_abs", o.geometricContacts.absTolerance},
           {"gap_tolerance_rel", o.geometricContacts.relTolerance},
           {"nematic_boundary_distance", o.boundaryDistance},
-          {"size_threshold", o.homogeneity.sizeThreshold}};
+          {"size_threshold", o.homogeneity.sizeThreshold},
+          {"max_cells", o.maxCells}};
 }
 
 void runAnalyze(AnalyzeState& st) {
@@ -111,6 +113,11 @@ void registerAnalyze(CLI::App& app) {
       ->capture_default_str()
       ->check(positiveNumber());
   sub->add_flag("--no-lattice", st->noLattice, "Skip the lattice bounds of the interpenetration");
+  sub->add_option("--max-cells", o.maxCells,
+                  "Refuse an analysis whose profiles or grids take more cells than this (a guard against a slice "
+                  "or cell typed far too small)")
+      ->capture_default_str()
+      ->check(realIn(1.0, HUGE_VAL, false, true, "a number >= 1", "CELLS"));
   sub->add_option("--force-threshold", o.coordination.forceThreshold,
                   "Force-carrying contact: f_n above this fraction of the mean f_n")
       ->capture_default_str()

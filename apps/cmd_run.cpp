@@ -20,6 +20,7 @@
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
 #include "backends/backend_factory.hpp"
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "study/run_pipeline.hpp"
 
@@ -71,7 +72,7 @@ void runRun(RunState& st) {
   core::RunConfig& cfg = st.cfg;
   std::optional<core::Deposit> start;
   checkInput("run", [&] {
-    if (!st.backendOptions.empty()) cfg.backendOptions = nlohmann::json::parse(st.backendOptions);
+    if (!st.backendOptions.empty()) cfg.backendOptions = core::parseJsonText(st.backendOptions, "--backend-options");
     if (!st.from.empty()) {
       const WorkStep step("reading the packing file");
       start = startFromPacking(st);

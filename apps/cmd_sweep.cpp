@@ -27,6 +27,7 @@ struct SweepState {
   std::size_t taskCount = 1;
   bool list = false;
   bool quiet = false;
+  std::size_t maxRuns = study::kDefaultMaxRuns;
 };
 
 void runSweepCommand(const SweepState& st) {
@@ -34,7 +35,7 @@ void runSweepCommand(const SweepState& st) {
   std::vector<study::SweepRun> runs;
   std::filesystem::path out = st.out.empty() ? std::filesystem::path(st.file.stem()) : st.out;
   checkInput("sweep", [&] {
-    spec = study::readSweepSpec(st.file);
+    spec = study::readSweepSpec(st.file, st.maxRuns);
     runs = study::expandRuns(spec);
     study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
     // The sweep file leaves backend_options to the backend: checked here, so that a typo is bad
@@ -97,6 +98,10 @@ void registerSweep(CLI::App& app) {
       ->check(CLI::Range(1, 1000000));
   sub->add_flag("--list", st->list, "Print the run table (with each run's status when the folder exists) and exit");
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
+  sub->add_option("--max-runs", st->maxRuns,
+                  "Refuse a sweep file that lists more runs than this (a guard against a mistyped list or replicas)")
+      ->check(unsignedInteger())
+      ->capture_default_str();
   sub->callback([st] { runSweepCommand(*st); });
 }
 

@@ -13,7 +13,7 @@
 namespace confpack::backends {
 
 const std::vector<std::string_view>& backendNames() {
-  static const std::vector<std::string_view> names = {"nscd", "bullet"};
+  static const std::vector<std::string_view> names(core::kBackendNames.begin(), core::kBackendNames.end());
   return names;
 }
 

@@ -19,6 +19,10 @@
 
 namespace confpack::core {
 
+/// Names of the contact backends, in a stable order; backends/backend_factory.hpp builds one by
+/// name. Here so that what only checks a name (a run configuration, a sweep file) needs no backend.
+inline constexpr std::array<std::string_view, 2> kBackendNames = {"nscd", "bullet"};
+
 /// Everything a backend needs to build its world.
 struct SystemDef {
   BoxDef box;

@@ -9,11 +9,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <initializer_list>
-#include <sstream>
 #include <stdexcept>
 #include <system_error>
+
+#include "core/json_input.hpp"
 
 namespace confpack::core {
 
@@ -53,7 +53,7 @@ class ObjectReader {
       if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
         std::string list;
         for (auto a : allowed) list += fmt::format("{}{}", list.empty() ? "" : ", ", a);
-        fail(source_, field(key), fmt::format("unknown key (allowed: {})", list));
+        fail(source_, field(textExcerpt(key)), fmt::format("unknown key (allowed: {})", list));
       }
     }
   }
@@ -70,19 +70,19 @@ class ObjectReader {
   double number(std::string_view key) const { return toNumber(at(key), field(key)); }
   bool boolean(std::string_view key) const {
     const json& v = at(key);
-    if (!v.is_boolean()) fail(source_, field(key), fmt::format("must be true or false (got {})", v.dump()));
+    if (!v.is_boolean()) fail(source_, field(key), fmt::format("must be true or false (got {})", jsonExcerpt(v)));
     return v.get<bool>();
   }
   int integer(std::string_view key) const {
     const json& v = at(key);
-    if (!v.is_number_integer()) fail(source_, field(key), fmt::format("must be an integer (got {})", v.dump()));
+    if (!v.is_number_integer()) fail(source_, field(key), fmt::format("must be an integer (got {})", jsonExcerpt(v)));
     const auto i = v.get<std::int64_t>();
     if (i < -1000000000 || i > 1000000000) fail(source_, field(key), fmt::format("out of range (got {})", i));
     return static_cast<int>(i);
   }
   std::string string(std::string_view key) const {
     const json& v = at(key);
-    if (!v.is_string()) fail(source_, field(key), fmt::format("must be a string (got {})", v.dump()));
+    if (!v.is_string()) fail(source_, field(key), fmt::format("must be a string (got {})", jsonExcerpt(v)));
     return v.get<std::string>();
   }
   Vec3 vec3(std::string_view key) const { return toVec3(at(key), field(key)); }
@@ -95,14 +95,14 @@ class ObjectReader {
   double toNumber(const json& v, const std::string& where) const {
     // NaN and infinities have no JSON spelling; nlohmann writes them as null, so a null here
     // usually means a non-finite value was written.
-    if (!v.is_number()) fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
+    if (!v.is_number()) fail(source_, where, fmt::format("must be a finite number (got {})", jsonExcerpt(v)));
     const double x = v.get<double>();
-    if (!std::isfinite(x)) fail(source_, where, fmt::format("must be a finite number (got {})", v.dump()));
+    if (!std::isfinite(x)) fail(source_, where, fmt::format("must be a finite number (got {})", jsonExcerpt(v)));
     return x;
   }
   Vec3 toVec3(const json& v, const std::string& where) const {
     if (!v.is_array() || v.size() != 3)
-      fail(source_, where, fmt::format("must be an array of 3 numbers (got {})", v.dump()));
+      fail(source_, where, fmt::format("must be an array of 3 numbers (got {})", jsonExcerpt(v)));
     return Vec3(toNumber(v[0], where + "[0]"), toNumber(v[1], where + "[1]"), toNumber(v[2], where + "[2]"));
   }
 
@@ -118,8 +118,14 @@ json toJsonVec(const Vec3& v) {
   return json::array({v.x(), v.y(), v.z()});
 }
 
-Vec3 unitOrFail(Vec3 v, std::string_view source, const std::string& where) {
-  const double n = v.norm();
+/// A direction (normal, quaternion) of unit length. Components near DBL_MAX overflow the plain
+/// norm to infinity (dividing by it gave [0, 0, 0, 0], then refused as "norm 0"); the scaled
+/// norm is only taken then, so that finite norms, and the bits of what they normalise, stay as
+/// they were.
+template <class Vector>
+Vector unitOrFail(Vector v, std::string_view source, const std::string& where) {
+  double n = v.norm();
+  if (std::isinf(n)) n = v.stableNorm();
   if (!(n > kMinNorm)) fail(source, where, fmt::format("cannot be normalised (norm {})", n));
   if (std::abs(n - 1.0) > kUnitTolerance) v /= n;
   return v;
@@ -147,13 +153,11 @@ Grain readGrain(const json& j, std::string_view source, std::size_t index) {
   g.position = r.vec3("position");
   const json& q = r.at("orientation");
   if (!q.is_array() || q.size() != 4)
-    fail(source, r.field("orientation"), fmt::format("must be [w, x, y, z] (got {})", q.dump()));
+    fail(source, r.field("orientation"), fmt::format("must be [w, x, y, z] (got {})", jsonExcerpt(q)));
   const std::string qw = r.field("orientation");
-  Eigen::Vector4d c(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"), r.toNumber(q[2], qw + "[2]"),
-                    r.toNumber(q[3], qw + "[3]"));
-  const double n = c.norm();
-  if (!(n > kMinNorm)) fail(source, qw, fmt::format("cannot be normalised (norm {})", n));
-  if (std::abs(n - 1.0) > kUnitTolerance) c /= n;
+  const Eigen::Vector4d c = unitOrFail(Eigen::Vector4d(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"),
+                                                        r.toNumber(q[2], qw + "[2]"), r.toNumber(q[3], qw + "[3]")),
+                                       source, qw);
   g.orientation = Quat(c[0], c[1], c[2], c[3]);
   return g;
 }
@@ -399,11 +403,12 @@ Packing packingFromJson(const json& j, std::string_view source) {
   if (!j.is_object() || !j.contains("format"))
     fail(source, "format", fmt::format("missing (expected \"{}\")", kPackingFormat));
   if (!j["format"].is_string() || j["format"].get<std::string>() != kPackingFormat)
-    fail(source, "format", fmt::format("must be \"{}\" (got {})", kPackingFormat, j["format"].dump()));
+    fail(source, "format", fmt::format("must be \"{}\" (got {})", kPackingFormat, jsonExcerpt(j["format"])));
   if (!j.contains("version")) fail(source, "version", "missing");
   if (!j["version"].is_number_integer() || j["version"].get<std::int64_t>() != kPackingVersion)
     fail(source, "version",
-         fmt::format("unsupported version {} (this build reads version {})", j["version"].dump(), kPackingVersion));
+         fmt::format("unsupported version {} (this build reads version {})", jsonExcerpt(j["version"]),
+                     kPackingVersion));
   top.onlyKeys({"format", "version", "box", "grains", "contacts", "metadata"});
 
   Packing p;
@@ -440,23 +445,7 @@ void writePacking(const Packing& packing, const std::filesystem::path& path) {
 }
 
 Packing readPacking(const std::filesystem::path& path) {
-  const std::string source = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw std::invalid_argument(fmt::format("{}: is a folder, not a packing file", source));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the packing file", source));
-  std::ostringstream text;
-  text << in.rdbuf();
-  json j;
-  try {
-    j = json::parse(text.str());
-  } catch (const json::parse_error& e) {
-    throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", source, e.what()));
-  } catch (const json::out_of_range& e) {  // a number beyond a double, e.g. 1e400
-    throw std::invalid_argument(fmt::format("{}: a number out of the range of a double: {}", source, e.what()));
-  }
-  return packingFromJson(j, source);
+  return packingFromJson(readJsonFile(path, "packing file"), path.string());
 }
 
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {

@@ -1,5 +1,7 @@
 #include "core/run_config.hpp"
 
+#include "core/backend.hpp"
+#include "core/json_input.hpp"
 #include "core/settings_table.hpp"
 
 #include <fmt/format.h>
@@ -25,7 +27,7 @@ void onlyKeys(const json& j, std::string_view where, std::initializer_list<std::
     if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
       std::string list;
       for (auto a : allowed) list += fmt::format("{}{}", list.empty() ? "" : ", ", a);
-      throw std::invalid_argument(fmt::format("{}.{}: unknown key (allowed: {})", where, key, list));
+      throw std::invalid_argument(fmt::format("{}.{}: unknown key (allowed: {})", where, textExcerpt(key), list));
     }
   }
 }
@@ -38,13 +40,9 @@ T valueOr(const json& j, std::string_view where, const char* key, const T& fallb
   try {
     return j.at(key).get<T>();
   } catch (const json::exception&) {
-    throw std::invalid_argument(fmt::format("{}.{}: wrong type ({})", where, key, j.at(key).dump()));
+    throw std::invalid_argument(fmt::format("{}.{}: wrong type ({})", where, key, jsonExcerpt(j.at(key))));
   }
 }
-
-// Names accepted by backends::makeBackend. core cannot see backends/ (it sits below them in the
-// dependency graph), so the list is repeated here; tests/apps/test_cli.cpp checks the two agree.
-constexpr std::string_view kBackendNames[] = {"nscd", "bullet"};
 
 }  // namespace
 
@@ -125,20 +123,22 @@ void from_json(const json& j, RunConfig& c) {
   c.backend = valueOr(j, w, "backend", d.backend);
   c.backendOptions = j.contains("backend_options") ? j.at("backend_options") : d.backendOptions;
   if (j.contains("seed") && !j.at("seed").is_number_unsigned())
-    throw std::invalid_argument(fmt::format("{}.seed: must be an integer >= 0 (got {})", w, j.at("seed").dump()));
+    throw std::invalid_argument(fmt::format("{}.seed: must be an integer >= 0 (got {})", w, jsonExcerpt(j.at("seed"))));
   c.seed = valueOr(j, w, "seed", d.seed);
   if (j.contains("threads") && !j.at("threads").is_number_integer())
-    throw std::invalid_argument(fmt::format("{}.threads: must be an integer (got {})", w, j.at("threads").dump()));
+    throw std::invalid_argument(
+        fmt::format("{}.threads: must be an integer (got {})", w, jsonExcerpt(j.at("threads"))));
   c.threads = valueOr(j, w, "threads", d.threads);
 }
 
 void RunConfig::validate() const {
   box.validate();
   population.validate();
-  if (std::find(std::begin(kBackendNames), std::end(kBackendNames), backend) == std::end(kBackendNames))
+  if (std::find(kBackendNames.begin(), kBackendNames.end(), backend) == kBackendNames.end())
     throw std::invalid_argument(fmt::format("backend: unknown backend '{}' (expected nscd or bullet)", backend));
   if (!backendOptions.is_object())
-    throw std::invalid_argument(fmt::format("backend_options: must be a JSON object (got {})", backendOptions.dump()));
+    throw std::invalid_argument(
+        fmt::format("backend_options: must be a JSON object (got {})", jsonExcerpt(backendOptions)));
   if (threads < 1) throw std::invalid_argument(fmt::format("threads: must be >= 1 (got {})", threads));
   deposition.validate();
   compactionTable().validate(compaction);

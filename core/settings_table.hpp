@@ -20,6 +20,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/json_input.hpp"
+
 namespace confpack::core {
 
 /// The finite values a numeric field accepts: an interval whose ends may be open or absent.
@@ -83,12 +85,13 @@ class SettingsTable {
   SettingsTable& integer(const char* key, Int T::*member, Range range, const char* unit, const char* help) {
     return add(key, unit, range.text(), help,
                [w = where_, key, member, range](const nlohmann::json& j, T& t) {
-                 if (!j.is_number_integer()) fail(w, key, fmt::format("must be an integer (got {})", shortDump(j)));
+                 if (!j.is_number_integer())
+                   fail(w, key, fmt::format("must be an integer (got {})", jsonExcerpt(j, 40)));
                  const long double v = j.is_number_unsigned() ? static_cast<long double>(j.get<std::uint64_t>())
                                                               : static_cast<long double>(j.get<std::int64_t>());
                  if (v < static_cast<long double>(std::numeric_limits<Int>::min()) ||
                      v > static_cast<long double>(std::numeric_limits<Int>::max()))
-                   fail(w, key, fmt::format("must be {} (got {})", range.text(), shortDump(j)));
+                   fail(w, key, fmt::format("must be {} (got {})", range.text(), jsonExcerpt(j, 40)));
                  t.*member = static_cast<Int>(v);
                },
                [member](const T& t) { return nlohmann::json(t.*member); },
@@ -97,7 +100,7 @@ class SettingsTable {
   SettingsTable& flag(const char* key, bool T::*member, const char* help) {
     return add(key, "-", "true or false", help,
                [w = where_, key, member](const nlohmann::json& j, T& t) {
-                 if (!j.is_boolean()) fail(w, key, fmt::format("must be true or false (got {})", shortDump(j)));
+                 if (!j.is_boolean()) fail(w, key, fmt::format("must be true or false (got {})", jsonExcerpt(j, 40)));
                  t.*member = j.get<bool>();
                },
                [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
@@ -114,7 +117,7 @@ class SettingsTable {
                      t.*member = value;
                      return;
                    }
-                 fail(w, key, fmt::format("must be {} (got {})", accepted, shortDump(j)));
+                 fail(w, key, fmt::format("must be {} (got {})", accepted, jsonExcerpt(j, 40)));
                },
                [member, names](const T& t) {
                  for (const auto& [name, value] : names)
@@ -139,8 +142,7 @@ class SettingsTable {
       if (!f) {
         std::string known;
         for (const Field& g : fields_) known += fmt::format("{}{}", known.empty() ? "" : ", ", g.key);
-        const std::string shown = key.size() > 40 ? key.substr(0, 40) + "..." : key;
-        throw std::invalid_argument(fmt::format("{}.{}: unknown key (known: {})", where_, shown, known));
+        throw std::invalid_argument(fmt::format("{}.{}: unknown key (known: {})", where_, textExcerpt(key, 40), known));
       }
       f->read(value, t);
     }
@@ -180,15 +182,11 @@ class SettingsTable {
     throw std::invalid_argument(fmt::format("{}.{}: {}", where, key, what));
   }
   static double asNumber(const std::string& w, const char* key, const nlohmann::json& j) {
-    if (!j.is_number()) fail(w, key, fmt::format("must be a number (got {})", shortDump(j)));
+    if (!j.is_number()) fail(w, key, fmt::format("must be a number (got {})", jsonExcerpt(j, 40)));
     return j.get<double>();
   }
   static void inRange(const std::string& w, const char* key, double v, const Range& range) {
     if (!range.contains(v)) fail(w, key, fmt::format("must be {} (got {})", range.text(), numberText(v)));
-  }
-  static std::string shortDump(const nlohmann::json& j) {
-    std::string s = j.dump();
-    return s.size() > 40 ? s.substr(0, 40) + "..." : s;
   }
 
   std::string where_;

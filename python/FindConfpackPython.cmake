@@ -3,9 +3,9 @@
 # for Debian's interpreter: where another python3 comes first on PATH (pyenv, conda), pass
 # -DPython_EXECUTABLE=/usr/bin/python3.
 set(CONFPACK_PYTHON_FOUND OFF)
-if(CONFPACK_SANITIZE)
+if(CONFPACK_SANITIZE OR CONFPACK_FUZZ)
   # An ASan-instrumented extension loads only into an instrumented interpreter.
-  message(STATUS "confpack Python module: not built with CONFPACK_SANITIZE")
+  message(STATUS "confpack Python module: not built with CONFPACK_SANITIZE or CONFPACK_FUZZ")
 elseif(NOT CONFPACK_PYTHON STREQUAL "OFF")
   if(CONFPACK_PYTHON STREQUAL "ON")
     set(_confpack_required REQUIRED)

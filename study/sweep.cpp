@@ -7,7 +7,6 @@
 #include <atomic>
 #include <chrono>
 #include <ctime>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -17,8 +16,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "backends/backend_factory.hpp"
+#include "core/backend.hpp"
 #include "core/interrupt.hpp"
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
 
@@ -41,7 +41,7 @@ json asList(const json& v) { return v.is_array() ? v : json::array({v}); }
 // default (backend_options) is free-form and left to its owner to check.
 void checkKnownKeys(const json& given, const json& known, const std::string& path, std::string_view source) {
   for (const auto& [key, value] : given.items()) {
-    const std::string here = path.empty() ? key : path + "." + key;
+    const std::string here = path.empty() ? core::textExcerpt(key) : path + "." + core::textExcerpt(key);
     if (!known.contains(key)) bad(source, here, "unknown key");
     const json& k = known.at(key);
     if (value.is_object() && k.is_object() && !k.empty()) checkKnownKeys(value, k, here, source);
@@ -62,11 +62,28 @@ core::RunConfig resolveBase(const json& base, std::string_view source) {
   return cfg;
 }
 
-SweepGroup parseGroup(const json& g, const std::string& where, std::string_view source) {
+// Runs a group lists: the product of its list sizes, an empty list (the base value) counting once;
+// `seeds` replaces the size of the seed list (replicas are counted before they are listed).
+// In double: the product of a few large lists must not wrap around.
+double listedRuns(const SweepGroup& g, double seeds) {
+  auto count = [](std::size_t n) { return static_cast<double>(std::max<std::size_t>(n, 1)); };
+  return count(g.widths.size()) * count(g.shapes.size()) * count(g.smallFractions.size()) *
+         count(g.wallFrictions.size()) * count(g.backends.size()) * std::max(seeds, 1.0);
+}
+
+void checkRunCount(double runs, std::size_t maxRuns, std::string_view source, std::string_view where) {
+  if (runs > static_cast<double>(maxRuns))
+    bad(source, where,
+        fmt::format("lists {:.6g} runs, more than the limit of {} (check the lists and replicas, or raise the "
+                    "limit with --max-runs)",
+                    runs, maxRuns));
+}
+
+SweepGroup parseGroup(const json& g, const std::string& where, std::string_view source, std::size_t maxRuns) {
   if (!g.is_object()) bad(source, where, "expected an object of value lists");
   SweepGroup out;
   for (const auto& [key, raw] : g.items()) {
-    const std::string field = where + "." + key;
+    const std::string field = where + "." + core::textExcerpt(key);
     if (key == "replicas") continue;
     const json list = asList(raw);
     if (list.empty()) bad(source, field, "empty list");
@@ -77,41 +94,43 @@ SweepGroup parseGroup(const json& g, const std::string& where, std::string_view 
         } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
           out.widths.push_back({v.get<double>(), false});
         } else {
-          bad(source, field, fmt::format("expected a positive number or \"biperiodic\" (got {})", v.dump()));
+          bad(source, field,
+              fmt::format("expected a positive number or \"biperiodic\" (got {})", core::jsonExcerpt(v)));
         }
       }
     } else if (key == "shape") {
       for (const json& v : list) {
-        if (!v.is_string()) bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", v.dump()));
+        if (!v.is_string())
+          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v)));
         try {
           out.shapes.push_back(core::shapeFromString(v.get<std::string>()));
         } catch (const std::invalid_argument&) {
-          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", v.dump()));
+          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v)));
         }
       }
     } else if (key == "small_fraction") {
       for (const json& v : list) {
         if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 100.0))
-          bad(source, field, fmt::format("x_S must be a number in [0, 100] (got {})", v.dump()));
+          bad(source, field, fmt::format("x_S must be a number in [0, 100] (got {})", core::jsonExcerpt(v)));
         out.smallFractions.push_back(v.get<double>());
       }
     } else if (key == "wall_friction") {
       for (const json& v : list) {
         if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
-          bad(source, field, fmt::format("mu_w must be a number >= 0 (got {})", v.dump()));
+          bad(source, field, fmt::format("mu_w must be a number >= 0 (got {})", core::jsonExcerpt(v)));
         out.wallFrictions.push_back(v.get<double>());
       }
     } else if (key == "seed") {
       for (const json& v : list) {
         if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
-          bad(source, field, fmt::format("seeds must be non-negative integers (got {})", v.dump()));
+          bad(source, field, fmt::format("seeds must be non-negative integers (got {})", core::jsonExcerpt(v)));
         out.seeds.push_back(v.get<std::uint64_t>());
       }
     } else if (key == "backend") {
-      const auto& names = backends::backendNames();
+      const auto& names = core::kBackendNames;
       for (const json& v : list) {
         if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
-          bad(source, field, fmt::format("unknown backend {} (known: nscd, bullet)", v.dump()));
+          bad(source, field, fmt::format("unknown backend {} (known: nscd, bullet)", core::jsonExcerpt(v)));
         out.backends.push_back(v.get<std::string>());
       }
     } else {
@@ -123,7 +142,8 @@ SweepGroup parseGroup(const json& g, const std::string& where, std::string_view 
     if (g.contains("seed")) bad(source, where + ".replicas", "give either seed or replicas, not both");
     const json& r = g.at("replicas");
     if (!r.is_number_integer() || r.get<std::int64_t>() < 1)
-      bad(source, where + ".replicas", fmt::format("expected an integer >= 1 (got {})", r.dump()));
+      bad(source, where + ".replicas", fmt::format("expected an integer >= 1 (got {})", core::jsonExcerpt(r)));
+    checkRunCount(listedRuns(out, static_cast<double>(r.get<std::int64_t>())), maxRuns, source, where);
     // Replicas are seeds 1..n, so that "replicas": 3 and "seed": [1, 2, 3] name the same runs.
     for (std::int64_t s = 1; s <= r.get<std::int64_t>(); ++s) out.seeds.push_back(static_cast<std::uint64_t>(s));
   }
@@ -140,16 +160,6 @@ std::string depositKey(const core::RunConfig& cfg) {
   core::to_json(pop, cfg.population);
   core::to_json(dep, cfg.deposition);
   return json{{"box", box}, {"population", pop}, {"deposition", dep}, {"seed", cfg.seed}}.dump();
-}
-
-json readJsonFile(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open", path.string()));
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw std::invalid_argument(fmt::format("{}: not valid JSON ({})", path.string(), e.what()));
-  }
 }
 
 std::string trimNumber(double v) { return fmt::format("{:g}", v); }
@@ -256,13 +266,14 @@ std::string_view toString(RunStatus s) {
   return "?";
 }
 
-SweepSpec parseSweepSpec(const json& doc, std::string_view source) {
+SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t maxRuns) {
   if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
   static const std::set<std::string> known = {"format", "version", "name", "base", "biperiodic_width", "vary",
                                               "groups", "description"};
   for (const auto& [key, v] : doc.items())
     if (!known.count(key))
-      bad(source, key, "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups)");
+      bad(source, core::textExcerpt(key),
+          "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups)");
   if (doc.contains("format") && doc.at("format") != kSweepFormat)
     bad(source, "format", fmt::format("expected \"{}\"", kSweepFormat));
   if (doc.contains("version") && doc.at("version") != kSweepVersion)
@@ -283,26 +294,31 @@ SweepSpec parseSweepSpec(const json& doc, std::string_view source) {
   if (doc.contains("biperiodic_width")) {
     const json& w = doc.at("biperiodic_width");
     if (!w.is_number() || !(w.get<double>() > 0.0))
-      bad(source, "biperiodic_width", fmt::format("expected a positive number (got {})", w.dump()));
+      bad(source, "biperiodic_width", fmt::format("expected a positive number (got {})", core::jsonExcerpt(w)));
     spec.biperiodicWidth = w.get<double>();
   }
   if (doc.contains("vary") == doc.contains("groups"))
     bad(source, "vary", "give exactly one of \"vary\" (one product) or \"groups\" (a list of products)");
   if (doc.contains("vary")) {
-    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", source));
+    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", source, maxRuns));
   } else {
     const json& groups = doc.at("groups");
     if (!groups.is_array() || groups.empty()) bad(source, "groups", "expected a non-empty list of objects");
     for (std::size_t i = 0; i < groups.size(); ++i)
-      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), source));
+      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), source, maxRuns));
   }
+  double runs = 0.0;
+  for (const SweepGroup& g : spec.groups) runs += listedRuns(g, static_cast<double>(g.seeds.size()));
+  checkRunCount(runs, maxRuns, source, doc.contains("vary") ? "vary" : "groups");
   for (SweepGroup& g : spec.groups)
     for (WidthChoice& w : g.widths)
       if (w.periodicY) w.width = spec.biperiodicWidth;
   return spec;
 }
 
-SweepSpec readSweepSpec(const fs::path& path) { return parseSweepSpec(readJsonFile(path), path.string()); }
+SweepSpec readSweepSpec(const fs::path& path, std::size_t maxRuns) {
+  return parseSweepSpec(core::readJsonFile(path, "sweep file"), path.string(), maxRuns);
+}
 
 std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
   const core::RunConfig base = resolveBase(spec.base, "sweep");
@@ -380,7 +396,7 @@ void prepareSweepDir(const fs::path& dir, const SweepSpec& spec, const std::vect
   const json table = runTableJson(runs);
   const fs::path tablePath = dir / kSweepTable;
   if (fs::exists(tablePath)) {
-    const json existing = readJsonFile(tablePath);
+    const json existing = core::readJsonFile(tablePath, "sweep table");
     if (!existing.contains("runs") || existing.at("runs") != table)
       throw std::invalid_argument(fmt::format(
           "{}: holds a different sweep (its run table differs from this sweep file's); resume it with the "
@@ -401,10 +417,13 @@ std::vector<SweepRun> readRunTable(const fs::path& dir, SweepSpec* spec) {
   const fs::path tablePath = dir / kSweepTable;
   if (!fs::exists(tablePath))
     throw std::invalid_argument(fmt::format("{}: not a sweep folder (no {})", dir.string(), kSweepTable));
-  const json doc = readJsonFile(tablePath);
+  const json doc = core::readJsonFile(tablePath, "sweep table");
   if (doc.value("format", std::string()) != "confpack-sweep-table" || !doc.contains("runs") || !doc.at("runs").is_array())
     throw std::invalid_argument(fmt::format("{}: format: not a confpack sweep table", tablePath.string()));
-  if (spec) *spec = parseSweepSpec(doc.at("sweep"), tablePath.string() + ": sweep");
+  // The table on disk was listed already, under whatever --max-runs its sweep was given.
+  if (spec)
+    *spec = parseSweepSpec(doc.at("sweep"), tablePath.string() + ": sweep",
+                           std::max(kDefaultMaxRuns, doc.at("runs").size()));
   std::vector<SweepRun> runs;
   std::map<std::string, std::size_t> deposits;
   for (const json& r : doc.at("runs")) {

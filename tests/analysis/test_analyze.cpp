@@ -1,5 +1,6 @@
 // The aggregate analysis (result.json blocks, docs/model.md "Results") and its CSV profiles.
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -110,4 +111,38 @@ TEST_CASE("analysis of a small pinacoid deposit", "[analysis][analyze][pinacoid]
   bad.b = 5000;
   p.contacts = std::vector<core::Contact>{bad};
   CHECK_THROWS_AS(analysis::analyzePacking(p), std::invalid_argument);
+}
+
+TEST_CASE("an analysis with far more cells than max_cells is refused before any work", "[analysis][analyze]") {
+  // Issue 23, failure 6: `analyze --slice 1e-7` on 170 grains ran over 10 minutes at 3.7 GB.
+  const core::Packing p = simpleCubic(5, 4, 10);  // 200 grains, W = 4
+  analysis::AnalysisOptions o;
+  std::string what;
+  // Defaults: 200 grains x 200 phi(y) slices of 0.02 across W = 4.
+  CHECK(analysis::estimatedCells(p, o, &what) == 200.0 * 200.0);
+  CHECK(what == "200 grains x phi(y) slices of 0.02 d_L");
+  o.profile.slice = 1e-7;
+  CHECK(analysis::estimatedCells(p, o) == Approx(200.0 * 4e7));
+  o.coordination.slice = 1e-10;  // 4e10 Z(y) slices: now the largest
+  CHECK(analysis::estimatedCells(p, o, &what) == Approx(4e10));
+  CHECK(what == "Z(y) slices of 1e-10 d_L");
+  o = {};
+  o.region.cellSize = 1e-4;  // (5 / 1e-4) x (4 / 1e-4) = 2e9 free-surface cells
+  CHECK(analysis::estimatedCells(p, o, &what) == Approx(2e9));
+  CHECK(what == "free-surface cells of 0.0001 d_L");
+
+  o = {};
+  o.profile.slice = 1e-7;
+  const auto start = std::chrono::steady_clock::now();
+  CHECK_THROWS_WITH(analysis::analyze(p, o),
+                    "analysis: about 8e+09 cells (200 grains x phi(y) slices of 1e-07 d_L), more than max_cells "
+                    "(1e+09); check the slice or cell size, or raise the limit with --max-cells");
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+  // The limit is the options' own: lowered, it refuses the default analysis; at the estimate, it
+  // lets it through.
+  o = {};
+  o.maxCells = 39999;
+  CHECK_THROWS_WITH(analysis::analyze(p, o), Catch::StartsWith("analysis: about 4e+04 cells"));
+  o.maxCells = 40000;
+  CHECK(analysis::analyze(p, o).grains == 200);
 }

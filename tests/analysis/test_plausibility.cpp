@@ -108,3 +108,21 @@ TEST_CASE("a contact point far from its grains is implausible", "[analysis][plau
       contactAt(0, static_cast<int>(core::WallId::Floor), core::Vec3(2.0, 2.0, 0.5), -core::Vec3::UnitZ())};
   CHECK_THAT(reasonOf(wall), Catch::StartsWith("contacts[0] has a point 0.5 away from the floor"));
 }
+
+TEST_CASE("a packing mixing spheres and pinacoids is refused naming the file and the grain, even if allowed") {
+  // Issue 23, failure 8: analyze refused it from inside the analysis, without the file's name.
+  confpack::core::Packing p;
+  p.box.lengthX = p.box.width = 5.0;
+  for (int i = 0; i < 3; ++i) {
+    confpack::core::Grain g;
+    g.position = confpack::core::Vec3(1.0 + i, 1.0, 0.5);
+    p.grains.push_back(g);
+  }
+  CHECK_NOTHROW(confpack::analysis::checkPlausible(p, "mono.json", false));
+  p.grains[2].shape = confpack::core::ShapeKind::Pinacoid;
+  const char* message =
+      "mixed.json: grains[2].shape: pinacoid, but grains[0] is a sphere: a packing mixing spheres and pinacoids is "
+      "not supported";
+  CHECK_THROWS_WITH(confpack::analysis::checkPlausible(p, "mixed.json", false), message);
+  CHECK_THROWS_WITH(confpack::analysis::checkPlausible(p, "mixed.json", true), message);
+}

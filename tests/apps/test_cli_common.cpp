@@ -97,6 +97,72 @@ TEST_CASE("a committed staged output appears whole, or replaces the entries it s
   fs::remove_all(root);
 }
 
+TEST_CASE("a commit into an existing target that fails between two renames puts the old files back") {
+  // Issue 23, failure 4: a failed move left old and new files mixed. The rename that fails is
+  // injected, in turn at every rename a commit makes (3 old entries moved aside, 4 new ones moved
+  // in): whichever fails, the target holds exactly its old files afterwards, and no staging folder
+  // is left.
+  const fs::path root = confpack::testing::freshDir("cli_common_rollback");
+  auto writeOld = [&] {
+    fs::remove_all(root / "run");
+    fs::create_directories(root / "run" / "vtk");
+    std::ofstream(root / "run" / "a.txt") << "old a";
+    std::ofstream(root / "run" / "b.txt") << "old b";
+    std::ofstream(root / "run" / "keep.txt") << "kept";
+    std::ofstream(root / "run" / "vtk" / "old.vtu") << "old frame";
+  };
+  auto checkOld = [&] {
+    CHECK(entriesOf(root) == std::vector<std::string>{"run"});
+    CHECK(entriesOf(root / "run") == std::vector<std::string>{"a.txt", "b.txt", "keep.txt", "vtk"});
+    CHECK(slurp(root / "run" / "a.txt") == "old a");
+    CHECK(slurp(root / "run" / "b.txt") == "old b");
+    CHECK(slurp(root / "run" / "keep.txt") == "kept");
+    CHECK(entriesOf(root / "run" / "vtk") == std::vector<std::string>{"old.vtu"});
+  };
+  constexpr int kRenames = 7;
+  for (int failAt = 1; failAt <= kRenames; ++failAt) {
+    CAPTURE(failAt);
+    writeOld();
+    int calls = 0;
+    auto rename = [&](const fs::path& from, const fs::path& to) {
+      if (++calls == failAt) throw std::runtime_error("injected rename failure");
+      fs::rename(from, to);
+    };
+    {
+      StagedOutput out(root / "run", rename);
+      std::ofstream(out.dir() / "a.txt") << "new a";
+      std::ofstream(out.dir() / "b.txt") << "new b";
+      std::ofstream(out.dir() / "c.txt") << "new c";
+      fs::create_directory(out.dir() / "vtk");
+      std::ofstream(out.dir() / "vtk" / "new.vtu") << "new frame";
+      CHECK_THROWS_WITH(out.commit(), Catch::Contains("its old files are back in place") &&
+                                          Catch::Contains("injected rename failure"));
+    }
+    checkOld();
+  }
+  // The same commit without a failure makes exactly kRenames renames and replaces the files.
+  writeOld();
+  int calls = 0;
+  {
+    StagedOutput out(root / "run", [&](const fs::path& from, const fs::path& to) {
+      ++calls;
+      fs::rename(from, to);
+    });
+    std::ofstream(out.dir() / "a.txt") << "new a";
+    std::ofstream(out.dir() / "b.txt") << "new b";
+    std::ofstream(out.dir() / "c.txt") << "new c";
+    fs::create_directory(out.dir() / "vtk");
+    std::ofstream(out.dir() / "vtk" / "new.vtu") << "new frame";
+    out.commit();
+  }
+  CHECK(calls == kRenames);
+  CHECK(entriesOf(root) == std::vector<std::string>{"run"});
+  CHECK(entriesOf(root / "run") == std::vector<std::string>{"a.txt", "b.txt", "c.txt", "keep.txt", "vtk"});
+  CHECK(slurp(root / "run" / "a.txt") == "new a");
+  CHECK(entriesOf(root / "run" / "vtk") == std::vector<std::string>{"new.vtu"});
+  fs::remove_all(root);
+}
+
 TEST_CASE("an --out that is an existing file is refused, and JSON is written whole and reads back equal") {
   const fs::path root = confpack::testing::freshDir("cli_common_out");
   std::ofstream(root / "file") << "keep";
@@ -110,3 +176,4 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
   CHECK(entriesOf(root) == std::vector<std::string>{"file", "r.json"});
   fs::remove_all(root);
 }
+

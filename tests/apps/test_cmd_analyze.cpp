@@ -55,6 +55,17 @@ TEST_CASE("confpack analyze writes result.json and profiles", "[apps][cli]") {
   CHECK_FALSE(fs::exists(dir / "missing_out"));
   CHECK(s.run("analyze packing.json --out neg --slice -1").code == 2);
   CHECK_FALSE(fs::exists(dir / "neg"));
+  // A slice far too thin (issue 23, failure 6): one line, exit 2, nothing written, at once.
+  const auto thin = s.run("analyze packing.json --out thin --slice 1e-7");
+  CHECK(thin.code == 2);
+  CHECK(thin.err ==
+        "confpack analyze: error: analysis: about 8e+09 cells (200 grains x phi(y) slices of 1e-07 d_L), more than "
+        "max_cells (1e+09); check the slice or cell size, or raise the limit with --max-cells\n");
+  CHECK_FALSE(fs::exists(dir / "thin"));
+  CHECK(s.run("analyze packing.json --out low --max-cells 39999").code == 2);
+  CHECK_FALSE(fs::exists(dir / "low"));
+  CHECK(s.run("analyze packing.json --out raised --max-cells 40000 --quiet").code == 0);
+  CHECK(s.run("analyze packing.json --out bad_limit --max-cells 0").code == 2);
 }
 
 TEST_CASE("confpack analyze refuses an implausible packing by name, exit 2, unless --allow-implausible",

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <map>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "study/sweep.hpp"
 #include "tests/support/confpack_binary.hpp"
@@ -69,4 +71,21 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
   // Both backends of a pile read the same deposit file.
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0000.json"));
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0001.json"));
+}
+
+TEST_CASE("confpack sweep refuses a sweep file listing more runs than --max-runs: one line, exit 2") {
+  const ConfpackSession s("cmd_sweep_max_runs");
+  std::ofstream(s.dir / "huge.json") << R"({"vary": {"width": [4], "replicas": 100000000}})";
+  std::ofstream(s.dir / "two.json") << R"({"vary": {"width": [4, 5]}})";
+  const auto huge = s.run("sweep huge.json --list");
+  CHECK(huge.code == 2);
+  CHECK(huge.err == "confpack sweep: error: huge.json: vary: lists 1e+08 runs, more than the limit of 100000 (check "
+                    "the lists and replicas, or raise the limit with --max-runs)\n");
+  const auto two = s.run("sweep two.json --list --max-runs 1");
+  CHECK(two.code == 2);
+  CHECK_THAT(two.err, Catch::Contains("lists 2 runs, more than the limit of 1"));
+  CHECK(s.run("sweep two.json --list --max-runs 2").code == 0);
+  std::vector<std::string> entries = s.entries();
+  std::sort(entries.begin(), entries.end());
+  CHECK(entries == std::vector<std::string>{"huge.json", "two.json"});  // nothing written
 }

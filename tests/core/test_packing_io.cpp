@@ -317,8 +317,49 @@ TEST_CASE("reading a broken or missing file gives one clear message") {
     std::ofstream f(dir / "huge.json");
     f << R"({"format": "confpack-packing", "version": 1, "grains": [{"position": [1e400, 0, 0]}]})";
   }
-  CHECK_THROWS_WITH(readPacking(dir / "huge.json"), Catch::Contains("huge.json: a number out of the range of a double"));
+  CHECK_THROWS_WITH(readPacking(dir / "huge.json"),
+                    Catch::Contains("huge.json: grains[0].position[0]: a number out of the range of a double"));
   fs::remove_all(dir);
+}
+
+TEST_CASE("a refusal echoes a long key or a deeply nested value only in part") {
+  // Issue 23, failure 8: a 10 MB unknown key was echoed in full; a value nested 100,000 deep was
+  // written out by a recursive dump().
+  json j = toJson(samplePacking());
+  j[std::string(10'000'000, 'k')] = 1;
+  std::string message;
+  try {
+    (void)packingFromJson(j, "packing.json");
+  } catch (const std::invalid_argument& e) {
+    message = e.what();
+  }
+  CHECK_THAT(message, Catch::StartsWith("packing.json: kkkk") && Catch::Contains("...: unknown key"));
+  CHECK(message.size() < 300);
+  json deep = 1;
+  for (int i = 0; i < 100000; ++i) deep = json::array({std::move(deep)});
+  j = toJson(samplePacking());
+  j["box"]["width"] = std::move(deep);
+  message.clear();
+  try {
+    (void)packingFromJson(j, "packing.json");
+  } catch (const std::invalid_argument& e) {
+    message = e.what();
+  }
+  CHECK_THAT(message, Catch::StartsWith("packing.json: box.width: must be a finite number (got [[[["));
+  CHECK(message.size() < 200);
+}
+
+TEST_CASE("a direction whose components overflow the norm is normalised, not called \"norm 0\"") {
+  // Issue 23, failure 8: [1e308, 1e308, 0, 0] has a norm beyond DBL_MAX; dividing by the
+  // infinite norm gave [0, 0, 0, 0], refused as "must be a unit quaternion (norm 0)".
+  json j = toJson(samplePacking());
+  j["grains"][0]["orientation"] = {1e308, 1e308, 0.0, 0.0};
+  const Packing p = packingFromJson(j);
+  CHECK(p.grains[0].orientation.w() == Approx(std::sqrt(0.5)));
+  CHECK(p.grains[0].orientation.x() == Approx(std::sqrt(0.5)));
+  CHECK(p.grains[0].orientation.norm() == Approx(1.0));
+  j["grains"][0]["orientation"] = {0.0, 0.0, 0.0, 0.0};
+  requireRefused(j, "grains[0].orientation: cannot be normalised (norm 0)");
 }
 
 TEST_CASE("writing refuses a packing that would not read back and leaves nothing behind") {

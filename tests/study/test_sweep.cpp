@@ -2,6 +2,7 @@
 // A fake runner (milliseconds per run) stands in for the physics; what is tested is the
 // bookkeeping that makes a study survive kills and cluster slicing.
 #include <catch2/catch.hpp>
+#include <chrono>
 
 #include <filesystem>
 #include <fstream>
@@ -173,6 +174,23 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
   CHECK_THAT(message(json::parse(R"({"vary": {}, "groups": [{}]})")), Contains("vary"));
   CHECK_THAT(message(json::parse(R"({"vary": {}, "colour": 1})")), Contains("colour"));
   CHECK(message(json::parse(R"({"vary": {"width": [5, "biperiodic"]}})")) == "accepted");
+}
+
+TEST_CASE("a sweep listing more runs than the limit is refused before any run is listed") {
+  // Issue 23, failure 6: "replicas": 100000000 needed more than 4 GB just to list the runs.
+  const auto start = std::chrono::steady_clock::now();
+  CHECK_THROWS_WITH(
+      study::parseSweepSpec(json::parse(R"({"vary": {"width": [4, 5], "replicas": 100000000}})"), "s.json"),
+      "s.json: vary: lists 2e+08 runs, more than the limit of 100000 (check the lists and replicas, "
+      "or raise the limit with --max-runs)");
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+  // The limit counts the product of a group's lists (replicas before they are listed), and the
+  // groups' sum; duplicates count too.
+  const json groups = json::parse(R"({"groups": [{"width": [4, 5], "seed": [1, 2, 3]},
+                                                 {"width": [4], "backend": ["nscd", "bullet"], "replicas": 3}]})");
+  CHECK_THROWS_WITH(study::parseSweepSpec(groups, "s.json", 5), Catch::StartsWith("s.json: groups[1]: lists 6 runs"));
+  CHECK_THROWS_WITH(study::parseSweepSpec(groups, "s.json", 11), Catch::StartsWith("s.json: groups: lists 12 runs"));
+  CHECK(study::expandRuns(study::parseSweepSpec(groups, "s.json", 12)).size() == 9);  // 3 duplicates dropped
 }
 
 TEST_CASE("slicing covers every run exactly once and keeps deposit groups together") {
