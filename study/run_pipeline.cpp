@@ -213,8 +213,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     handOver = true;
     handOverAt = def.fallTimeLimit > 0.0 ? "fall_time_limit" : "time_limit";
   }
-  // How far the fall had got when the finisher took over: a pile handed over while still falling
-  // (at the time limit) ends looser than one handed over at rest-like speeds (docs/model.md).
+  // How far the fall had got when the finisher took over: the finisher is meant for the creep after
+  // the fall (docs/model.md), and this shows a pile it was handed while still falling.
   const double handOverKineticRatio = haveEq ? eq.meanKineticRatio : 0.0;
   const long dynamicSteps = steps;
   const long dynamicIterations = totalIterations;
