@@ -115,7 +115,8 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   // Bullet has no finisher: its runs stay dynamic, and result.json says which protocol ran.
   const bool finisher = def.protocol == core::Protocol::QuasiStatic && backend->hasQuasiStaticStep();
   // With the finisher, the dynamic steps are the fall, bounded by fall_time_limit when given.
-  const double timeLimit = finisher && def.fallTimeLimit > 0.0 ? def.fallTimeLimit : def.timeLimit;
+  const bool fallBounded = finisher && def.fallTimeLimit > 0.0;
+  const double timeLimit = fallBounded ? def.fallTimeLimit : def.timeLimit;
   out.protocol = finisher ? core::Protocol::QuasiStatic : core::Protocol::Dynamic;
   // A fixed step runs ceil(limit / dt) steps, its time counted as steps x dt (no round-off drift);
   // an adaptive one sums its steps until the sum reaches the limit.
@@ -211,7 +212,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   const char* handOverAt = handOver ? "switch_kinetic_ratio" : nullptr;
   if (finisher && !handOver && !eq.reached) {
     handOver = true;
-    handOverAt = def.fallTimeLimit > 0.0 ? "fall_time_limit" : "time_limit";
+    handOverAt = fallBounded ? "fall_time_limit" : "time_limit";
   }
   // How far the fall had got when the finisher took over: the finisher is meant for the creep after
   // the fall (docs/model.md), and this shows a pile it was handed while still falling.
