@@ -22,6 +22,7 @@
 #include "backends/backend_factory.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
+#include "core/settings_table.hpp"
 #include "study/run_pipeline.hpp"
 
 namespace confpack::app {
@@ -37,6 +38,7 @@ struct RunState {
   core::RunConfig cfg;
   CommonOptions opts;
   std::string backendOptions;  ///< --backend-options JSON text
+  std::string compactionOptions;  ///< --compaction-options JSON text
   std::string from;            ///< --from PACKING: start from its grains instead of a deposit
   bool allowImplausible = false;  ///< --allow-implausible: take an implausible --from packing
   CLI::App* sub = nullptr;
@@ -73,6 +75,9 @@ void runRun(RunState& st) {
   std::optional<core::Deposit> start;
   checkInput("run", [&] {
     if (!st.backendOptions.empty()) cfg.backendOptions = core::parseJsonText(st.backendOptions, "--backend-options");
+    // After the flags: a key given both ways takes the JSON's value.
+    if (!st.compactionOptions.empty())
+      core::compactionTable().read(core::parseJsonText(st.compactionOptions, "--compaction-options"), cfg.compaction);
     if (!st.from.empty()) {
       const WorkStep step("reading the packing file");
       start = startFromPacking(st);
@@ -153,6 +158,8 @@ void registerRun(CLI::App& app) {
   addAllowImplausibleFlag(*sub, st->allowImplausible);
   sub->add_option("--backend-options", st->backendOptions,
                   "Backend settings as JSON, e.g. '{\"tolerance\": 1e-5}' (see the README for the keys)");
+  sub->add_option("--compaction-options", st->compactionOptions,
+                  "Compaction settings as JSON, e.g. '{\"trust_radius\": 0.02}' (`confpack options` lists the keys)");
   sub->callback([st] { runRun(*st); });
 }
 

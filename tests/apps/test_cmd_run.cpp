@@ -84,6 +84,34 @@ TEST_CASE("run --from refuses box options and unreadable files with one line, ex
   CHECK(!fs::exists(s.dir / "out"));
 }
 
+TEST_CASE("run --compaction-options sets compaction keys (over the flags) and refuses bad ones by name") {
+  ConfpackSession s("cmd_run_compaction_options");
+  core::writePacking(looseColumn(), s.dir / "column.json");
+  // The finisher bounded at 2 steps from the bead column's loose start: not at rest, as asked.
+  const auto r = s.run(
+      "run --from column.json --protocol quasi-static --time-limit 20 --out out -q "
+      "--compaction-options '{\"time_limit\": 0.05, \"finisher_max_steps\": 2, \"trust_radius\": 0.02}'");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const nlohmann::json result = nlohmann::json::parse(testing::slurp(s.dir / "out" / "result.json"));
+  CHECK(result["config"]["compaction"]["time_limit"].get<double>() == 0.05);
+  CHECK(result["config"]["compaction"]["trust_radius"].get<double>() == 0.02);
+  CHECK_FALSE(result["equilibrium"]["reached"].get<bool>());
+  CHECK(result["timing"]["stages"]["quasi_static"]["steps"].get<long>() == 2);
+
+  for (const auto& [options, named] : std::vector<std::pair<std::string, std::string>>{
+           {"{\"trust_radius\": 0.9}", "compaction.trust_radius"},
+           {"{\"no_such_key\": 1}", "no_such_key"},
+           {"{not json", "--compaction-options"}}) {
+    const auto bad = s.run("run --from column.json --out bad --compaction-options '" + options + "'");
+    INFO(bad.err);
+    CHECK(bad.code == 2);
+    CHECK(bad.err.find(named) != std::string::npos);
+    CHECK(testing::lineCount(bad.err) == 1);
+  }
+  CHECK(!fs::exists(s.dir / "bad"));
+}
+
 TEST_CASE("SIGTERM stops a run at its next step: one line saying where, exit 143, nothing written") {
   ConfpackSession s("cmd_run_sigterm");
   const fs::path err = s.dir.string() + ".err";
