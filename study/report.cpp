@@ -592,6 +592,25 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   addFitQuantities(out, fits.z, "Z_bulk",
                      "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
                      "C_Z", "loss of coordination due to the walls, in d_L");
+  // lambda_L/d_avg from the widest confined sample of each family, as the lambda_L section takes it.
+  const std::string lambdaKey = "profile_fit/lambda_L_over_d_avg";
+  SummaryQuantity lambda{"lambda_L/d_avg",
+                         "length over which the wall's layering of the large grains decays, in mean grain sizes d_avg, "
+                         "from the fit of phi(y) of the widest confined sample (mean ± standard error over its replicas)",
+                         {}};
+  for (const SeriesKey& sk : study.seriesKeys())
+    for (const std::string& b : study.backends) {
+      const ConfKey* widest = nullptr;
+      for (const auto& [k, _] : study.groups)
+        if (seriesOf(k) == sk && !k.periodic && study.statOf(k, b, lambdaKey).n > 0 &&
+            (!widest || k.width > widest->width))
+          widest = &k;
+      if (!widest) continue;
+      const ReplicaStat st = study.statOf(*widest, b, lambdaKey);
+      const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+      lambda.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
+    }
+  if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
   const std::string overlap = "interpenetration_percent/exact";
   SummaryQuantity interpenetration{"interpenetration",
                                    "volume shared by overlapping grains, % of the grains' volume, mean over every "

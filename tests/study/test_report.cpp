@@ -4,6 +4,7 @@
 // the run folders, and the per-configuration tables in tables/*.csv, read back.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -53,7 +54,10 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
        {{"reached", true}, {"max_force_ratio", 1e-5}, {"max_moment_ratio", 1e-5}, {"max_kinetic_ratio", 1e-9}}},
       {"anisotropy", 0.1},
       {"nematic", {{"bulk", nullptr}, {"boundary", nullptr}}},
-      {"profile_fit", {{"phi_bulk", phiBulk}, {"lambda_L", 1.0 + 0.1 * cfg.population.smallFraction / 10.0}}},
+      {"profile_fit",
+       {{"phi_bulk", phiBulk},
+        {"lambda_L", 1.0 + 0.1 * cfg.population.smallFraction / 10.0},
+        {"lambda_L_over_d_avg", (nscd ? 1.25 : 1.5) + offset}}},
       {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
@@ -396,7 +400,7 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
     CHECK_THAT(zFit[4], Catch::StartsWith("1.200 ± "));
     // The summary row: every run at equilibrium, the same numbers as the fits, the fit quality.
     const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
-    REQUIRE(row.size() == 9);
+    REQUIRE(row.size() == 10);
     CHECK(md.find("| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt) < verdictAt);
     CHECK(row[2] == "15 / 15");
     CHECK(row[3] == phiFit[3]);
@@ -404,10 +408,15 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
     CHECK(row[5] == "chi²/dof " + phiFit[7] + ", Q " + phiFit[8]);
     CHECK(row[6] == zFit[3]);
     CHECK(row[7] == zFit[4]);
-    CHECK_THAT(row[8], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
+    // lambda_L/d_avg of the widest confined sample (W = 20): the replicas' mean and standard error.
+    CHECK(row[8] == fmt::format("{:.3g} ± {:.2g}", backend == "nscd" ? 1.25 : 1.5, kDelta / std::sqrt(3.0)));
+    CHECK_THAT(row[9], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
   }
+  // Without --reference there is no reference column.
+  CHECK(md.find("reference |") == std::string::npos);
   // Quantities are named and defined, never numbered.
   CHECK(md.find("- phi_bulk: solid fraction far from the walls") != std::string::npos);
+  CHECK(md.find("- lambda_L/d_avg: length over which the wall's layering") != std::string::npos);
   if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
 }
 
