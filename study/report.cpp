@@ -143,6 +143,36 @@ std::string seriesText(const SeriesKey& s) {
   return fmt::format("{} x_S={} mu_w={}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu));
 }
 
+// The published values of --reference as the sections show them: found per series, each citation
+// numbered [1], [2], ... in the order the page first uses it, so the summary's footnotes and the
+// figures' legends agree.
+class References {
+ public:
+  explicit References(const std::optional<ReferenceValues>& values) : values_(values ? &*values : nullptr) {}
+
+  bool given() const { return values_ != nullptr; }
+  const ReferenceValues& values() const { return *values_; }
+
+  const ReferenceValue* find(const SeriesKey& s, const std::string& key) const {
+    return values_ ? values_->find(familyOf(s.shape, s.xs), s.xs, s.mu, key) : nullptr;
+  }
+  int number(const std::string& citation) {
+    const auto it = std::find(citations_.begin(), citations_.end(), citation);
+    if (it != citations_.end()) return static_cast<int>(it - citations_.begin()) + 1;
+    citations_.push_back(citation);
+    return static_cast<int>(citations_.size());
+  }
+  // "0.64 ± 0.01 [1]"
+  std::string cell(const ReferenceValue& v) {
+    return fmt::format("{:.4g} ± {:.2g} [{}]", v.value, v.uncertainty, number(v.citation));
+  }
+  const std::vector<std::string>& citations() const { return citations_; }
+
+ private:
+  const ReferenceValues* values_;
+  std::vector<std::string> citations_;
+};
+
 // Mean +- std (n): 4 significant digits for the mean, 2 for the spread.
 std::string statText(const ReplicaStat& s) {
   if (s.n == 0) return "missing";
@@ -391,8 +421,8 @@ struct FitQuantity {
 // The values against d_L/W with the fitted lines, the biperiodic value at d_L/W = 0: one colour per
 // series, solid for the first backend, dashed for the second.
 void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
-                  const FitQuantity& q) {
-  const std::string caption =
+                  const FitQuantity& q, References& references) {
+  std::string caption =
       fmt::format("{} against d_L/W with the fits {}_bulk - {}/W (biperiodic at 0)", q.quantity, q.quantity, q.cName);
   Plot p{q.stem, caption, "d_L / W", q.quantity, {}, {}, true};
   const auto& backends = study.backends;
@@ -411,20 +441,36 @@ void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, 
       p.functions.push_back(fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt {} notitle", f.fit->bulk, f.fit->c,
                                         colors[f.series], dashed ? 2 : 1));
   }
+  // The published bulk value of each series as a square at d_L/W = 0, in the series' colour, and
+  // with a published C the published law as a dotted line.
+  bool marked = false;
+  for (const auto& [series, color] : colors) {
+    const ReferenceValue* bulk = references.find(series, q.quantity + "_bulk");
+    if (!bulk) continue;
+    marked = true;
+    Series s{fmt::format("reference {} [{}]", seriesText(series), references.number(bulk->citation)), color, false,
+             false, {{0.0, bulk->value, bulk->uncertainty}}};
+    s.pointType = 5;
+    p.series.push_back(std::move(s));
+    if (const ReferenceValue* c = references.find(series, q.cName))
+      p.functions.push_back(
+          fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt 3 notitle", bulk->value, c->value, color));
+  }
+  if (marked) p.caption += "; squares: reference values";
   doc.figure(figures.draw(p));
 }
 
 // The figure of quantity(W) = quantity_bulk - cName/W against d_L/W with the fitted lines, the
 // fit table and the backends' differences of its parameters.
 void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
-                   const FitQuantity& q) {
+                   const FitQuantity& q, References& references) {
   if (fits.empty()) return;
   const auto& backends = study.backends;
   const std::string& quantity = q.quantity;
   const std::string& cName = q.cName;
   doc.heading(2, q.title);
   doc.paragraph(q.definition);
-  addFitFigure(doc, study, figures, fits, q);
+  addFitFigure(doc, study, figures, fits, q, references);
   doc.paragraph("The fit per series (shape, x_S, mu_w) and backend over the confined widths:");
   std::vector<std::vector<std::string>> rows;
   for (const FitRow& f : fits) {
@@ -642,23 +688,57 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   return out;
 }
 
-void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary) {
+void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary, References& references) {
   doc.heading(2, "Summary: the results per family and backend");
+  // The columns: each quantity, its published value beside it when the reference file gives one
+  // for a family of the study, the fit quality after C; a published quantity the study has no
+  // number for (no Z, no profile fit) still gets its reference column, at the end.
+  struct Column {
+    enum Kind { Value, Reference, FitQuality } kind;
+    const SummaryQuantity* quantity = nullptr;
+    std::string referenceKey;
+  };
+  const auto referenced = [&](const std::string& key) {
+    const auto keys = study.seriesKeys();
+    return std::any_of(keys.begin(), keys.end(), [&](const SeriesKey& sk) { return references.find(sk, key); });
+  };
+  std::vector<Column> columns;
   std::vector<std::string> head = {"family", "backend", "runs at equilibrium / total"};
+  std::set<std::string> withReference;
   for (const SummaryQuantity& q : summary.quantities) {
+    columns.push_back({Column::Value, &q, ""});
     head.push_back(q.name);
-    if (q.name == "C") head.push_back("phi(W) fit quality");
+    for (const ReferenceQuantity& rq : referenceQuantities())
+      if (rq.name == q.name && referenced(rq.key)) {
+        columns.push_back({Column::Reference, nullptr, rq.key});
+        head.push_back(q.name + " reference");
+        withReference.insert(rq.key);
+      }
+    if (q.name == "C") {
+      columns.push_back({Column::FitQuality, nullptr, ""});
+      head.push_back("phi(W) fit quality");
+    }
   }
+  for (const ReferenceQuantity& rq : referenceQuantities())
+    if (!withReference.count(rq.key) && referenced(rq.key)) {
+      columns.push_back({Column::Reference, nullptr, rq.key});
+      head.push_back(rq.name + " reference");
+      withReference.insert(rq.key);
+    }
   std::vector<std::vector<std::string>> rows;
   for (const SeriesKey& sk : study.seriesKeys())
     for (const std::string& b : study.backends) {
       const RunCount& n = summary.runs.at({sk, b});
       if (n.total == 0) continue;
       std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total)};
-      for (const SummaryQuantity& q : summary.quantities) {
-        const auto it = q.values.find({sk, b});
-        row.push_back(it != q.values.end() ? it->second.text : "-");
-        if (q.name == "C") {
+      for (const Column& c : columns) {
+        if (c.kind == Column::Value) {
+          const auto it = c.quantity->values.find({sk, b});
+          row.push_back(it != c.quantity->values.end() ? it->second.text : "-");
+        } else if (c.kind == Column::Reference) {
+          const ReferenceValue* r = references.find(sk, c.referenceKey);
+          row.push_back(r ? references.cell(*r) : "-");
+        } else {
           const auto fq = summary.phiFitQuality.find({sk, b});
           row.push_back(fq != summary.phiFitQuality.end() ? fq->second : "-");
         }
@@ -666,6 +746,20 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
       rows.push_back(std::move(row));
     }
   doc.table(head, rows);
+  if (references.given()) {
+    const ReferenceValues& file = references.values();
+    const std::string from =
+        fmt::format("{}{}", file.source, file.description.empty() ? "" : " (" + file.description + ")");
+    if (references.citations().empty()) {
+      doc.paragraph(fmt::format("The reference file {} gives no value for the families of this study.", from));
+    } else {
+      doc.paragraph(fmt::format("Reference values from {}; [n] in a reference cell is its source:", from));
+      std::vector<std::string> sources;
+      for (std::size_t i = 0; i < references.citations().size(); ++i)
+        sources.push_back(fmt::format("[{}] {}", i + 1, references.citations()[i]));
+      doc.bullets(sources);
+    }
+  }
   std::vector<std::string> definitions = {
       "runs at equilibrium: finished runs whose forces and moments balance (equilibrium reached), out of all the "
       "runs of the family and backend"};
@@ -676,6 +770,10 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
           "phi(W) fit quality: chi² per degree of freedom of the fit over the confined widths and Q, "
           "the probability of a chi² at least as large if the law holds (weighted fits)");
   }
+  if (!withReference.empty())
+    definitions.push_back(
+        "QUANTITY reference: the published value of the reference file for the family (the entry for its x_S and "
+        "mu_w when the file has one), ± its published uncertainty, [n] its source");
   definitions.push_back("± values are standard errors; the fits' are from the least squares (docs/model.md).");
   doc.bullets(definitions);
 }
@@ -745,17 +843,20 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
 // After the answers: the figures with their fits, then the runs and the tables behind them
 
 // The figures of the phi(W) and Z(W) fits and of lambda_L, in this order.
-void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits) {
+void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits,
+                          References& references) {
   addFitSection(doc, study, figures, fits.phi,
                 {"phi", "C", "phi_vs_invW", "Solid fraction phi against d_L/W",
                  "The solid fraction phi is the share of the bulk region's volume (away from the floor and the free "
                  "surface) filled by grains; the geometrical model phi(W) = phi_bulk − C/W splits it into phi_bulk, "
-                 "its value far from the walls, and C, the loss due to the two wall layers, in d_L."});
+                 "its value far from the walls, and C, the loss due to the two wall layers, in d_L."},
+                references);
   addFitSection(doc, study, figures, fits.z,
                 {"Z", "C_Z", "Z_vs_invW", "Coordination number Z against d_L/W",
                  "The coordination number Z is the mean number of grain-grain contacts per grain of the bulk region; "
                  "the same model Z(W) = Z_bulk − C_Z/W gives its value far from the walls, Z_bulk, and its loss "
-                 "due to the walls, C_Z, in d_L."});
+                 "due to the walls, C_Z, in d_L."},
+                references);
   if (study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, fits.phi);
 }
 
@@ -1042,9 +1143,10 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   if (study.keys.count("solid_fraction")) fits.phi = confinementFits(study, "solid_fraction");
   if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
   const StudySummary results = summarize(study, fits);
-  addSummarySection(doc, study, results);
+  References references(options.reference);
+  addSummarySection(doc, study, results, references);
   addVerdictSection(doc, study, results);
-  addFitFigureSections(doc, study, figures, fits);
+  addFitFigureSections(doc, study, figures, fits, references);
   addProfileSections(doc, study, figures);
   addRunsSection(doc, study, outDir);
   addQuantityTables(doc, study, outDir);

@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "study/reference_values.hpp"
 #include "study/sweep.hpp"
 
 namespace confpack::study {
@@ -70,6 +71,11 @@ std::map<std::string, std::optional<double>> flattenResult(const nlohmann::json&
 struct ReportOptions {
   std::filesystem::path gnuplot = "gnuplot";  ///< executable; empty = do not draw figures
   std::chrono::milliseconds figureTimeout = std::chrono::seconds(120);  ///< gnuplot is killed after this, per figure
+  /// Published values shown next to the study's (`--reference FILE`, study/reference_values.hpp):
+  /// a "reference" column beside each quantity of the summary that has one, the citations below
+  /// it, and marks at d_L/W = 0 (the law as a dotted line when C is given too) on the phi(W) and
+  /// Z(W) figures. None: the report has no reference column.
+  std::optional<ReferenceValues> reference;
 };
 
 struct ReportSummary {

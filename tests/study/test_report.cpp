@@ -523,3 +523,71 @@ TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json")
   }
   fs::remove_all(dir);
 }
+
+TEST_CASE("report with reference values: a reference column beside each quantity, the sources below, marks on the figures") {
+  const fs::path dir = makeStudy("reference", false);
+  study::ReportOptions o;
+  o.reference = study::parseReferenceValues(json::parse(R"json({
+    "format": "confpack-reference", "version": 1, "description": "test values",
+    "families": {
+      "MSP": [
+        { "phi_bulk": { "value": 0.64, "uncertainty": 0.01, "citation": "Scott and Kilgour, J. Phys. D 2, 863 (1969)" },
+          "C": { "value": 0.45, "uncertainty": 0.05, "citation": "made-up example, not a publication" },
+          "Z_bulk": { "value": 6, "uncertainty": 0, "citation": "O'Hern et al., Phys. Rev. E 68, 011306 (2003)" } },
+        { "mu_w": 0.5, "phi_bulk": { "value": 0.1, "uncertainty": 0.1, "citation": "never shown: no series has mu_w 0.5" } }
+      ],
+      "BSP": { "lambda_L_over_d_avg": { "value": 9, "uncertainty": 1, "citation": "never shown: no BSP series" } }
+    }})json"),
+                                                "test-reference.json");
+  const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
+  const std::string md = slurp(s.markdown);
+  const std::string html = slurp(s.html);
+  const std::size_t summaryAt = md.find("## Summary");
+  const std::size_t verdictAt = md.find("## Cross-solver verdict");
+  // The columns: each referenced quantity followed by its reference, in the summary only.
+  const std::string head =
+      "| family | backend | runs at equilibrium / total | phi_bulk | phi_bulk reference | C | C reference | phi(W) fit "
+      "quality | Z_bulk | Z_bulk reference | C_Z | lambda_L/d_avg | interpenetration |";
+  CHECK(md.find(head) > summaryAt);
+  CHECK(md.find(head) < verdictAt);
+  for (const std::string backend : {"nscd", "bullet"}) {
+    INFO(backend);
+    const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
+    REQUIRE(row.size() == 13);
+    CHECK_THAT(row[3], Catch::StartsWith(backend == "nscd" ? "0.6400 ± " : "0.6300 ± "));
+    CHECK(row[4] == "0.64 ± 0.01 [1]");
+    CHECK(row[6] == "0.45 ± 0.05 [2]");
+    CHECK(row[9] == "6 ± 0 [3]");
+  }
+  // The sources, numbered as the cells cite them, in both renderings; the file is named.
+  CHECK(md.find("Reference values from test-reference.json (test values); [n] in a reference cell is its source:") !=
+        std::string::npos);
+  CHECK(md.find("- [1] Scott and Kilgour, J. Phys. D 2, 863 (1969)\n- [2] made-up example, not a publication\n- [3] "
+                "O'Hern et al., Phys. Rev. E 68, 011306 (2003)\n") != std::string::npos);
+  CHECK(html.find("<th>phi_bulk reference</th>") != std::string::npos);
+  CHECK(html.find("<td>0.64 ± 0.01 [1]</td>") != std::string::npos);
+  CHECK(html.find("<li>[1] Scott and Kilgour, J. Phys. D 2, 863 (1969)</li>") != std::string::npos);
+  CHECK(html.find("<li>[3] O'Hern et al.") != std::string::npos);
+  CHECK(md.find("never shown") == std::string::npos);
+  // The figures' data: the published bulk value at d_L/W = 0 with its uncertainty, the law as a
+  // dotted line in the script.
+  const fs::path figures = dir / "report" / "figures";
+  CHECK(slurp(figures / "phi_vs_invW.csv").find("\nreference MSP x_S=0 mu_w=0 [1],0,0.64,0.01\n") != std::string::npos);
+  CHECK(slurp(figures / "phi_vs_invW.gp").find("[0:*] 0.64 - 0.45*x lc 1 dt 3 notitle") != std::string::npos);
+  CHECK(slurp(figures / "Z_vs_invW.csv").find("\nreference MSP x_S=0 mu_w=0 [3],0,6,0\n") != std::string::npos);
+  CHECK(slurp(figures / "phi_vs_invW.gp").find("squares: reference values") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("report with reference values for none of the study's families says so") {
+  const fs::path dir = makeStudy("reference_none", false);
+  study::ReportOptions o;
+  o.reference = study::parseReferenceValues(
+      json::parse(R"({"families": {"MPP": {"phi_bulk": {"value": 0.7, "uncertainty": 0.01, "citation": "c"}}}})"),
+      "pinacoids.json");
+  const std::string md = slurp(study::writeReport(dir, dir / "report", o).markdown);
+  CHECK(md.find("The reference file pinacoids.json gives no value for the families of this study.") != std::string::npos);
+  CHECK(md.find("reference |") == std::string::npos);
+  CHECK(slurp(dir / "report" / "figures" / "phi_vs_invW.csv").find("reference") == std::string::npos);
+  fs::remove_all(dir);
+}
