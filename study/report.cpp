@@ -107,18 +107,46 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Configurations and grouping
 
+// A value of a setting the study varies beyond the named axes (a sweep's setting axis, study/
+// sweep.hpp), as it names and orders configurations: numbers in numeric order (45 before 100),
+// other values by their text. The name is the setting's short name, for the labels only.
+struct SettingValue {
+  std::string name;
+  std::string text;
+  std::optional<double> number;
+
+  std::weak_ordering operator<=>(const SettingValue& o) const {
+    if (number && o.number) return *number < *o.number ? std::weak_ordering::less
+                                   : *number > *o.number ? std::weak_ordering::greater
+                                                         : std::weak_ordering::equivalent;
+    if (number.has_value() != o.number.has_value())
+      return number ? std::weak_ordering::less : std::weak_ordering::greater;
+    return text <=> o.text;
+  }
+  bool operator==(const SettingValue& o) const { return (*this <=> o) == 0; }
+};
+
 struct ConfKey {
   int shape = 0;
   double xs = 0.0;
   double mu = 0.0;
+  std::vector<SettingValue> settings;  // of the study's varied settings, in their order
   bool periodic = false;
   double width = 0.0;
   auto operator<=>(const ConfKey&) const = default;
 };
 
-ConfKey confKey(const core::RunConfig& c) {
-  return {static_cast<int>(c.population.shape), c.population.smallFraction, c.box.wallFriction, c.box.periodicY,
-          c.box.width};
+ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths, const std::vector<std::string>& names) {
+  ConfKey k{static_cast<int>(c.population.shape), c.population.smallFraction, c.box.wallFriction, {}, c.box.periodicY,
+            c.box.width};
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    SettingValue v{names[i], settingText(c, paths[i]), std::nullopt};
+    char* end = nullptr;
+    const double x = std::strtod(v.text.c_str(), &end);
+    if (!v.text.empty() && end == v.text.c_str() + v.text.size() && std::isfinite(x)) v.number = x;
+    k.settings.push_back(std::move(v));
+  }
+  return k;
 }
 
 // Series of a geometrical-model fit: everything but the width.
@@ -126,10 +154,11 @@ struct SeriesKey {
   int shape = 0;
   double xs = 0.0;
   double mu = 0.0;
+  std::vector<SettingValue> settings;
   auto operator<=>(const SeriesKey&) const = default;
 };
 
-SeriesKey seriesOf(const ConfKey& k) { return {k.shape, k.xs, k.mu}; }
+SeriesKey seriesOf(const ConfKey& k) { return {k.shape, k.xs, k.mu, k.settings}; }
 
 std::string num(double v) { return fmt::format("{:g}", v); }
 
@@ -137,10 +166,17 @@ std::string familyOf(int shape, double xs) {
   return fmt::format("{}{}", xs > 0.0 ? "B" : "M", shape == static_cast<int>(core::ShapeKind::Sphere) ? "SP" : "PP");
 }
 
+// " alpha_deg=45 E=0.5" (sep "=") or ", alpha_deg = 45, E = 0.5" (sep " = ", lead ", ").
+std::string settingsText(const std::vector<SettingValue>& settings, const char* lead = " ", const char* sep = "=") {
+  std::string out;
+  for (const SettingValue& v : settings) out += fmt::format("{}{}{}{}", lead, v.name, sep, v.text);
+  return out;
+}
+
 std::string widthText(const ConfKey& k) { return k.periodic ? fmt::format("biperiodic ({})", num(k.width)) : num(k.width); }
 
 std::string seriesText(const SeriesKey& s) {
-  return fmt::format("{} x_S={} mu_w={}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu));
+  return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu), settingsText(s.settings));
 }
 
 // The published values of --reference as the sections show them: found per series, each citation
@@ -244,10 +280,14 @@ std::size_t tableGroupOf(const std::string& key) {
 class StudyView {
  public:
   explicit StudyView(const fs::path& sweepDir) : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
+    std::vector<SweepRun> runs;
+    for (const RunRecord& r : records) runs.push_back(r.run);
+    settings = variedSettings(runs);
+    settingNames = study::settingNames(settings);
     for (const RunRecord& r : records) {
       if (std::find(backends.begin(), backends.end(), r.run.config.backend) == backends.end())
         backends.push_back(r.run.config.backend);
-      groups[confKey(r.run.config)][r.run.config.backend].push_back(&r);
+      groups[confKey(r.run.config, settings, settingNames)][r.run.config.backend].push_back(&r);
       if (r.status != RunStatus::Done) continue;
       for (const auto& [k, v] : r.values) keys.insert(k);
       for (const auto& e : fs::directory_iterator(runDir(r)))
@@ -292,6 +332,8 @@ class StudyView {
   SweepSpec spec;
   std::vector<RunRecord> records;
   std::vector<std::string> backends;  // in table order
+  std::vector<std::string> settings;      // varied beyond the named axes: configuration paths
+  std::vector<std::string> settingNames;  // their short names
   std::map<ConfKey, std::map<std::string, std::vector<const RunRecord*>>> groups;
   std::set<std::string> keys;      // every quantity of a finished run
   std::set<std::string> csvNames;  // every profile file of a finished run
@@ -330,6 +372,15 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                             "(not run or interrupted), {} done but not equilibrated.",
                             fs::absolute(study.sweepDir).string(), when, CONFPACK_VERSION, summary.runs, summary.done,
                             summary.failed, summary.missing, summary.unequilibrated));
+  if (!study.settings.empty()) {
+    std::string varied;
+    for (std::size_t i = 0; i < study.settings.size(); ++i)
+      varied += fmt::format("{}{}{}", i == 0 ? "" : ", ", study.settings[i],
+                            study.settingNames[i] == study.settings[i] ? "" : " (" + study.settingNames[i] + ")");
+    doc.paragraph(fmt::format("Beyond W, shape, x_S, mu_w, seed and backend this study varies {}: each family below "
+                              "is one combination of its values.",
+                              varied));
+  }
   doc.paragraph(
       "The results come first: the summary per family and backend and the two backends compared, then the "
       "figures with their fits and the profiles; the runs, the tables of every quantity, the cost and the "
@@ -522,7 +573,7 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
   std::vector<std::vector<std::string>> originRows;
   for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
     const std::string& b = study.backends[bi];
-    std::map<std::pair<int, double>, Series> bySeries;
+    std::map<SeriesKey, Series> bySeries;  // a line per series without its x_S
     std::vector<double> cs, ls, sig;
     Series cSeries{b, static_cast<int>(bi) + 1, bi > 0, false, {}};
     for (const SeriesKey& sk : study.seriesKeys()) {
@@ -534,9 +585,10 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
       if (!widest) continue;
       const ReplicaStat st = study.statOf(*widest, b, "profile_fit/lambda_L");
       const double err = st.n >= 2 ? st.std / std::sqrt(double(st.n)) : 0.0;
-      auto& ser = bySeries[{sk.shape, sk.mu}];
+      auto& ser = bySeries[SeriesKey{sk.shape, 0.0, sk.mu, sk.settings}];
       if (ser.name.empty())
-        ser = Series{fmt::format("{} mu_w={} {}", sk.shape == 0 ? "spheres" : "pinacoids", num(sk.mu), b),
+        ser = Series{fmt::format("{} mu_w={}{} {}", sk.shape == 0 ? "spheres" : "pinacoids", num(sk.mu),
+                                 settingsText(sk.settings), b),
                      static_cast<int>(bySeries.size()), bi > 0, true, {}};
       ser.points.push_back({sk.xs, st.mean, err});
       for (const FitRow& f : phiFits)
@@ -579,9 +631,9 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
 // The answers first: one row per family and backend, then nscd against Bullet
 
 std::string familyName(const SeriesKey& s) {
-  return fmt::format("{}: {} x_S = {}, mu_w = {}", familyOf(s.shape, s.xs),
+  return fmt::format("{}: {} x_S = {}, mu_w = {}{}", familyOf(s.shape, s.xs),
                      s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids", num(s.xs),
-                     num(s.mu));
+                     num(s.mu), settingsText(s.settings, ", ", " = "));
 }
 
 // A number of the summary with its standard error (0 when it has none) as printed.
@@ -842,6 +894,58 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
 // ---------------------------------------------------------------------------------------------
 // After the answers: the figures with their fits, then the runs and the tables behind them
 
+// For each numeric setting the study varies beyond the named axes (a sweep's setting axis such as
+// population.pinacoid.alpha_deg): phi and Z of every configuration against it, one line per
+// combination of everything else (family, the other settings, W) and backend. A study in the
+// biperiodic box alone has no phi(W) fit: this is where its answers are.
+void addSettingSections(Document& doc, const StudyView& study, FigureWriter& figures) {
+  const std::vector<std::pair<std::string, std::string>> quantities = {{"solid_fraction", "phi"},
+                                                                       {"coordination/Z", "Z"}};
+  for (std::size_t i = 0; i < study.settings.size(); ++i) {
+    const bool numeric = std::all_of(study.groups.begin(), study.groups.end(),
+                                     [&](const auto& g) { return g.first.settings[i].number.has_value(); });
+    if (!numeric) continue;
+    const std::string& name = study.settingNames[i];
+    std::string stem;
+    for (char c : name) stem += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    bool headed = false;
+    for (const auto& [key, symbol] : quantities) {
+      if (!study.keys.count(key)) continue;
+      if (!headed) {
+        doc.heading(2, fmt::format("Solid fraction and coordination against {}", name));
+        doc.paragraph(fmt::format(
+            "{} is a setting of the run configuration this study varies. Each point is a configuration's mean over "
+            "its replicas with the standard error of that mean; each line joins the configurations that differ in "
+            "{} alone: solid for the first backend, dashed for the second.",
+            study.settings[i], name));
+        headed = true;
+      }
+      Plot p{fmt::format("{}_vs_{}", symbol, stem), fmt::format("{} against {}", symbol, name), name, symbol, {}, {},
+             false};
+      // One line per (configuration without this setting, backend), in the study's order.
+      std::map<std::pair<ConfKey, std::string>, Series> lines;
+      std::map<ConfKey, int> colors;
+      for (const auto& [k, _] : study.groups) {
+        ConfKey rest = k;
+        rest.settings.erase(rest.settings.begin() + static_cast<std::ptrdiff_t>(i));
+        if (!colors.count(rest)) colors.emplace(rest, static_cast<int>(colors.size()) + 1);
+        for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
+          const ReplicaStat st = study.statOf(k, study.backends[bi], key);
+          if (st.n == 0) continue;
+          Series& line = lines[{rest, study.backends[bi]}];
+          if (line.name.empty())
+            line = Series{fmt::format("{} W={} {}", seriesText(seriesOf(rest)), widthText(rest), study.backends[bi]),
+                          colors.at(rest), bi > 0, true, {}};
+          line.points.push_back(
+              {*k.settings[i].number, st.mean, st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0});
+        }
+      }
+      for (auto& [_, line] : lines) p.series.push_back(std::move(line));
+      doc.figure(figures.draw(p));
+    }
+  }
+}
+
 // The figures of the phi(W) and Z(W) fits and of lambda_L, in this order.
 void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits,
                           References& references) {
@@ -986,7 +1090,7 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
     }
     if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";
     std::vector<std::string> row = {link(r.run.name, relativeLink(study.runDir(r), reportDir)),
-                                    r.run.label(),
+                                    r.run.label(study.settings),
                                     status,
                                     value("solid_fraction", "{:.4f}"),
                                     value("timing/wall_s", "{:.1f}"),
@@ -1014,6 +1118,7 @@ std::string exact(double v) { return fmt::format("{:.17g}", v); }
 // two replicas).
 void writeQuantityTable(const fs::path& path, const StudyView& study, const std::vector<std::string>& keys) {
   std::vector<std::string> head = {"key", "family", "x_S", "W", "mu_w", "biperiodic"};
+  for (const std::string& path : study.settings) head.push_back(path);  // the varied settings, by path
   for (const auto& b : study.backends)
     for (const char* what : {"_mean", "_std", "_n"}) head.push_back(b + what);
   const std::string diffName = study.pair() ? study.backends[0] + "_minus_" + study.backends[1] : "";
@@ -1026,6 +1131,7 @@ void writeQuantityTable(const fs::path& path, const StudyView& study, const std:
     for (const auto& [k, _] : study.groups) {
       std::vector<std::string> row = {key,          familyOf(k.shape, k.xs), exact(k.xs), exact(k.width),
                                       exact(k.mu), k.periodic ? "1" : "0"};
+      for (const SettingValue& v : k.settings) row.push_back(v.text);
       std::vector<ReplicaStat> stats;
       for (const auto& b : study.backends) {
         const ReplicaStat& st = stats.emplace_back(study.statOf(k, b, key));
@@ -1064,11 +1170,13 @@ void addQuantityTables(Document& doc, const StudyView& study, const fs::path& re
     doc.paragraph("No run of this study has finished: there is no quantity to tabulate.");
     return;
   }
+  std::string varied;
+  for (const std::string& path : study.settings) varied += ", " + path;
   std::string text = fmt::format(
       "Every quantity of result.json per configuration: {}. One row per quantity (key) and configuration (family, "
-      "x_S, W, mu_w, biperiodic 1 or 0); per backend the mean, the sample standard deviation and the number n of "
+      "x_S, W, mu_w, biperiodic 1 or 0{}); per backend the mean, the sample standard deviation and the number n of "
       "replicas that finished",
-      files);
+      files, varied);
   if (study.pair())
     text += fmt::format(", then {} − {} with its uncertainty sqrt(s1²/n1 + s2²/n2)", study.backends[0],
                         study.backends[1]);
@@ -1147,6 +1255,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   addSummarySection(doc, study, results, references);
   addVerdictSection(doc, study, results);
   addFitFigureSections(doc, study, figures, fits, references);
+  addSettingSections(doc, study, figures);
   addProfileSections(doc, study, figures);
   addRunsSection(doc, study, outDir);
   addQuantityTables(doc, study, outDir);

@@ -9,7 +9,9 @@
 // Z(W) = Z_bulk - C_Z/W per backend, lambda_L against x_S and against C, the profiles phi(y) and
 // the others the runs wrote. Then every run once (the missing, failed or unequilibrated ones first,
 // never dropped silently, each linked to its folder), the list of the tables, the cost and the
-// method. Every quantity of result.json per configuration (shape, x_S, W, mu_w) is not on the page
+// method. A setting the sweep varied by its path (study/sweep.hpp, SettingAxis) is part of every
+// family and configuration, and phi and Z are drawn against it when it is a number. Every
+// quantity of result.json per configuration (shape, x_S, W, mu_w, varied settings) is not on the page
 // but in tables/GROUP.csv: per backend the mean, standard deviation and number of the replicas,
 // and the difference of the two backends with its uncertainty, at full precision.
 //

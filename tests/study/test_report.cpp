@@ -591,3 +591,56 @@ TEST_CASE("report with reference values for none of the study's families says so
   CHECK(slurp(dir / "report" / "figures" / "phi_vs_invW.csv").find("reference") == std::string::npos);
   fs::remove_all(dir);
 }
+
+TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, tables and a figure against it") {
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_axis_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  // Two runs: pinacoids in the biperiodic box at alpha = 60 and 75 degrees, phi rising with alpha.
+  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
+    "name": "shape", "base": { "box": { "length_x": 6, "height": 4 }, "population": { "shape": "pinacoid" } },
+    "vary": { "width": ["biperiodic"], "population.pinacoid.alpha_deg": [60, 75], "backend": "nscd" } })"));
+  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+                   const study::RunProgressFn&) {
+    const double alpha = cfg.population.pinacoid.alphaDeg;
+    const json r = {{"solid_fraction", 0.5 + alpha / 1000.0},
+                    {"coordination", {{"Z", 8.0 + alpha / 100.0}}},
+                    {"equilibrium", {{"reached", true}}}};
+    std::ofstream(runDir / "result.json") << r.dump();
+    return r;
+  };
+  study::SweepOptions o;
+  o.quiet = true;
+  study::runSweep(spec, dir, o, runner, testing::oneGrainDeposit);
+  const study::ReportSummary s = study::writeReport(dir, dir / "report");
+  const std::string md = slurp(s.markdown);
+  CHECK(md.find("Beyond W, shape, x_S, mu_w, seed and backend this study varies population.pinacoid.alpha_deg "
+                "(alpha_deg): each family below is one combination of its values.") != std::string::npos);
+  // One summary row per value, named by it, in numeric order.
+  const std::size_t summaryAt = md.find("## Summary");
+  const std::size_t at60 = md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 60 | nscd | 1 / 1 |", summaryAt);
+  const std::size_t at75 = md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 |", summaryAt);
+  CHECK(at60 != std::string::npos);
+  CHECK(at75 != std::string::npos);
+  CHECK(at60 < at75);
+  // The runs say their value.
+  CHECK(md.find("| MPP xS=0 W=bi20 mu=0 s1 nscd alpha_deg=75 | done |") != std::string::npos);
+  // tables/: a column for the setting, by its path, a row per value.
+  const study::CsvTable phi = readTable(dir / "report", "solid_fraction.csv");
+  const auto col = std::find(phi.columns.begin(), phi.columns.end(), "population.pinacoid.alpha_deg");
+  REQUIRE(col != phi.columns.end());
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(phi.columns.begin(), phi.columns.end(), name) - phi.columns.begin());
+  };
+  REQUIRE(phi.rows.size() == 2);
+  CHECK(phi.text[0][column("population.pinacoid.alpha_deg")] == "60");
+  CHECK(phi.rows[0][column("nscd_mean")] == Approx(0.56));
+  CHECK(phi.text[1][column("population.pinacoid.alpha_deg")] == "75");
+  CHECK(phi.rows[1][column("nscd_mean")] == Approx(0.575));
+  // phi and Z against the setting: one line through both values.
+  CHECK(md.find("## Solid fraction and coordination against alpha_deg") != std::string::npos);
+  const std::string csv = slurp(dir / "report" / "figures" / "phi_vs_alpha_deg.csv");
+  CHECK(csv == "series,x,y,err\nMPP x_S=0 mu_w=0 W=biperiodic (20) nscd,60,0.56,0\n"
+               "MPP x_S=0 mu_w=0 W=biperiodic (20) nscd,75,0.575,0\n");
+  CHECK(fs::exists(dir / "report" / "figures" / "Z_vs_alpha_deg.csv"));
+  if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
+}
