@@ -282,6 +282,65 @@ std::string depositKey(const core::RunConfig& cfg) {
 
 std::string trimNumber(double v) { return fmt::format("{:g}", v); }
 
+// The leaves of a configuration's JSON, keyed by their path joined with '.'.
+void flattenConfig(const json& j, const std::string& path, std::map<std::string, const json*>& out) {
+  for (const auto& [key, v] : j.items()) {
+    const std::string here = path.empty() ? key : path + "." + key;
+    if (v.is_object()) flattenConfig(v, here, out);
+    else out[here] = &v;
+  }
+}
+
+// The settings that differ between configurations given one by one as JSON (variedSettings):
+// each against the first, leaf by leaf, a path varied where a value differs or one of the two
+// lacks it. Paths are spelled out only where they differ, so a table of 100,000 runs is compared
+// in about the time its configurations take to write as JSON.
+class VariedSettings {
+ public:
+  void add(const json& cfg) {
+    if (first_.is_null()) {
+      first_ = cfg;
+      return;
+    }
+    compare(cfg, first_, "");
+    compare(first_, cfg, "");
+  }
+  // In path order, without those of the named axes (their own columns: W and biperiodic, shape,
+  // x_S, mu_w, seed, backend).
+  std::vector<std::string> paths() const {
+    static const std::set<std::string> named = {"box.width",         "box.periodic_y", "population.shape",
+                                                "population.small_fraction", "box.wall_friction", "seed",
+                                                "backend"};
+    std::vector<std::string> out;
+    for (const std::string& p : varied_)
+      if (!named.count(p)) out.push_back(p);
+    return out;
+  }
+
+ private:
+  void compare(const json& a, const json& b, const std::string& path) {
+    for (const auto& [key, v] : a.items()) {
+      const auto it = b.find(key);
+      if (it != b.end() && !v.is_object() && v == *it) continue;  // the common case: no path spelled out
+      const std::string here = path.empty() ? key : path + "." + key;
+      if (it == b.end()) {
+        // The whole subtree is missing from b.
+        std::map<std::string, const json*> leaves;
+        if (v.is_object()) flattenConfig(v, here, leaves);
+        else leaves[here] = &v;
+        for (const auto& [p, _] : leaves) varied_.insert(p);
+      } else if (v.is_object() && it->is_object()) {
+        compare(v, *it, here);
+      } else if (v != *it) {
+        varied_.insert(here);
+      }
+    }
+  }
+
+  json first_;
+  std::set<std::string> varied_;
+};
+
 // Every combination of the values of a group's setting axes, the first axis varying slowest; one
 // empty combination when the group has none.
 std::vector<std::vector<const json*>> settingCombinations(const std::vector<SettingAxis>& axes) {
@@ -316,14 +375,6 @@ void applySettings(SweepRun& r, const std::vector<SettingAxis>& axes, const std:
   core::from_json(cfg, r.config);
 }
 
-// The leaves of a configuration's JSON, keyed by their path joined with '.'.
-void flattenConfig(const json& j, const std::string& path, std::map<std::string, const json*>& out) {
-  for (const auto& [key, v] : j.items()) {
-    const std::string here = path.empty() ? key : path + "." + key;
-    if (v.is_object()) flattenConfig(v, here, out);
-    else out[here] = &v;
-  }
-}
 
 std::string utcNow() {
   const std::time_t t = std::time(nullptr);
@@ -411,45 +462,11 @@ std::string familyName(const core::RunConfig& cfg) {
   return fmt::format("{}{}", bidisperse ? "B" : "M", grains);
 }
 
-std::string SweepRun::label(const std::vector<std::string>& settings) const {
-  const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
-                                             : trimNumber(config.box.width);
-  std::string text = fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config),
-                                 trimNumber(config.population.smallFraction), w, trimNumber(config.box.wallFriction),
-                                 config.seed, config.backend);
-  const std::vector<std::string> names = settingNames(settings);
-  for (std::size_t i = 0; i < settings.size(); ++i) text += fmt::format(" {}={}", names[i], settingText(config, settings[i]));
-  return text;
-}
+namespace {
 
-std::vector<std::string> variedSettings(const std::vector<SweepRun>& runs) {
-  // Shown by their own columns: W and biperiodic, shape, x_S, mu_w, seed, backend.
-  static const std::set<std::string> named = {"box.width",         "box.periodic_y", "population.shape",
-                                              "population.small_fraction", "box.wall_friction", "seed",
-                                              "backend"};
-  std::map<std::string, std::set<std::string>> values;  // path -> the values' JSON text
-  std::map<std::string, std::size_t> present;           // path -> runs that have it
-  for (const SweepRun& r : runs) {
-    json cfg;
-    core::to_json(cfg, r.config);
-    std::map<std::string, const json*> leaves;
-    flattenConfig(cfg, "", leaves);
-    for (const auto& [path, v] : leaves) {
-      if (named.count(path)) continue;
-      values[path].insert(v->dump());
-      ++present[path];
-    }
-  }
-  std::vector<std::string> out;
-  for (const auto& [path, set] : values)
-    if (set.size() > 1 || present[path] < runs.size()) out.push_back(path);
-  return out;
-}
-
-std::string settingText(const core::RunConfig& cfg, const std::string& path) {
-  json j;
-  core::to_json(j, cfg);
-  const json* at = &j;
+// The value at `path` of a configuration written as JSON.
+std::string settingText(const json& cfg, const std::string& path) {
+  const json* at = &cfg;
   for (std::size_t from = 0;;) {
     const std::size_t dot = path.find('.', from);
     const std::string key = path.substr(from, dot == std::string::npos ? std::string::npos : dot - from);
@@ -464,6 +481,39 @@ std::string settingText(const core::RunConfig& cfg, const std::string& path) {
   if (at->is_number_float()) return fmt::format("{}", at->get<double>());
   if (at->is_null()) return "none";
   return at->dump();
+}
+
+}  // namespace
+
+std::string SweepRun::label(const std::vector<std::string>& settings) const {
+  const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
+                                             : trimNumber(config.box.width);
+  std::string text = fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config),
+                                 trimNumber(config.population.smallFraction), w, trimNumber(config.box.wallFriction),
+                                 config.seed, config.backend);
+  if (settings.empty()) return text;
+  const std::vector<std::string> names = settingNames(settings);
+  json cfg;
+  core::to_json(cfg, config);
+  for (std::size_t i = 0; i < settings.size(); ++i) text += fmt::format(" {}={}", names[i], settingText(cfg, settings[i]));
+  return text;
+}
+
+std::vector<std::string> variedSettings(const std::vector<SweepRun>& runs) {
+  VariedSettings varied;
+  for (const SweepRun& r : runs) {
+    json cfg;
+    core::to_json(cfg, r.config);
+    varied.add(cfg);
+  }
+  return varied.paths();
+}
+
+
+std::string settingText(const core::RunConfig& cfg, const std::string& path) {
+  json j;
+  core::to_json(j, cfg);
+  return settingText(j, path);
 }
 
 std::vector<std::string> settingNames(const std::vector<std::string>& paths) {
@@ -564,6 +614,7 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
   std::vector<SweepRun> runs;
   std::set<std::string> seen;
   std::map<std::string, std::size_t> deposits;
+  VariedSettings variedInTable;
 
   for (const SweepGroup& g : spec.groups) {
     // An empty list takes the base value; writing it as a one-element list keeps one loop nest.
@@ -598,6 +649,7 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
                   json key;
                   core::to_json(key, r.config);
                   if (!seen.insert(key.dump()).second) continue;
+                  variedInTable.add(key);
                   r.index = runs.size();
                   const auto [it, inserted] = deposits.try_emplace(depositKey(r.config), deposits.size());
                   r.depositIndex = it->second;
@@ -605,7 +657,7 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
                 }
   }
   const int digits = std::max<int>(4, static_cast<int>(std::to_string(runs.empty() ? 0 : runs.size() - 1).size()));
-  const std::vector<std::string> varied = variedSettings(runs);
+  const std::vector<std::string> varied = variedInTable.paths();
   for (SweepRun& r : runs) {
     r.name = fmt::format("r{:0{}d}", r.index, digits);
     try {
@@ -695,11 +747,14 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
   std::vector<std::vector<std::string>> cells(runs.size());
   std::vector<std::size_t> widths;
   for (const std::string& n : names) widths.push_back(n.size());
-  for (std::size_t k = 0; k < runs.size(); ++k)
+  for (std::size_t k = 0; k < runs.size() && !varied.empty(); ++k) {
+    json cfg;
+    core::to_json(cfg, runs[k].config);
     for (std::size_t i = 0; i < varied.size(); ++i) {
-      cells[k].push_back(settingText(runs[k].config, varied[i]));
+      cells[k].push_back(settingText(cfg, varied[i]));
       widths[i] = std::max(widths[i], cells[k].back().size());
     }
+  }
   std::ostringstream out;
   out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", "run", "deposit", "family", "x_S", "W", "mu_w",
                      "seed", "backend");

@@ -95,7 +95,7 @@ std::string settingText(const core::RunConfig& cfg, const std::string& path);
 std::vector<std::string> settingNames(const std::vector<std::string>& paths);
 
 /// Most runs a sweep file may list unless `confpack sweep --max-runs` raises the limit
-/// (docs/sweeps.md). The paper-scale study has 174 runs; a table of 100,000 takes 0.22 GB and 3 s
+/// (docs/sweeps.md). The paper-scale study has 174 runs; a table of 100,000 takes 0.22 GB and 5 s
 /// to list (measured with --list), while a typo such as "replicas": 100000000 would need tens of
 /// gigabytes.
 inline constexpr std::size_t kDefaultMaxRuns = 100000;
