@@ -55,7 +55,8 @@ ReferenceValue readValue(const json& j, const std::string& where, std::string_vi
   }
   // A number without its uncertainty or its source cannot be weighed against a study's.
   for (const auto& f : table.fields())
-    if (!j.contains(f.key)) bad(source, where + "." + f.key, "missing (a reference value needs value, uncertainty and citation)");
+    if (!j.contains(f.key))
+      bad(source, where + "." + f.key, "missing (a reference value needs value, uncertainty and citation)");
   return v;
 }
 
@@ -80,8 +81,7 @@ ReferenceEntry readEntry(const json& e, const std::string& family, const std::st
       if (bidisperse && v.get<double>() == 0.0)
         bad(source, field, fmt::format("{} is bidisperse: x_S must be > 0 (got 0)", family));
       if (!bidisperse && v.get<double>() != 0.0)
-        bad(source, field,
-            fmt::format("{} is monodisperse: x_S must be 0 (got {})", family, core::jsonExcerpt(v, 40)));
+        bad(source, field, fmt::format("{} is monodisperse: x_S must be 0 (got {})", family, core::jsonExcerpt(v, 40)));
       out.smallFraction = v.get<double>();
     } else if (key == "mu_w") {
       if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
@@ -99,7 +99,9 @@ ReferenceEntry readEntry(const json& e, const std::string& family, const std::st
 }
 
 // How specific an entry is: x_S and mu_w given first, a family-wide entry last.
-int specificity(const ReferenceEntry& e) { return (e.smallFraction ? 2 : 0) + (e.wallFriction ? 1 : 0); }
+int specificity(const ReferenceEntry& e) {
+  return (e.smallFraction ? 2 : 0) + (e.wallFriction ? 1 : 0);
+}
 
 }  // namespace
 
@@ -160,7 +162,8 @@ ReferenceValues parseReferenceValues(const json& doc, std::string_view source) {
       if (a.family != b.family || a.smallFraction != b.smallFraction || a.wallFriction != b.wallFriction) continue;
       for (const auto& [key, _] : a.values)
         if (b.values.count(key))
-          bad(source, a.where + "." + key, fmt::format("given twice for the same family, x_S and mu_w (also in {})", b.where));
+          bad(source, a.where + "." + key,
+              fmt::format("given twice for the same family, x_S and mu_w (also in {})", b.where));
     }
   return out;
 }

@@ -136,7 +136,8 @@ struct ConfKey {
   auto operator<=>(const ConfKey&) const = default;
 };
 
-ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths, const std::vector<std::string>& names) {
+ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
+                const std::vector<std::string>& names) {
   ConfKey k{static_cast<int>(c.population.shape), c.population.smallFraction, c.box.wallFriction, {}, c.box.periodicY,
             c.box.width};
   for (std::size_t i = 0; i < paths.size(); ++i) {
@@ -692,10 +693,11 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
                      "C_Z", "loss of coordination due to the walls, in d_L");
   // lambda_L/d_avg from the widest confined sample of each family, as the lambda_L section takes it.
   const std::string lambdaKey = "profile_fit/lambda_L_over_d_avg";
-  SummaryQuantity lambda{"lambda_L/d_avg",
-                         "length over which the wall's layering of the large grains decays, in mean grain sizes d_avg, "
-                         "from the fit of phi(y) of the widest confined sample (mean ± standard error over its replicas)",
-                         {}};
+  SummaryQuantity lambda{
+      "lambda_L/d_avg",
+      "length over which the wall's layering of the large grains decays, in mean grain sizes d_avg, "
+      "from the fit of phi(y) of the widest confined sample (mean ± standard error over its replicas)",
+      {}};
   for (const SeriesKey& sk : study.seriesKeys())
     for (const std::string& b : study.backends) {
       const ConfKey* widest = nullptr;

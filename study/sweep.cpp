@@ -16,10 +16,10 @@
 #include <stdexcept>
 #include <thread>
 
+#include "backends/backend_factory.hpp"
 #include "core/backend.hpp"
 #include "core/interrupt.hpp"
 #include "core/json_input.hpp"
-#include "backends/backend_factory.hpp"
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
 
@@ -125,7 +125,8 @@ SettingAxis parseSettingAxis(const std::string& path, const json& list, const st
   }
   for (const std::string& k : keys)
     if (k.empty())
-      bad(source, field, "not a configuration path (keys of config.json joined by '.', e.g. population.pinacoid.alpha_deg)");
+      bad(source, field,
+          "not a configuration path (keys of config.json joined by '.', e.g. population.pinacoid.alpha_deg)");
 
   if (keys.front() == "backend_options" && keys.size() > 2)
     bad(source, field, "a backend option is one key deep: backend_options.KEY (confpack options nscd, or bullet)");
@@ -159,7 +160,8 @@ SettingAxis parseSettingAxis(const std::string& path, const json& list, const st
             fmt::format("unknown key (known: width, shape, small_fraction, wall_friction, seed, replicas, backend, "
                         "or a path of the run configuration under {})",
                         keysOf(*node)));
-      if (!node->is_object()) bad(source, field, fmt::format("unknown configuration path: {} is a setting, not a section", here));
+      if (!node->is_object())
+        bad(source, field, fmt::format("unknown configuration path: {} is a setting, not a section", here));
       bad(source, field,
           fmt::format("unknown configuration path: {} has no key {} (its keys: {})", here, core::textExcerpt(k),
                       keysOf(*node)));
@@ -375,7 +377,6 @@ void applySettings(SweepRun& r, const std::vector<SettingAxis>& axes, const std:
   core::from_json(cfg, r.config);
 }
 
-
 std::string utcNow() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -495,7 +496,8 @@ std::string SweepRun::label(const std::vector<std::string>& settings) const {
   const std::vector<std::string> names = settingNames(settings);
   json cfg;
   core::to_json(cfg, config);
-  for (std::size_t i = 0; i < settings.size(); ++i) text += fmt::format(" {}={}", names[i], settingText(cfg, settings[i]));
+  for (std::size_t i = 0; i < settings.size(); ++i)
+    text += fmt::format(" {}={}", names[i], settingText(cfg, settings[i]));
   return text;
 }
 
@@ -508,7 +510,6 @@ std::vector<std::string> variedSettings(const std::vector<SweepRun>& runs) {
   }
   return varied.paths();
 }
-
 
 std::string settingText(const core::RunConfig& cfg, const std::string& path) {
   json j;
@@ -610,7 +611,8 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
   const core::RunConfig base = resolveBase(spec.base, "sweep");
   bool hasBackendOptionAxis = false;
   for (const SweepGroup& g : spec.groups)
-    for (const SettingAxis& a : g.settings) hasBackendOptionAxis = hasBackendOptionAxis || a.path.starts_with("backend_options.");
+    for (const SettingAxis& a : g.settings)
+      hasBackendOptionAxis = hasBackendOptionAxis || a.path.starts_with("backend_options.");
   std::vector<SweepRun> runs;
   std::set<std::string> seen;
   std::map<std::string, std::size_t> deposits;

@@ -58,7 +58,14 @@ TEST_CASE("settings table: ranges say what they accept") {
 TEST_CASE("settings table: reads the keys given, refuses the rest by name") {
   const auto t = exampleTable();
   Example e;
-  t.read({{"length", 0.5}, {"limit", nullptr}, {"count", 4}, {"on", true}, {"colour", "blue"}, {"big", 1LL << 40}, {"name", "Scott"}}, e);
+  t.read({{"length", 0.5},
+          {"limit", nullptr},
+          {"count", 4},
+          {"on", true},
+          {"colour", "blue"},
+          {"big", 1LL << 40},
+          {"name", "Scott"}},
+         e);
   CHECK(e.length == 0.5);
   CHECK(e.limit == std::numeric_limits<double>::infinity());
   CHECK(e.count == 4);

@@ -27,10 +27,9 @@ json document(const json& families) {
 
 TEST_CASE("reference values: a family-wide entry and entries narrowed to x_S and mu_w") {
   const json doc = document({{"MSP", {{"phi_bulk", value(0.64)}, {"Z_bulk", value(6.0, 0.0)}}},
-                             {"BSP",
-                              json::array({{{"x_S", 25}, {"phi_bulk", value(0.66)}},
-                                           {{"phi_bulk", value(0.65)}, {"C", value(0.3, 0.05)}},
-                                           {{"x_S", 25}, {"mu_w", 0.5}, {"phi_bulk", value(0.67)}}})}});
+                             {"BSP", json::array({{{"x_S", 25}, {"phi_bulk", value(0.66)}},
+                                                  {{"phi_bulk", value(0.65)}, {"C", value(0.3, 0.05)}},
+                                                  {{"x_S", 25}, {"mu_w", 0.5}, {"phi_bulk", value(0.67)}}})}});
   const study::ReferenceValues r = study::parseReferenceValues(doc, "ref.json");
   CHECK(r.source == "ref.json");
   REQUIRE(r.entries.size() == 4);
@@ -72,7 +71,8 @@ TEST_CASE("reference values: every refusal names the file and the field") {
   refused({{"version", 2}, {"families", {{"MSP", {{"phi_bulk", ok}}}}}}, "ref.json: version: expected 1");
   refused({{"format", "confpack-reference"}}, "ref.json: families: missing (an object keyed by MSP, BSP, MPP, BPP)");
   refused(document(json::object()), "ref.json: families: expected a non-empty object keyed by MSP, BSP, MPP, BPP");
-  refused(document({{"RCP", {{"phi_bulk", ok}}}}), "ref.json: families.RCP: unknown family (known: MSP, BSP, MPP, BPP)");
+  refused(document({{"RCP", {{"phi_bulk", ok}}}}),
+          "ref.json: families.RCP: unknown family (known: MSP, BSP, MPP, BPP)");
   refused(document({{"MSP", {{"phi_bulkk", ok}}}}),
           "ref.json: families.MSP.phi_bulkk: unknown key (known: x_S, mu_w, phi_bulk, C, Z_bulk, C_Z, "
           "lambda_L_over_d_avg)");
@@ -94,8 +94,9 @@ TEST_CASE("reference values: every refusal names the file and the field") {
           "ref.json: families.MSP.phi_bulk.value: must be a number (got \"0.64\")");
   refused(document({{"MSP", {{"phi_bulk", value(0.64, 0.01, "")}}}}),
           "ref.json: families.MSP.phi_bulk.citation: must be a non-empty string (got \"\")");
-  refused(document({{"MSP", {{"phi_bulk", {{"value", 0.64}, {"uncertainty", 0.01}, {"citation", "x"}, {"doi", "y"}}}}}}),
-          "ref.json: families.MSP.phi_bulk.doi: unknown key (known: value, uncertainty, citation)");
+  refused(
+      document({{"MSP", {{"phi_bulk", {{"value", 0.64}, {"uncertainty", 0.01}, {"citation", "x"}, {"doi", "y"}}}}}}),
+      "ref.json: families.MSP.phi_bulk.doi: unknown key (known: value, uncertainty, citation)");
   // Selectors: in range and consistent with the family's name.
   refused(document({{"MSP", {{"x_S", 10}, {"phi_bulk", ok}}}}),
           "ref.json: families.MSP.x_S: MSP is monodisperse: x_S must be 0 (got 10)");
@@ -103,7 +104,8 @@ TEST_CASE("reference values: every refusal names the file and the field") {
           "ref.json: families.BPP.x_S: BPP is bidisperse: x_S must be > 0 (got 0)");
   refused(document({{"BSP", {{"x_S", 120}, {"phi_bulk", ok}}}}),
           "ref.json: families.BSP.x_S: must be a number in [0, 100] (got 120)");
-  refused(document({{"MSP", {{"mu_w", -1}, {"phi_bulk", ok}}}}), "ref.json: families.MSP.mu_w: must be a number >= 0 (got -1)");
+  refused(document({{"MSP", {{"mu_w", -1}, {"phi_bulk", ok}}}}),
+          "ref.json: families.MSP.mu_w: must be a number >= 0 (got -1)");
   // Two published numbers for the same series and quantity: which one would the report show?
   refused(document({{"BSP", json::array({{{"x_S", 25}, {"phi_bulk", ok}}, {{"x_S", 25}, {"phi_bulk", value(0.65)}}})}}),
           "ref.json: families.BSP[1].phi_bulk: given twice for the same family, x_S and mu_w (also in "
@@ -113,7 +115,8 @@ TEST_CASE("reference values: every refusal names the file and the field") {
 TEST_CASE("reference values: a file that is not JSON, or is a folder, is refused") {
   const fs::path dir = testing::freshDir("reference_values");
   std::ofstream(dir / "bad.json") << "{ \"families\": ";
-  CHECK_THROWS_WITH(study::readReferenceValues(dir / "bad.json"), Catch::StartsWith((dir / "bad.json").string() + ": not valid JSON"));
+  CHECK_THROWS_WITH(study::readReferenceValues(dir / "bad.json"),
+                    Catch::StartsWith((dir / "bad.json").string() + ": not valid JSON"));
   CHECK_THROWS_WITH(study::readReferenceValues(dir), (dir.string() + ": is a folder, not a reference file"));
   fs::remove_all(dir);
 }

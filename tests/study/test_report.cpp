@@ -524,7 +524,7 @@ TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json")
   fs::remove_all(dir);
 }
 
-TEST_CASE("report with reference values: a reference column beside each quantity, the sources below, marks on the figures") {
+TEST_CASE("report with reference values: a reference column beside each quantity, its sources, marks on the figures") {
   const fs::path dir = makeStudy("reference", false);
   study::ReportOptions o;
   o.reference = study::parseReferenceValues(json::parse(R"json({
@@ -534,7 +534,8 @@ TEST_CASE("report with reference values: a reference column beside each quantity
         { "phi_bulk": { "value": 0.64, "uncertainty": 0.01, "citation": "Scott and Kilgour, J. Phys. D 2, 863 (1969)" },
           "C": { "value": 0.45, "uncertainty": 0.05, "citation": "made-up example, not a publication" },
           "Z_bulk": { "value": 6, "uncertainty": 0, "citation": "O'Hern et al., Phys. Rev. E 68, 011306 (2003)" } },
-        { "mu_w": 0.5, "phi_bulk": { "value": 0.1, "uncertainty": 0.1, "citation": "never shown: no series has mu_w 0.5" } }
+        { "mu_w": 0.5,
+          "phi_bulk": { "value": 0.1, "uncertainty": 0.1, "citation": "never shown: no series has mu_w 0.5" } }
       ],
       "BSP": { "lambda_L_over_d_avg": { "value": 9, "uncertainty": 1, "citation": "never shown: no BSP series" } }
     }})json"),
@@ -586,7 +587,8 @@ TEST_CASE("report with reference values for none of the study's families says so
       json::parse(R"({"families": {"MPP": {"phi_bulk": {"value": 0.7, "uncertainty": 0.01, "citation": "c"}}}})"),
       "pinacoids.json");
   const std::string md = slurp(study::writeReport(dir, dir / "report", o).markdown);
-  CHECK(md.find("The reference file pinacoids.json gives no value for the families of this study.") != std::string::npos);
+  CHECK(md.find("The reference file pinacoids.json gives no value for the families of this study.") !=
+        std::string::npos);
   CHECK(md.find("reference |") == std::string::npos);
   CHECK(slurp(dir / "report" / "figures" / "phi_vs_invW.csv").find("reference") == std::string::npos);
   fs::remove_all(dir);

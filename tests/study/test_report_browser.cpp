@@ -162,8 +162,9 @@ std::string editSvg(std::string html, int n, Edit edit) {
 TEST_CASE("report: every figure renders in headless Chromium, and a removed or emptied SVG is caught", "[browser]") {
   const fs::path chromium = findChromium();
   if (chromium.empty()) {
-    WARN("chromium not found (apt-get install chromium, or set CONFPACK_CHROMIUM): the report was not checked in a "
-         "browser");
+    WARN(
+        "chromium not found (apt-get install chromium, or set CONFPACK_CHROMIUM): the report was not checked in a "
+        "browser");
     return;
   }
   const fs::path dir = testing::freshDir("report_browser");

@@ -386,9 +386,11 @@ TEST_CASE("setting axes: any key of the run configuration, by its path, expanded
         std::vector<std::string>{"pinacoid.E", "deposition.E", "seed"});
   CHECK(runs[7].label(varied) == "MPP xS=0 W=bi20 mu=0 s2 nscd protocol=quasi-static alpha_deg=45");
   const std::string table = study::formatRunTable(runs);
-  CHECK_THAT(table, Catch::StartsWith("run     deposit family   x_S        W  mu_w   seed backend protocol     alpha_deg\n"
-                                      "r0000   d0000   MPP        0     bi20     0      1 nscd    dynamic      45       \n"));
-  CHECK_THAT(table, Catch::Contains("r0011   d0005   MPP        0     bi20     0      2 nscd    quasi-static 75       \n"));
+  CHECK_THAT(table,
+             Catch::StartsWith("run     deposit family   x_S        W  mu_w   seed backend protocol     alpha_deg\n"
+                               "r0000   d0000   MPP        0     bi20     0      1 nscd    dynamic      45       \n"));
+  CHECK_THAT(table,
+             Catch::Contains("r0011   d0005   MPP        0     bi20     0      2 nscd    quasi-static 75       \n"));
   // A sweep over the named axes alone varies no other setting.
   CHECK(study::variedSettings(study::expandRuns(study::parseSweepSpec(smallSweep()))).empty());
 }
@@ -418,12 +420,14 @@ TEST_CASE("setting axes: an unknown path or a value the configuration's readers 
         "s.json: vary.population..shape: not a configuration path (keys of config.json joined by '.', e.g. "
         "population.pinacoid.alpha_deg)");
   CHECK(message(R"({"compaction.protocol": ["fast"]})") ==
-        "s.json: vary.compaction.protocol: compaction.protocol: must be \"dynamic\" or \"quasi-static\" (got \"fast\")");
+        "s.json: vary.compaction.protocol: compaction.protocol: must be \"dynamic\" or \"quasi-static\" (got "
+        "\"fast\")");
   CHECK(message(R"({"compaction.time_limit": [-1]})") ==
         "s.json: vary.compaction.time_limit: compaction.time_limit: must be in (0, 1e+09] (got -1)");
   CHECK(message(R"({"population.pinacoid.alpha_deg": ["sixty"]})") ==
         "s.json: vary.population.pinacoid.alpha_deg: expected a number (got \"sixty\")");
-  CHECK(message(R"({"compaction.adaptive_dt": [1]})") == "s.json: vary.compaction.adaptive_dt: expected true or false (got 1)");
+  CHECK(message(R"({"compaction.adaptive_dt": [1]})") ==
+        "s.json: vary.compaction.adaptive_dt: expected true or false (got 1)");
   CHECK(message(R"({"population.pinacoid.alpha": []})") == "s.json: vary.population.pinacoid.alpha: empty list");
   // Backend options: a key one of the backends knows, a value it accepts; a run whose own backend
   // does not know the key is refused with the run named.
