@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <optional>
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
@@ -18,13 +19,16 @@ struct ReportState {
   std::filesystem::path sweepDir;
   std::filesystem::path out;
   std::filesystem::path gnuplot = "gnuplot";
+  std::filesystem::path reference;
   bool noFigures = false;
 };
 
 void runReportCommand(const ReportState& st) {
   const std::filesystem::path out = st.out.empty() ? st.sweepDir / "report" : st.out;
+  std::optional<study::ReferenceValues> reference;
   checkInput("report", [&] {
     study::readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
+    if (!st.reference.empty()) reference = study::readReferenceValues(st.reference);
     checkOutputTarget(out);
   });
   runWork("report", [&] {
@@ -32,6 +36,7 @@ void runReportCommand(const ReportState& st) {
     WorkStep step("writing the report");
     study::ReportOptions o;
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
+    o.reference = std::move(reference);
     const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
     step.next("moving the report into place");
     output.commit();
@@ -57,6 +62,9 @@ void registerReport(CLI::App& app) {
       ->check(CLI::ExistingDirectory);
   sub->add_option("--out", st->out, "Report folder (default: SWEEPDIR/report)");
   sub->add_option("--gnuplot", st->gnuplot, "gnuplot executable used to draw the SVG figures");
+  sub->add_option("--reference", st->reference,
+                  "Published values to show beside the study's (JSON, format confpack-reference; "
+                  "docs/reference-values.md)");
   sub->add_flag("--no-figures", st->noFigures, "Write the figure data and scripts but do not run gnuplot");
   sub->callback([st] { runReportCommand(*st); });
 }

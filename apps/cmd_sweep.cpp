@@ -40,12 +40,13 @@ void runSweepCommand(const SweepState& st) {
     study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
     // The sweep file leaves backend_options to the backend: checked here, so that a typo is bad
     // input (exit 2) rather than a failure of every run.
+    const std::vector<std::string> varied = study::variedSettings(runs);
     for (const study::SweepRun& run : runs) {
       try {
         backends::checkBackendOptions(run.config.backend, run.config.backendOptions);
       } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(
-            fmt::format("{}: run {} ({}): backend_options: {}", st.file.string(), run.name, run.label(), e.what()));
+        throw std::invalid_argument(fmt::format("{}: run {} ({}): backend_options: {}", st.file.string(), run.name,
+                                                run.label(varied), e.what()));
       }
     }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
@@ -87,8 +88,9 @@ void registerSweep(CLI::App& app) {
   auto st = std::make_shared<SweepState>();
   auto* sub = app.add_subcommand(
       "sweep",
-      "Run a study: every combination of widths, shapes, fractions, frictions, seeds and backends of a sweep file "
-      "(docs/sweeps.md). Resumable: finished runs are never redone.");
+      "Run a study: every combination of widths, shapes, fractions, frictions, seeds, backends and any other "
+      "configuration key (by its path, e.g. population.pinacoid.alpha_deg) of a sweep file (docs/sweeps.md). "
+      "Resumable: finished runs are never redone.");
   sub->add_option("file", st->file, "Sweep file (JSON, format confpack-sweep)")->required()->check(CLI::ExistingFile);
   sub->add_option("--out", st->out, "Sweep folder (default: the sweep file's name without extension)");
   sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096));

@@ -105,6 +105,16 @@ class SettingsTable {
                },
                [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
   }
+  /// Free text that must not be empty (a citation, a name).
+  SettingsTable& text(const char* key, std::string T::*member, const char* help) {
+    return add(key, "-", "a non-empty string", help,
+               [w = where_, key, member](const nlohmann::json& j, T& t) {
+                 if (!j.is_string() || j.get_ref<const std::string&>().empty())
+                   fail(w, key, fmt::format("must be a non-empty string (got {})", jsonExcerpt(j, 40)));
+                 t.*member = j.get<std::string>();
+               },
+               [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
+  }
   /// One of a few names, each standing for a value of E.
   template <class E>
   SettingsTable& choice(const char* key, E T::*member, std::vector<std::pair<std::string, E>> names, const char* help) {

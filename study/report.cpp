@@ -107,18 +107,47 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Configurations and grouping
 
+// A value of a setting the study varies beyond the named axes (a sweep's setting axis, study/
+// sweep.hpp), as it names and orders configurations: numbers in numeric order (45 before 100),
+// other values by their text. The name is the setting's short name, for the labels only.
+struct SettingValue {
+  std::string name;
+  std::string text;
+  std::optional<double> number;
+
+  std::weak_ordering operator<=>(const SettingValue& o) const {
+    if (number && o.number) return *number < *o.number ? std::weak_ordering::less
+                                   : *number > *o.number ? std::weak_ordering::greater
+                                                         : std::weak_ordering::equivalent;
+    if (number.has_value() != o.number.has_value())
+      return number ? std::weak_ordering::less : std::weak_ordering::greater;
+    return text <=> o.text;
+  }
+  bool operator==(const SettingValue& o) const { return (*this <=> o) == 0; }
+};
+
 struct ConfKey {
   int shape = 0;
   double xs = 0.0;
   double mu = 0.0;
+  std::vector<SettingValue> settings;  // of the study's varied settings, in their order
   bool periodic = false;
   double width = 0.0;
   auto operator<=>(const ConfKey&) const = default;
 };
 
-ConfKey confKey(const core::RunConfig& c) {
-  return {static_cast<int>(c.population.shape), c.population.smallFraction, c.box.wallFriction, c.box.periodicY,
-          c.box.width};
+ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
+                const std::vector<std::string>& names) {
+  ConfKey k{static_cast<int>(c.population.shape), c.population.smallFraction, c.box.wallFriction, {}, c.box.periodicY,
+            c.box.width};
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    SettingValue v{names[i], settingText(c, paths[i]), std::nullopt};
+    char* end = nullptr;
+    const double x = std::strtod(v.text.c_str(), &end);
+    if (!v.text.empty() && end == v.text.c_str() + v.text.size() && std::isfinite(x)) v.number = x;
+    k.settings.push_back(std::move(v));
+  }
+  return k;
 }
 
 // Series of a geometrical-model fit: everything but the width.
@@ -126,10 +155,11 @@ struct SeriesKey {
   int shape = 0;
   double xs = 0.0;
   double mu = 0.0;
+  std::vector<SettingValue> settings;
   auto operator<=>(const SeriesKey&) const = default;
 };
 
-SeriesKey seriesOf(const ConfKey& k) { return {k.shape, k.xs, k.mu}; }
+SeriesKey seriesOf(const ConfKey& k) { return {k.shape, k.xs, k.mu, k.settings}; }
 
 std::string num(double v) { return fmt::format("{:g}", v); }
 
@@ -137,11 +167,48 @@ std::string familyOf(int shape, double xs) {
   return fmt::format("{}{}", xs > 0.0 ? "B" : "M", shape == static_cast<int>(core::ShapeKind::Sphere) ? "SP" : "PP");
 }
 
+// " alpha_deg=45 E=0.5" (sep "=") or ", alpha_deg = 45, E = 0.5" (sep " = ", lead ", ").
+std::string settingsText(const std::vector<SettingValue>& settings, const char* lead = " ", const char* sep = "=") {
+  std::string out;
+  for (const SettingValue& v : settings) out += fmt::format("{}{}{}{}", lead, v.name, sep, v.text);
+  return out;
+}
+
 std::string widthText(const ConfKey& k) { return k.periodic ? fmt::format("biperiodic ({})", num(k.width)) : num(k.width); }
 
 std::string seriesText(const SeriesKey& s) {
-  return fmt::format("{} x_S={} mu_w={}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu));
+  return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu), settingsText(s.settings));
 }
+
+// The published values of --reference as the sections show them: found per series, each citation
+// numbered [1], [2], ... in the order the page first uses it, so the summary's footnotes and the
+// figures' legends agree.
+class References {
+ public:
+  explicit References(const std::optional<ReferenceValues>& values) : values_(values ? &*values : nullptr) {}
+
+  bool given() const { return values_ != nullptr; }
+  const ReferenceValues& values() const { return *values_; }
+
+  const ReferenceValue* find(const SeriesKey& s, const std::string& key) const {
+    return values_ ? values_->find(familyOf(s.shape, s.xs), s.xs, s.mu, key) : nullptr;
+  }
+  int number(const std::string& citation) {
+    const auto it = std::find(citations_.begin(), citations_.end(), citation);
+    if (it != citations_.end()) return static_cast<int>(it - citations_.begin()) + 1;
+    citations_.push_back(citation);
+    return static_cast<int>(citations_.size());
+  }
+  // "0.64 ± 0.01 [1]"
+  std::string cell(const ReferenceValue& v) {
+    return fmt::format("{:.4g} ± {:.2g} [{}]", v.value, v.uncertainty, number(v.citation));
+  }
+  const std::vector<std::string>& citations() const { return citations_; }
+
+ private:
+  const ReferenceValues* values_;
+  std::vector<std::string> citations_;
+};
 
 // Mean +- std (n): 4 significant digits for the mean, 2 for the spread.
 std::string statText(const ReplicaStat& s) {
@@ -214,10 +281,14 @@ std::size_t tableGroupOf(const std::string& key) {
 class StudyView {
  public:
   explicit StudyView(const fs::path& sweepDir) : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
+    std::vector<SweepRun> runs;
+    for (const RunRecord& r : records) runs.push_back(r.run);
+    settings = variedSettings(runs);
+    settingNames = study::settingNames(settings);
     for (const RunRecord& r : records) {
       if (std::find(backends.begin(), backends.end(), r.run.config.backend) == backends.end())
         backends.push_back(r.run.config.backend);
-      groups[confKey(r.run.config)][r.run.config.backend].push_back(&r);
+      groups[confKey(r.run.config, settings, settingNames)][r.run.config.backend].push_back(&r);
       if (r.status != RunStatus::Done) continue;
       for (const auto& [k, v] : r.values) keys.insert(k);
       for (const auto& e : fs::directory_iterator(runDir(r)))
@@ -262,6 +333,8 @@ class StudyView {
   SweepSpec spec;
   std::vector<RunRecord> records;
   std::vector<std::string> backends;  // in table order
+  std::vector<std::string> settings;      // varied beyond the named axes: configuration paths
+  std::vector<std::string> settingNames;  // their short names
   std::map<ConfKey, std::map<std::string, std::vector<const RunRecord*>>> groups;
   std::set<std::string> keys;      // every quantity of a finished run
   std::set<std::string> csvNames;  // every profile file of a finished run
@@ -300,6 +373,15 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                             "(not run or interrupted), {} done but not equilibrated.",
                             fs::absolute(study.sweepDir).string(), when, CONFPACK_VERSION, summary.runs, summary.done,
                             summary.failed, summary.missing, summary.unequilibrated));
+  if (!study.settings.empty()) {
+    std::string varied;
+    for (std::size_t i = 0; i < study.settings.size(); ++i)
+      varied += fmt::format("{}{}{}", i == 0 ? "" : ", ", study.settings[i],
+                            study.settingNames[i] == study.settings[i] ? "" : " (" + study.settingNames[i] + ")");
+    doc.paragraph(fmt::format("Beyond W, shape, x_S, mu_w, seed and backend this study varies {}: each family below "
+                              "is one combination of its values.",
+                              varied));
+  }
   doc.paragraph(
       "The results come first: the summary per family and backend and the two backends compared, then the "
       "figures with their fits and the profiles; the runs, the tables of every quantity, the cost and the "
@@ -391,8 +473,8 @@ struct FitQuantity {
 // The values against d_L/W with the fitted lines, the biperiodic value at d_L/W = 0: one colour per
 // series, solid for the first backend, dashed for the second.
 void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
-                  const FitQuantity& q) {
-  const std::string caption =
+                  const FitQuantity& q, References& references) {
+  std::string caption =
       fmt::format("{} against d_L/W with the fits {}_bulk - {}/W (biperiodic at 0)", q.quantity, q.quantity, q.cName);
   Plot p{q.stem, caption, "d_L / W", q.quantity, {}, {}, true};
   const auto& backends = study.backends;
@@ -411,20 +493,36 @@ void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, 
       p.functions.push_back(fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt {} notitle", f.fit->bulk, f.fit->c,
                                         colors[f.series], dashed ? 2 : 1));
   }
+  // The published bulk value of each series as a square at d_L/W = 0, in the series' colour, and
+  // with a published C the published law as a dotted line.
+  bool marked = false;
+  for (const auto& [series, color] : colors) {
+    const ReferenceValue* bulk = references.find(series, q.quantity + "_bulk");
+    if (!bulk) continue;
+    marked = true;
+    Series s{fmt::format("reference {} [{}]", seriesText(series), references.number(bulk->citation)), color, false,
+             false, {{0.0, bulk->value, bulk->uncertainty}}};
+    s.pointType = 5;
+    p.series.push_back(std::move(s));
+    if (const ReferenceValue* c = references.find(series, q.cName))
+      p.functions.push_back(
+          fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt 3 notitle", bulk->value, c->value, color));
+  }
+  if (marked) p.caption += "; squares: reference values";
   doc.figure(figures.draw(p));
 }
 
 // The figure of quantity(W) = quantity_bulk - cName/W against d_L/W with the fitted lines, the
 // fit table and the backends' differences of its parameters.
 void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
-                   const FitQuantity& q) {
+                   const FitQuantity& q, References& references) {
   if (fits.empty()) return;
   const auto& backends = study.backends;
   const std::string& quantity = q.quantity;
   const std::string& cName = q.cName;
   doc.heading(2, q.title);
   doc.paragraph(q.definition);
-  addFitFigure(doc, study, figures, fits, q);
+  addFitFigure(doc, study, figures, fits, q, references);
   doc.paragraph("The fit per series (shape, x_S, mu_w) and backend over the confined widths:");
   std::vector<std::vector<std::string>> rows;
   for (const FitRow& f : fits) {
@@ -476,7 +574,7 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
   std::vector<std::vector<std::string>> originRows;
   for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
     const std::string& b = study.backends[bi];
-    std::map<std::pair<int, double>, Series> bySeries;
+    std::map<SeriesKey, Series> bySeries;  // a line per series without its x_S
     std::vector<double> cs, ls, sig;
     Series cSeries{b, static_cast<int>(bi) + 1, bi > 0, false, {}};
     for (const SeriesKey& sk : study.seriesKeys()) {
@@ -488,9 +586,10 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
       if (!widest) continue;
       const ReplicaStat st = study.statOf(*widest, b, "profile_fit/lambda_L");
       const double err = st.n >= 2 ? st.std / std::sqrt(double(st.n)) : 0.0;
-      auto& ser = bySeries[{sk.shape, sk.mu}];
+      auto& ser = bySeries[SeriesKey{sk.shape, 0.0, sk.mu, sk.settings}];
       if (ser.name.empty())
-        ser = Series{fmt::format("{} mu_w={} {}", sk.shape == 0 ? "spheres" : "pinacoids", num(sk.mu), b),
+        ser = Series{fmt::format("{} mu_w={}{} {}", sk.shape == 0 ? "spheres" : "pinacoids", num(sk.mu),
+                                 settingsText(sk.settings), b),
                      static_cast<int>(bySeries.size()), bi > 0, true, {}};
       ser.points.push_back({sk.xs, st.mean, err});
       for (const FitRow& f : phiFits)
@@ -533,9 +632,9 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
 // The answers first: one row per family and backend, then nscd against Bullet
 
 std::string familyName(const SeriesKey& s) {
-  return fmt::format("{}: {} x_S = {}, mu_w = {}", familyOf(s.shape, s.xs),
+  return fmt::format("{}: {} x_S = {}, mu_w = {}{}", familyOf(s.shape, s.xs),
                      s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids", num(s.xs),
-                     num(s.mu));
+                     num(s.mu), settingsText(s.settings, ", ", " = "));
 }
 
 // A number of the summary with its standard error (0 when it has none) as printed.
@@ -592,6 +691,26 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   addFitQuantities(out, fits.z, "Z_bulk",
                      "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
                      "C_Z", "loss of coordination due to the walls, in d_L");
+  // lambda_L/d_avg from the widest confined sample of each family, as the lambda_L section takes it.
+  const std::string lambdaKey = "profile_fit/lambda_L_over_d_avg";
+  SummaryQuantity lambda{
+      "lambda_L/d_avg",
+      "length over which the wall's layering of the large grains decays, in mean grain sizes d_avg, "
+      "from the fit of phi(y) of the widest confined sample (mean ± standard error over its replicas)",
+      {}};
+  for (const SeriesKey& sk : study.seriesKeys())
+    for (const std::string& b : study.backends) {
+      const ConfKey* widest = nullptr;
+      for (const auto& [k, _] : study.groups)
+        if (seriesOf(k) == sk && !k.periodic && study.statOf(k, b, lambdaKey).n > 0 &&
+            (!widest || k.width > widest->width))
+          widest = &k;
+      if (!widest) continue;
+      const ReplicaStat st = study.statOf(*widest, b, lambdaKey);
+      const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+      lambda.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
+    }
+  if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
   const std::string overlap = "interpenetration_percent/exact";
   SummaryQuantity interpenetration{"interpenetration",
                                    "volume shared by overlapping grains, % of the grains' volume, mean over every "
@@ -623,23 +742,57 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   return out;
 }
 
-void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary) {
+void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary, References& references) {
   doc.heading(2, "Summary: the results per family and backend");
+  // The columns: each quantity, its published value beside it when the reference file gives one
+  // for a family of the study, the fit quality after C; a published quantity the study has no
+  // number for (no Z, no profile fit) still gets its reference column, at the end.
+  struct Column {
+    enum Kind { Value, Reference, FitQuality } kind;
+    const SummaryQuantity* quantity = nullptr;
+    std::string referenceKey;
+  };
+  const auto referenced = [&](const std::string& key) {
+    const auto keys = study.seriesKeys();
+    return std::any_of(keys.begin(), keys.end(), [&](const SeriesKey& sk) { return references.find(sk, key); });
+  };
+  std::vector<Column> columns;
   std::vector<std::string> head = {"family", "backend", "runs at equilibrium / total"};
+  std::set<std::string> withReference;
   for (const SummaryQuantity& q : summary.quantities) {
+    columns.push_back({Column::Value, &q, ""});
     head.push_back(q.name);
-    if (q.name == "C") head.push_back("phi(W) fit quality");
+    for (const ReferenceQuantity& rq : referenceQuantities())
+      if (rq.name == q.name && referenced(rq.key)) {
+        columns.push_back({Column::Reference, nullptr, rq.key});
+        head.push_back(q.name + " reference");
+        withReference.insert(rq.key);
+      }
+    if (q.name == "C") {
+      columns.push_back({Column::FitQuality, nullptr, ""});
+      head.push_back("phi(W) fit quality");
+    }
   }
+  for (const ReferenceQuantity& rq : referenceQuantities())
+    if (!withReference.count(rq.key) && referenced(rq.key)) {
+      columns.push_back({Column::Reference, nullptr, rq.key});
+      head.push_back(rq.name + " reference");
+      withReference.insert(rq.key);
+    }
   std::vector<std::vector<std::string>> rows;
   for (const SeriesKey& sk : study.seriesKeys())
     for (const std::string& b : study.backends) {
       const RunCount& n = summary.runs.at({sk, b});
       if (n.total == 0) continue;
       std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total)};
-      for (const SummaryQuantity& q : summary.quantities) {
-        const auto it = q.values.find({sk, b});
-        row.push_back(it != q.values.end() ? it->second.text : "-");
-        if (q.name == "C") {
+      for (const Column& c : columns) {
+        if (c.kind == Column::Value) {
+          const auto it = c.quantity->values.find({sk, b});
+          row.push_back(it != c.quantity->values.end() ? it->second.text : "-");
+        } else if (c.kind == Column::Reference) {
+          const ReferenceValue* r = references.find(sk, c.referenceKey);
+          row.push_back(r ? references.cell(*r) : "-");
+        } else {
           const auto fq = summary.phiFitQuality.find({sk, b});
           row.push_back(fq != summary.phiFitQuality.end() ? fq->second : "-");
         }
@@ -647,6 +800,20 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
       rows.push_back(std::move(row));
     }
   doc.table(head, rows);
+  if (references.given()) {
+    const ReferenceValues& file = references.values();
+    const std::string from =
+        fmt::format("{}{}", file.source, file.description.empty() ? "" : " (" + file.description + ")");
+    if (references.citations().empty()) {
+      doc.paragraph(fmt::format("The reference file {} gives no value for the families of this study.", from));
+    } else {
+      doc.paragraph(fmt::format("Reference values from {}; [n] in a reference cell is its source:", from));
+      std::vector<std::string> sources;
+      for (std::size_t i = 0; i < references.citations().size(); ++i)
+        sources.push_back(fmt::format("[{}] {}", i + 1, references.citations()[i]));
+      doc.bullets(sources);
+    }
+  }
   std::vector<std::string> definitions = {
       "runs at equilibrium: finished runs whose forces and moments balance (equilibrium reached), out of all the "
       "runs of the family and backend"};
@@ -657,6 +824,10 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
           "phi(W) fit quality: chi² per degree of freedom of the fit over the confined widths and Q, "
           "the probability of a chi² at least as large if the law holds (weighted fits)");
   }
+  if (!withReference.empty())
+    definitions.push_back(
+        "QUANTITY reference: the published value of the reference file for the family (the entry for its x_S and "
+        "mu_w when the file has one), ± its published uncertainty, [n] its source");
   definitions.push_back("± values are standard errors; the fits' are from the least squares (docs/model.md).");
   doc.bullets(definitions);
 }
@@ -725,18 +896,73 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
 // ---------------------------------------------------------------------------------------------
 // After the answers: the figures with their fits, then the runs and the tables behind them
 
+// For each numeric setting the study varies beyond the named axes (a sweep's setting axis such as
+// population.pinacoid.alpha_deg): phi and Z of every configuration against it, one line per
+// combination of everything else (family, the other settings, W) and backend. A study in the
+// biperiodic box alone has no phi(W) fit: this is where its answers are.
+void addSettingSections(Document& doc, const StudyView& study, FigureWriter& figures) {
+  const std::vector<std::pair<std::string, std::string>> quantities = {{"solid_fraction", "phi"},
+                                                                       {"coordination/Z", "Z"}};
+  for (std::size_t i = 0; i < study.settings.size(); ++i) {
+    const bool numeric = std::all_of(study.groups.begin(), study.groups.end(),
+                                     [&](const auto& g) { return g.first.settings[i].number.has_value(); });
+    if (!numeric) continue;
+    const std::string& name = study.settingNames[i];
+    std::string stem;
+    for (char c : name) stem += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    bool headed = false;
+    for (const auto& [key, symbol] : quantities) {
+      if (!study.keys.count(key)) continue;
+      if (!headed) {
+        doc.heading(2, fmt::format("Solid fraction and coordination against {}", name));
+        doc.paragraph(fmt::format(
+            "{} is a setting of the run configuration this study varies. Each point is a configuration's mean over "
+            "its replicas with the standard error of that mean; each line joins the configurations that differ in "
+            "{} alone: solid for the first backend, dashed for the second.",
+            study.settings[i], name));
+        headed = true;
+      }
+      Plot p{fmt::format("{}_vs_{}", symbol, stem), fmt::format("{} against {}", symbol, name), name, symbol, {}, {},
+             false};
+      // One line per (configuration without this setting, backend), in the study's order.
+      std::map<std::pair<ConfKey, std::string>, Series> lines;
+      std::map<ConfKey, int> colors;
+      for (const auto& [k, _] : study.groups) {
+        ConfKey rest = k;
+        rest.settings.erase(rest.settings.begin() + static_cast<std::ptrdiff_t>(i));
+        if (!colors.count(rest)) colors.emplace(rest, static_cast<int>(colors.size()) + 1);
+        for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
+          const ReplicaStat st = study.statOf(k, study.backends[bi], key);
+          if (st.n == 0) continue;
+          Series& line = lines[{rest, study.backends[bi]}];
+          if (line.name.empty())
+            line = Series{fmt::format("{} W={} {}", seriesText(seriesOf(rest)), widthText(rest), study.backends[bi]),
+                          colors.at(rest), bi > 0, true, {}};
+          line.points.push_back(
+              {*k.settings[i].number, st.mean, st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0});
+        }
+      }
+      for (auto& [_, line] : lines) p.series.push_back(std::move(line));
+      doc.figure(figures.draw(p));
+    }
+  }
+}
+
 // The figures of the phi(W) and Z(W) fits and of lambda_L, in this order.
-void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits) {
+void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits,
+                          References& references) {
   addFitSection(doc, study, figures, fits.phi,
                 {"phi", "C", "phi_vs_invW", "Solid fraction phi against d_L/W",
                  "The solid fraction phi is the share of the bulk region's volume (away from the floor and the free "
                  "surface) filled by grains; the geometrical model phi(W) = phi_bulk − C/W splits it into phi_bulk, "
-                 "its value far from the walls, and C, the loss due to the two wall layers, in d_L."});
+                 "its value far from the walls, and C, the loss due to the two wall layers, in d_L."},
+                references);
   addFitSection(doc, study, figures, fits.z,
                 {"Z", "C_Z", "Z_vs_invW", "Coordination number Z against d_L/W",
                  "The coordination number Z is the mean number of grain-grain contacts per grain of the bulk region; "
                  "the same model Z(W) = Z_bulk − C_Z/W gives its value far from the walls, Z_bulk, and its loss "
-                 "due to the walls, C_Z, in d_L."});
+                 "due to the walls, C_Z, in d_L."},
+                references);
   if (study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, fits.phi);
 }
 
@@ -866,7 +1092,7 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
     }
     if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";
     std::vector<std::string> row = {link(r.run.name, relativeLink(study.runDir(r), reportDir)),
-                                    r.run.label(),
+                                    r.run.label(study.settings),
                                     status,
                                     value("solid_fraction", "{:.4f}"),
                                     value("timing/wall_s", "{:.1f}"),
@@ -894,6 +1120,7 @@ std::string exact(double v) { return fmt::format("{:.17g}", v); }
 // two replicas).
 void writeQuantityTable(const fs::path& path, const StudyView& study, const std::vector<std::string>& keys) {
   std::vector<std::string> head = {"key", "family", "x_S", "W", "mu_w", "biperiodic"};
+  for (const std::string& path : study.settings) head.push_back(path);  // the varied settings, by path
   for (const auto& b : study.backends)
     for (const char* what : {"_mean", "_std", "_n"}) head.push_back(b + what);
   const std::string diffName = study.pair() ? study.backends[0] + "_minus_" + study.backends[1] : "";
@@ -906,6 +1133,7 @@ void writeQuantityTable(const fs::path& path, const StudyView& study, const std:
     for (const auto& [k, _] : study.groups) {
       std::vector<std::string> row = {key,          familyOf(k.shape, k.xs), exact(k.xs), exact(k.width),
                                       exact(k.mu), k.periodic ? "1" : "0"};
+      for (const SettingValue& v : k.settings) row.push_back(v.text);
       std::vector<ReplicaStat> stats;
       for (const auto& b : study.backends) {
         const ReplicaStat& st = stats.emplace_back(study.statOf(k, b, key));
@@ -944,11 +1172,13 @@ void addQuantityTables(Document& doc, const StudyView& study, const fs::path& re
     doc.paragraph("No run of this study has finished: there is no quantity to tabulate.");
     return;
   }
+  std::string varied;
+  for (const std::string& path : study.settings) varied += ", " + path;
   std::string text = fmt::format(
       "Every quantity of result.json per configuration: {}. One row per quantity (key) and configuration (family, "
-      "x_S, W, mu_w, biperiodic 1 or 0); per backend the mean, the sample standard deviation and the number n of "
+      "x_S, W, mu_w, biperiodic 1 or 0{}); per backend the mean, the sample standard deviation and the number n of "
       "replicas that finished",
-      files);
+      files, varied);
   if (study.pair())
     text += fmt::format(", then {} − {} with its uncertainty sqrt(s1²/n1 + s2²/n2)", study.backends[0],
                         study.backends[1]);
@@ -1023,9 +1253,11 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   if (study.keys.count("solid_fraction")) fits.phi = confinementFits(study, "solid_fraction");
   if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
   const StudySummary results = summarize(study, fits);
-  addSummarySection(doc, study, results);
+  References references(options.reference);
+  addSummarySection(doc, study, results, references);
   addVerdictSection(doc, study, results);
-  addFitFigureSections(doc, study, figures, fits);
+  addFitFigureSections(doc, study, figures, fits, references);
+  addSettingSections(doc, study, figures);
   addProfileSections(doc, study, figures);
   addRunsSection(doc, study, outDir);
   addQuantityTables(doc, study, outDir);

@@ -9,7 +9,9 @@
 // Z(W) = Z_bulk - C_Z/W per backend, lambda_L against x_S and against C, the profiles phi(y) and
 // the others the runs wrote. Then every run once (the missing, failed or unequilibrated ones first,
 // never dropped silently, each linked to its folder), the list of the tables, the cost and the
-// method. Every quantity of result.json per configuration (shape, x_S, W, mu_w) is not on the page
+// method. A setting the sweep varied by its path (study/sweep.hpp, SettingAxis) is part of every
+// family and configuration, and phi and Z are drawn against it when it is a number. Every
+// quantity of result.json per configuration (shape, x_S, W, mu_w, varied settings) is not on the page
 // but in tables/GROUP.csv: per backend the mean, standard deviation and number of the replicas,
 // and the difference of the two backends with its uncertainty, at full precision.
 //
@@ -27,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "study/reference_values.hpp"
 #include "study/sweep.hpp"
 
 namespace confpack::study {
@@ -70,6 +73,11 @@ std::map<std::string, std::optional<double>> flattenResult(const nlohmann::json&
 struct ReportOptions {
   std::filesystem::path gnuplot = "gnuplot";  ///< executable; empty = do not draw figures
   std::chrono::milliseconds figureTimeout = std::chrono::seconds(120);  ///< gnuplot is killed after this, per figure
+  /// Published values shown next to the study's (`--reference FILE`, study/reference_values.hpp):
+  /// a "reference" column beside each quantity of the summary that has one, the citations below
+  /// it, and marks at d_L/W = 0 (the law as a dotted line when C is given too) on the phi(W) and
+  /// Z(W) figures. None: the report has no reference column.
+  std::optional<ReferenceValues> reference;
 };
 
 struct ReportSummary {

@@ -48,7 +48,8 @@ std::string gnuplotScript(const Plot& p) {
     // Rows of other series give an undefined x and are skipped; rows of one series are
     // contiguous in the CSV, so its line is not broken.
     const std::string sel = fmt::format("(strcol(1) eq \"{}\" ? $2 : 1/0)", s.name);
-    const std::string style = fmt::format("lc {} dt {} pt {}", s.color, s.dashed ? 2 : 1, s.dashed ? 6 : 7);
+    const std::string style =
+        fmt::format("lc {} dt {} pt {}", s.color, s.dashed ? 2 : 1, s.pointType ? s.pointType : s.dashed ? 6 : 7);
     bool hasErr = false;
     for (const auto& pt : s.points) hasErr = hasErr || pt[2] > 0.0;
     if (hasErr)

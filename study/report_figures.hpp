@@ -21,6 +21,7 @@ struct Series {
   bool lines = true;
   std::vector<std::array<double, 3>> points;  ///< x, y, err
   bool markers = true;                        ///< false: a plain line (dense profiles)
+  int pointType = 0;                          ///< gnuplot's pt; 0: by backend (7 solid, 6 dashed)
 };
 
 struct Plot {

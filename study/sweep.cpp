@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "backends/backend_factory.hpp"
 #include "core/backend.hpp"
 #include "core/interrupt.hpp"
 #include "core/json_input.hpp"
@@ -48,6 +49,15 @@ void checkKnownKeys(const json& given, const json& known, const std::string& pat
   }
 }
 
+// The default configuration with the base's keys over it, as JSON: what a path of a setting
+// axis is walked in.
+json mergedBase(const json& base) {
+  json merged;
+  core::to_json(merged, core::RunConfig{});
+  merged.merge_patch(base);
+  return merged;
+}
+
 core::RunConfig resolveBase(const json& base, std::string_view source) {
   json merged;
   core::to_json(merged, core::RunConfig{});
@@ -67,8 +77,10 @@ core::RunConfig resolveBase(const json& base, std::string_view source) {
 // In double: the product of a few large lists must not wrap around.
 double listedRuns(const SweepGroup& g, double seeds) {
   auto count = [](std::size_t n) { return static_cast<double>(std::max<std::size_t>(n, 1)); };
+  double settings = 1.0;
+  for (const SettingAxis& a : g.settings) settings *= count(a.values.size());
   return count(g.widths.size()) * count(g.shapes.size()) * count(g.smallFractions.size()) *
-         count(g.wallFrictions.size()) * count(g.backends.size()) * std::max(seeds, 1.0);
+         count(g.wallFrictions.size()) * count(g.backends.size()) * std::max(seeds, 1.0) * settings;
 }
 
 void checkRunCount(double runs, std::size_t maxRuns, std::string_view source, std::string_view where) {
@@ -79,7 +91,113 @@ void checkRunCount(double runs, std::size_t maxRuns, std::string_view source, st
                     runs, maxRuns));
 }
 
-SweepGroup parseGroup(const json& g, const std::string& where, std::string_view source, std::size_t maxRuns) {
+// The named axes and the configuration paths they set: a group may not give both names of one.
+const std::vector<std::pair<std::string, std::string>>& namedAxisPaths() {
+  static const std::vector<std::pair<std::string, std::string>> m = {
+      {"width", "box.width"},
+      {"width", "box.periodic_y"},
+      {"shape", "population.shape"},
+      {"small_fraction", "population.small_fraction"},
+      {"wall_friction", "box.wall_friction"}};
+  return m;
+}
+
+std::string keysOf(const json& section) {
+  std::string keys;
+  for (const auto& [k, _] : section.items()) keys += (keys.empty() ? "" : ", ") + k;
+  return keys;
+}
+
+// A key of a group that is not a named axis: a path of the run configuration. It must name a
+// setting the configuration's readers know (walked in `defaults`, the resolved base as JSON), or a
+// backend option one of the backends knows; and each value must be read by them, so that a typo
+// in a path or a value is refused before any run, by its name. Ranges that depend on other
+// settings (a pinacoid's alpha against its E) are the expansion's to check, run by run.
+SettingAxis parseSettingAxis(const std::string& path, const json& list, const std::string& field,
+                             std::string_view source, const json& defaults) {
+  SettingAxis axis{path, {}};
+  std::vector<std::string> keys;
+  for (std::size_t at = 0;;) {
+    const std::size_t dot = path.find('.', at);
+    keys.push_back(path.substr(at, dot == std::string::npos ? std::string::npos : dot - at));
+    if (dot == std::string::npos) break;
+    at = dot + 1;
+  }
+  for (const std::string& k : keys)
+    if (k.empty())
+      bad(source, field,
+          "not a configuration path (keys of config.json joined by '.', e.g. population.pinacoid.alpha_deg)");
+
+  if (keys.front() == "backend_options" && keys.size() > 2)
+    bad(source, field, "a backend option is one key deep: backend_options.KEY (confpack options nscd, or bullet)");
+  if (keys.front() == "backend_options" && keys.size() == 2) {
+    // Backend options are the backends' own settings tables: a value is valid when one of the
+    // backends reads it (the expansion checks each run against its own backend).
+    for (const json& v : list) {
+      std::string why;
+      for (std::string_view backend : core::kBackendNames) {
+        try {
+          backends::checkBackendOptions(backend, json{{keys[1], v}});
+          why.clear();
+          break;
+        } catch (const std::invalid_argument& e) {
+          // An unknown key is the least telling reason: keep a backend's objection to the value.
+          if (why.empty() || why.find(": unknown key") != std::string::npos) why = e.what();
+        }
+      }
+      if (!why.empty()) bad(source, field, why);
+      axis.values.push_back(v);
+    }
+    return axis;
+  }
+
+  const json* node = &defaults;
+  std::string here;
+  for (const std::string& k : keys) {
+    if (!node->is_object() || !node->contains(k)) {
+      if (here.empty())
+        bad(source, field,
+            fmt::format("unknown key (known: width, shape, small_fraction, wall_friction, seed, replicas, backend, "
+                        "or a path of the run configuration under {})",
+                        keysOf(*node)));
+      if (!node->is_object())
+        bad(source, field, fmt::format("unknown configuration path: {} is a setting, not a section", here));
+      bad(source, field,
+          fmt::format("unknown configuration path: {} has no key {} (its keys: {})", here, core::textExcerpt(k),
+                      keysOf(*node)));
+    }
+    here += (here.empty() ? "" : ".") + k;
+    node = &node->at(k);
+  }
+  if (node->is_object())
+    bad(source, field,
+        node->empty() ? fmt::format("{} is a section: give one of its keys, {}.KEY", here, here)
+                      : fmt::format("{} is a section, not a setting: give one of its keys ({})", here, keysOf(*node)));
+  for (const json& v : list) {
+    // The readers of some sections take any JSON type and fail with the library's words: say it
+    // plainly first.
+    const char* expected = node->is_number()    ? (v.is_number() || v.is_null() ? nullptr : "a number")
+                           : node->is_string()  ? (v.is_string() ? nullptr : "a string")
+                           : node->is_boolean() ? (v.is_boolean() ? nullptr : "true or false")
+                                                : nullptr;
+    if (expected) bad(source, field, fmt::format("expected {} (got {})", expected, core::jsonExcerpt(v)));
+    json cfg = defaults;
+    json* at = &cfg;
+    for (const std::string& k : keys) at = &(*at)[k];
+    *at = v;
+    try {
+      core::RunConfig c;
+      core::from_json(cfg, c);
+    } catch (const std::exception& e) {
+      bad(source, field, e.what());
+    }
+    axis.values.push_back(v);
+  }
+  return axis;
+}
+
+SweepGroup parseGroup(const json& g, const std::string& where, std::string_view source, std::size_t maxRuns,
+                      const json& defaults) {
   if (!g.is_object()) bad(source, where, "expected an object of value lists");
   SweepGroup out;
   for (const auto& [key, raw] : g.items()) {
@@ -134,10 +252,12 @@ SweepGroup parseGroup(const json& g, const std::string& where, std::string_view 
         out.backends.push_back(v.get<std::string>());
       }
     } else {
-      bad(source, field,
-          "unknown key (known: width, shape, small_fraction, wall_friction, seed, replicas, backend)");
+      out.settings.push_back(parseSettingAxis(key, list, field, source, defaults));
     }
   }
+  for (const auto& [name, path] : namedAxisPaths())
+    if (g.contains(name) && g.contains(path))
+      bad(source, where + "." + path, fmt::format("{} and {} vary the same setting: give one of them", name, path));
   if (g.contains("replicas")) {
     if (g.contains("seed")) bad(source, where + ".replicas", "give either seed or replicas, not both");
     const json& r = g.at("replicas");
@@ -164,6 +284,99 @@ std::string depositKey(const core::RunConfig& cfg) {
 
 std::string trimNumber(double v) { return fmt::format("{:g}", v); }
 
+// The leaves of a configuration's JSON, keyed by their path joined with '.'.
+void flattenConfig(const json& j, const std::string& path, std::map<std::string, const json*>& out) {
+  for (const auto& [key, v] : j.items()) {
+    const std::string here = path.empty() ? key : path + "." + key;
+    if (v.is_object()) flattenConfig(v, here, out);
+    else out[here] = &v;
+  }
+}
+
+// The settings that differ between configurations given one by one as JSON (variedSettings):
+// each against the first, leaf by leaf, a path varied where a value differs or one of the two
+// lacks it. Paths are spelled out only where they differ, so a table of 100,000 runs is compared
+// in about the time its configurations take to write as JSON.
+class VariedSettings {
+ public:
+  void add(const json& cfg) {
+    if (first_.is_null()) {
+      first_ = cfg;
+      return;
+    }
+    compare(cfg, first_, "");
+    compare(first_, cfg, "");
+  }
+  // In path order, without those of the named axes (their own columns: W and biperiodic, shape,
+  // x_S, mu_w, seed, backend).
+  std::vector<std::string> paths() const {
+    static const std::set<std::string> named = {"box.width",         "box.periodic_y", "population.shape",
+                                                "population.small_fraction", "box.wall_friction", "seed",
+                                                "backend"};
+    std::vector<std::string> out;
+    for (const std::string& p : varied_)
+      if (!named.count(p)) out.push_back(p);
+    return out;
+  }
+
+ private:
+  void compare(const json& a, const json& b, const std::string& path) {
+    for (const auto& [key, v] : a.items()) {
+      const auto it = b.find(key);
+      if (it != b.end() && !v.is_object() && v == *it) continue;  // the common case: no path spelled out
+      const std::string here = path.empty() ? key : path + "." + key;
+      if (it == b.end()) {
+        // The whole subtree is missing from b.
+        std::map<std::string, const json*> leaves;
+        if (v.is_object()) flattenConfig(v, here, leaves);
+        else leaves[here] = &v;
+        for (const auto& [p, _] : leaves) varied_.insert(p);
+      } else if (v.is_object() && it->is_object()) {
+        compare(v, *it, here);
+      } else if (v != *it) {
+        varied_.insert(here);
+      }
+    }
+  }
+
+  json first_;
+  std::set<std::string> varied_;
+};
+
+// Every combination of the values of a group's setting axes, the first axis varying slowest; one
+// empty combination when the group has none.
+std::vector<std::vector<const json*>> settingCombinations(const std::vector<SettingAxis>& axes) {
+  std::vector<std::vector<const json*>> out = {{}};
+  for (const SettingAxis& a : axes) {
+    std::vector<std::vector<const json*>> next;
+    for (const auto& prefix : out)
+      for (const json& v : a.values) {
+        next.push_back(prefix);
+        next.back().push_back(&v);
+      }
+    out = std::move(next);
+  }
+  return out;
+}
+
+// Sets each axis's value at its path of the run's configuration, through the configuration's
+// JSON reader (the one config.json is read with).
+void applySettings(SweepRun& r, const std::vector<SettingAxis>& axes, const std::vector<const json*>& values) {
+  json cfg;
+  core::to_json(cfg, r.config);
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    json* at = &cfg;
+    for (std::size_t from = 0;;) {
+      const std::size_t dot = axes[i].path.find('.', from);
+      at = &(*at)[axes[i].path.substr(from, dot == std::string::npos ? std::string::npos : dot - from)];
+      if (dot == std::string::npos) break;
+      from = dot + 1;
+    }
+    *at = *values[i];
+  }
+  core::from_json(cfg, r.config);
+}
+
 std::string utcNow() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -175,10 +388,11 @@ std::string utcNow() {
 
 json runTableJson(const std::vector<SweepRun>& runs) {
   json table = json::array();
+  const std::vector<std::string> varied = variedSettings(runs);
   for (const SweepRun& r : runs) {
     json cfg;
     core::to_json(cfg, r.config);
-    table.push_back({{"name", r.name}, {"deposit", r.depositName()}, {"label", r.label()}, {"config", cfg}});
+    table.push_back({{"name", r.name}, {"deposit", r.depositName()}, {"label", r.label(varied)}, {"config", cfg}});
   }
   return table;
 }
@@ -249,11 +463,83 @@ std::string familyName(const core::RunConfig& cfg) {
   return fmt::format("{}{}", bidisperse ? "B" : "M", grains);
 }
 
-std::string SweepRun::label() const {
+namespace {
+
+// The value at `path` of a configuration written as JSON.
+std::string settingText(const json& cfg, const std::string& path) {
+  const json* at = &cfg;
+  for (std::size_t from = 0;;) {
+    const std::size_t dot = path.find('.', from);
+    const std::string key = path.substr(from, dot == std::string::npos ? std::string::npos : dot - from);
+    if (!at->is_object() || !at->contains(key)) return "-";
+    at = &at->at(key);
+    if (dot == std::string::npos) break;
+    from = dot + 1;
+  }
+  if (at->is_string()) return at->get<std::string>();
+  // Shortest text that reads back as the same double ("45", "0.1", "1e-08"): runs that differ in
+  // a setting must not share its text.
+  if (at->is_number_float()) return fmt::format("{}", at->get<double>());
+  if (at->is_null()) return "none";
+  return at->dump();
+}
+
+}  // namespace
+
+std::string SweepRun::label(const std::vector<std::string>& settings) const {
   const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
                                              : trimNumber(config.box.width);
-  return fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config), trimNumber(config.population.smallFraction),
-                     w, trimNumber(config.box.wallFriction), config.seed, config.backend);
+  std::string text = fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config),
+                                 trimNumber(config.population.smallFraction), w, trimNumber(config.box.wallFriction),
+                                 config.seed, config.backend);
+  if (settings.empty()) return text;
+  const std::vector<std::string> names = settingNames(settings);
+  json cfg;
+  core::to_json(cfg, config);
+  for (std::size_t i = 0; i < settings.size(); ++i)
+    text += fmt::format(" {}={}", names[i], settingText(cfg, settings[i]));
+  return text;
+}
+
+std::vector<std::string> variedSettings(const std::vector<SweepRun>& runs) {
+  VariedSettings varied;
+  for (const SweepRun& r : runs) {
+    json cfg;
+    core::to_json(cfg, r.config);
+    varied.add(cfg);
+  }
+  return varied.paths();
+}
+
+std::string settingText(const core::RunConfig& cfg, const std::string& path) {
+  json j;
+  core::to_json(j, cfg);
+  return settingText(j, path);
+}
+
+std::vector<std::string> settingNames(const std::vector<std::string>& paths) {
+  // The last k keys of a path (the whole path when it has fewer).
+  const auto tail = [](const std::string& path, std::size_t k) {
+    std::size_t at = path.size();
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::size_t dot = at == 0 ? std::string::npos : path.rfind('.', at - 1);
+      if (dot == std::string::npos) return path;
+      at = dot;
+    }
+    return path.substr(at + 1);
+  };
+  std::vector<std::string> names;
+  for (const std::string& p : paths) {
+    std::size_t k = 1;
+    for (;; ++k) {
+      const std::string name = tail(p, k);
+      const bool unique = std::none_of(paths.begin(), paths.end(),
+                                       [&](const std::string& q) { return q != p && tail(q, k) == name; });
+      if (unique || name == p) break;
+    }
+    names.push_back(tail(p, k));
+  }
+  return names;
 }
 
 std::string_view toString(RunStatus s) {
@@ -299,13 +585,14 @@ SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t m
   }
   if (doc.contains("vary") == doc.contains("groups"))
     bad(source, "vary", "give exactly one of \"vary\" (one product) or \"groups\" (a list of products)");
+  const json defaults = mergedBase(spec.base);
   if (doc.contains("vary")) {
-    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", source, maxRuns));
+    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", source, maxRuns, defaults));
   } else {
     const json& groups = doc.at("groups");
     if (!groups.is_array() || groups.empty()) bad(source, "groups", "expected a non-empty list of objects");
     for (std::size_t i = 0; i < groups.size(); ++i)
-      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), source, maxRuns));
+      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), source, maxRuns, defaults));
   }
   double runs = 0.0;
   for (const SweepGroup& g : spec.groups) runs += listedRuns(g, static_cast<double>(g.seeds.size()));
@@ -322,9 +609,14 @@ SweepSpec readSweepSpec(const fs::path& path, std::size_t maxRuns) {
 
 std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
   const core::RunConfig base = resolveBase(spec.base, "sweep");
+  bool hasBackendOptionAxis = false;
+  for (const SweepGroup& g : spec.groups)
+    for (const SettingAxis& a : g.settings)
+      hasBackendOptionAxis = hasBackendOptionAxis || a.path.starts_with("backend_options.");
   std::vector<SweepRun> runs;
   std::set<std::string> seen;
   std::map<std::string, std::size_t> deposits;
+  VariedSettings variedInTable;
 
   for (const SweepGroup& g : spec.groups) {
     // An empty list takes the base value; writing it as a one-element list keeps one loop nest.
@@ -335,39 +627,47 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
     const auto frictions = g.wallFrictions.empty() ? std::vector{base.box.wallFriction} : g.wallFrictions;
     const auto seeds = g.seeds.empty() ? std::vector{base.seed} : g.seeds;
     const auto backendList = g.backends.empty() ? std::vector{base.backend} : g.backends;
+    const std::vector<std::vector<const json*>> settings = settingCombinations(g.settings);
     for (core::ShapeKind shape : shapes)
       for (double xs : fractions)
         for (const WidthChoice& w : widths)
           for (double mu : frictions)
-            for (std::uint64_t seed : seeds)
-              for (const std::string& backend : backendList) {
-                SweepRun r;
-                r.config = base;
-                r.config.population.shape = shape;
-                r.config.population.smallFraction = xs;
-                r.config.box.width = w.width;
-                r.config.box.periodicY = w.periodicY;
-                // A biperiodic box has no side walls: mu_w is meaningless there, and keeping it
-                // would make mu_w variants of the reference distinct runs of the same physics.
-                r.config.box.wallFriction = w.periodicY ? 0.0 : mu;
-                r.config.seed = seed;
-                r.config.backend = backend;
-                json key;
-                core::to_json(key, r.config);
-                if (!seen.insert(key.dump()).second) continue;
-                r.index = runs.size();
-                const auto [it, inserted] = deposits.try_emplace(depositKey(r.config), deposits.size());
-                r.depositIndex = it->second;
-                runs.push_back(std::move(r));
-              }
+            for (const std::vector<const json*>& values : settings)
+              for (std::uint64_t seed : seeds)
+                for (const std::string& backend : backendList) {
+                  SweepRun r;
+                  r.config = base;
+                  r.config.population.shape = shape;
+                  r.config.population.smallFraction = xs;
+                  r.config.box.width = w.width;
+                  r.config.box.periodicY = w.periodicY;
+                  r.config.box.wallFriction = mu;
+                  r.config.seed = seed;
+                  r.config.backend = backend;
+                  if (!values.empty()) applySettings(r, g.settings, values);
+                  // A biperiodic box has no side walls: mu_w is meaningless there, and keeping it
+                  // would make mu_w variants of the reference distinct runs of the same physics.
+                  if (r.config.box.periodicY) r.config.box.wallFriction = 0.0;
+                  json key;
+                  core::to_json(key, r.config);
+                  if (!seen.insert(key.dump()).second) continue;
+                  variedInTable.add(key);
+                  r.index = runs.size();
+                  const auto [it, inserted] = deposits.try_emplace(depositKey(r.config), deposits.size());
+                  r.depositIndex = it->second;
+                  runs.push_back(std::move(r));
+                }
   }
   const int digits = std::max<int>(4, static_cast<int>(std::to_string(runs.empty() ? 0 : runs.size() - 1).size()));
+  const std::vector<std::string> varied = variedInTable.paths();
   for (SweepRun& r : runs) {
     r.name = fmt::format("r{:0{}d}", r.index, digits);
     try {
       r.config.validate();
+      // A backend option set by an axis must be one of the run's own backend.
+      if (hasBackendOptionAxis) backends::checkBackendOptions(r.config.backend, r.config.backendOptions);
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(fmt::format("sweep run {} ({}): {}", r.name, r.label(), e.what()));
+      throw std::invalid_argument(fmt::format("sweep run {} ({}): {}", r.name, r.label(varied), e.what()));
     }
   }
   return runs;
@@ -443,16 +743,34 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
   std::set<std::size_t> slice;
   if (taskIndex)
     for (std::size_t i : sliceRuns(runs, *taskIndex, taskCount)) slice.insert(i);
+  // A column per varied setting, as wide as its name or its widest value.
+  const std::vector<std::string> varied = variedSettings(runs);
+  const std::vector<std::string> names = settingNames(varied);
+  std::vector<std::vector<std::string>> cells(runs.size());
+  std::vector<std::size_t> widths;
+  for (const std::string& n : names) widths.push_back(n.size());
+  for (std::size_t k = 0; k < runs.size() && !varied.empty(); ++k) {
+    json cfg;
+    core::to_json(cfg, runs[k].config);
+    for (std::size_t i = 0; i < varied.size(); ++i) {
+      cells[k].push_back(settingText(cfg, varied[i]));
+      widths[i] = std::max(widths[i], cells[k].back().size());
+    }
+  }
   std::ostringstream out;
-  out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}{}\n", "run", "deposit", "family", "x_S", "W",
-                     "mu_w", "seed", "backend", dir.empty() ? "" : " status");
-  for (const SweepRun& r : runs) {
+  out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", "run", "deposit", "family", "x_S", "W", "mu_w",
+                     "seed", "backend");
+  for (std::size_t i = 0; i < names.size(); ++i) out << fmt::format(" {:<{}}", names[i], widths[i]);
+  out << (dir.empty() ? "" : " status") << '\n';
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const SweepRun& r = runs[k];
     if (taskIndex && !slice.count(r.index)) continue;
     const std::string w = r.config.box.periodicY ? fmt::format("bi{}", trimNumber(r.config.box.width))
                                                  : trimNumber(r.config.box.width);
     out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(),
                        familyName(r.config), trimNumber(r.config.population.smallFraction), w,
                        trimNumber(r.config.box.wallFriction), r.config.seed, r.config.backend);
+    for (std::size_t i = 0; i < varied.size(); ++i) out << fmt::format(" {:<{}}", cells[k][i], widths[i]);
     if (!dir.empty()) out << ' ' << toString(runStatus(dir / "runs" / r.name));
     out << '\n';
   }
@@ -466,6 +784,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
   const std::vector<SweepRun> runs = expandRuns(spec);
   const std::vector<std::size_t> slice = sliceRuns(runs, opt.taskIndex, opt.taskCount);
   prepareSweepDir(dir, spec, runs);
+  const std::vector<std::string> varied = variedSettings(runs);
 
   SweepSummary summary;
   summary.total = runs.size();
@@ -558,7 +877,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
         // The marker is the last thing written, atomically: its presence means result.json and
         // everything else of the run is complete.
         json done = {{"name", r.name},      {"status", "done"},       {"wall_s", seconds},
-                     {"finished", utcNow()}, {"label", r.label()}};
+                     {"finished", utcNow()}, {"label", r.label(varied)}};
         if (result.contains("solid_fraction")) done["solid_fraction"] = result.at("solid_fraction");
         if (result.contains("equilibrium") && result.at("equilibrium").contains("reached"))
           done["equilibrium_reached"] = result.at("equilibrium").at("reached");

@@ -1,6 +1,7 @@
 #pragma once
 // Sweeps (docs/model.md, "The study and its report"): a base run configuration and lists of values
-// to combine (width W or biperiodic, shape, x_S, mu_w, seeds, backends), expanded into a table of
+// to combine (width W or biperiodic, shape, x_S, mu_w, seeds, backends, and any other key of the
+// run configuration by its path, e.g. "population.pinacoid.alpha_deg"), expanded into a table of
 // runs with stable names r0000, r0001, ... that are run locally in parallel or sliced over the
 // tasks of a cluster job array, and that resume after an interruption without redoing a finished
 // run.
@@ -37,6 +38,15 @@ struct WidthChoice {
   bool operator==(const WidthChoice&) const = default;
 };
 
+/// A sweep axis named by its path in the run configuration, the keys of config.json joined by '.'
+/// ("population.pinacoid.alpha_deg", "compaction.protocol", "backend_options.tolerance"): each run
+/// of the axis has one of the values at that path. The path and every value were checked against
+/// the configuration's readers when the sweep file was parsed.
+struct SettingAxis {
+  std::string path;
+  std::vector<nlohmann::json> values;
+};
+
 /// One cartesian product of values; an empty list means "the base configuration's value".
 struct SweepGroup {
   std::vector<WidthChoice> widths;
@@ -45,6 +55,7 @@ struct SweepGroup {
   std::vector<double> wallFrictions;   ///< mu_w [-]
   std::vector<std::uint64_t> seeds;
   std::vector<std::string> backends;
+  std::vector<SettingAxis> settings;   ///< every other key of the group, in the order of their paths
 };
 
 /// A parsed, validated sweep file.
@@ -65,12 +76,26 @@ struct SweepRun {
 
   /// "d0003": the deposit file stem.
   std::string depositName() const;
-  /// Short human label, e.g. "MSP xS=0 W=10 mu=0.3 s1 nscd".
-  std::string label() const;
+  /// Short human label, e.g. "MSP xS=0 W=10 mu=0.3 s1 nscd", followed by the value of each of
+  /// `settings` (configuration paths, variedSettings) under its short name: " alpha_deg=45 E=0.5".
+  std::string label(const std::vector<std::string>& settings = {}) const;
 };
 
+/// The settings a run table and a report show beside W, shape, x_S, mu_w, seed and backend: the
+/// paths of the run configuration whose values differ between the runs (a sweep's setting axes),
+/// in path order. Empty for a sweep over those named axes alone.
+std::vector<std::string> variedSettings(const std::vector<SweepRun>& runs);
+
+/// The value at `path` of a configuration as text ("45", "quasi-static"), "-" where it has none
+/// (a backend option the run does not set).
+std::string settingText(const core::RunConfig& cfg, const std::string& path);
+
+/// Names for configuration paths, as short as stays unambiguous: the last key ("alpha_deg"), or
+/// the last two ("pinacoid.E") and so on where two paths end alike.
+std::vector<std::string> settingNames(const std::vector<std::string>& paths);
+
 /// Most runs a sweep file may list unless `confpack sweep --max-runs` raises the limit
-/// (docs/sweeps.md). The paper-scale study has 174 runs; a table of 100,000 takes 0.22 GB and 3 s
+/// (docs/sweeps.md). The paper-scale study has 174 runs; a table of 100,000 takes 0.22 GB and 5 s
 /// to list (measured with --list), while a typo such as "replicas": 100000000 would need tens of
 /// gigabytes.
 inline constexpr std::size_t kDefaultMaxRuns = 100000;
@@ -83,7 +108,8 @@ SweepSpec parseSweepSpec(const nlohmann::json& doc, std::string_view source = "s
 /// Reads and parses a sweep file (JSON).
 SweepSpec readSweepSpec(const std::filesystem::path& path, std::size_t maxRuns = kDefaultMaxRuns);
 
-/// Expands the groups in order (shape, x_S, W, mu_w, seed, backend; backend varies fastest), drops
+/// Expands the groups in order (shape, x_S, W, mu_w, the setting axes in the order of their paths,
+/// seed, backend; backend varies fastest), drops
 /// duplicates of runs already in the table, and gives each run its stable name and its deposit.
 /// Each resolved configuration is validated (std::invalid_argument names the run).
 std::vector<SweepRun> expandRuns(const SweepSpec& spec);
@@ -142,8 +168,8 @@ void prepareSweepDir(const std::filesystem::path& dir, const SweepSpec& spec, co
 SweepSummary runSweep(const SweepSpec& spec, const std::filesystem::path& dir, const SweepOptions& opt,
                       const SweepRunFn& run, const SweepDepositFn& makeDeposit);
 
-/// The run table as text (name, deposit, family, x_S, W, mu_w, seed, backend, status when `dir`
-/// is given), one line per run, for `confpack sweep --list`.
+/// The run table as text (name, deposit, family, x_S, W, mu_w, seed, backend, a column per varied
+/// setting, status when `dir` is given), one line per run, for `confpack sweep --list`.
 std::string formatRunTable(const std::vector<SweepRun>& runs, const std::filesystem::path& dir = {},
                            std::optional<std::size_t> taskIndex = {}, std::size_t taskCount = 1);
 

@@ -181,3 +181,29 @@ TEST_CASE("report: SIGTERM or SIGKILL while gnuplot hangs leaves the previous re
   REQUIRE(s.run("report sw --no-figures").code == 0);
   CHECK(entriesStartingWith(s.dir / "sw", ".report.partial-").empty());
 }
+
+TEST_CASE("report --reference: a bad reference file is refused by its field, exit 2, one line, nothing written") {
+  ConfpackSession s("cmd_report_reference");
+  makeSweep(s.dir / "sw");
+  std::ofstream(s.dir / "typo.json") << R"json({"families": {"MSP": {"phi_bulk": {"value": 0.64, "uncertainty": 0.01,
+    "citation": "Scott and Kilgour (1969)"}, "Zbulk": {"value": 6, "uncertainty": 0, "citation": "x"}}}})json";
+  const auto r = s.run("report sw --no-figures --reference typo.json");
+  CHECK(r.code == 2);
+  CHECK(lineCount(r.err) == 1);
+  CHECK(r.err ==
+        "confpack report: error: typo.json: families.MSP.Zbulk: unknown key (known: x_S, mu_w, phi_bulk, C, Z_bulk, "
+        "C_Z, lambda_L_over_d_avg)\n");
+  CHECK_FALSE(fs::exists(s.dir / "sw" / "report"));
+  const auto missing = s.run("report sw --no-figures --reference nowhere.json");
+  CHECK(missing.code == 2);
+  CHECK(missing.err == "confpack report: error: nowhere.json: cannot open the reference file\n");
+  CHECK_FALSE(fs::exists(s.dir / "sw" / "report"));
+
+  // The example of the docs is accepted, and its values are in the summary.
+  const fs::path example = fs::path(CONFPACK_SOURCE_DIR) / "docs" / "examples" / "reference-values.json";
+  REQUIRE(s.run("report sw --no-figures --reference '" + example.string() + "'").code == 0);
+  const std::string md = slurp(s.dir / "sw" / "report" / "report.md");
+  CHECK(md.find("| phi_bulk | phi_bulk reference | C |") != std::string::npos);
+  CHECK(md.find("| 0.64 ± 0.01 [1] |") != std::string::npos);
+  CHECK(md.find("- [1] random close packing: G. D. Scott and D. M. Kilgour") != std::string::npos);
+}

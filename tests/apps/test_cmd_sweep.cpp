@@ -89,3 +89,55 @@ TEST_CASE("confpack sweep refuses a sweep file listing more runs than --max-runs
   std::sort(entries.begin(), entries.end());
   CHECK(entries == std::vector<std::string>{"huge.json", "two.json"});  // nothing written
 }
+
+TEST_CASE("a sweep over a configuration path: two real runs, listed, run and reported by the setting") {
+  const ConfpackSession s("cmd_sweep_setting_axis");
+  // Two small piles of pinacoids in the biperiodic box, alpha = 60 and 75 degrees; 1 t0 of compaction.
+  std::ofstream(s.dir / "shape.json") << R"({
+    "name": "shape",
+    "base": { "box": { "length_x": 4, "height": 4 }, "population": { "shape": "pinacoid" },
+              "compaction": { "time_limit": 1 } },
+    "biperiodic_width": 4,
+    "vary": { "width": ["biperiodic"], "population.pinacoid.alpha_deg": [60, 75], "backend": "nscd" } })";
+  const auto list = s.run("sweep shape.json --list");
+  REQUIRE(list.code == 0);
+  CHECK(list.out ==
+        "run     deposit family   x_S        W  mu_w   seed backend alpha_deg\n"
+        "r0000   d0000   MPP        0      bi4     0      1 nscd    60       \n"
+        "r0001   d0001   MPP        0      bi4     0      1 nscd    75       \n");
+  REQUIRE(s.run("sweep shape.json --out sw -q").code == 0);
+  for (const char* r : {"r0000", "r0001"}) {
+    INFO(r);
+    REQUIRE(study::runStatus(s.dir / "sw" / "runs" / r) == study::RunStatus::Done);
+    const nlohmann::json cfg = nlohmann::json::parse(slurp(s.dir / "sw" / "runs" / r / "config.json"));
+    CHECK(cfg["population"]["pinacoid"]["alpha_deg"] == (std::string(r) == "r0000" ? 60.0 : 75.0));
+  }
+  CHECK_THAT(slurp(s.dir / "sw" / "runs" / "r0001" / study::kDoneMarker),
+             Catch::Contains("\"label\": \"MPP xS=0 W=bi4 mu=0 s1 nscd alpha_deg=75\""));
+  REQUIRE(s.run("report sw --no-figures").code == 0);
+  const std::string md = slurp(s.dir / "sw" / "report" / "report.md");
+  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 60 | nscd |") != std::string::npos);
+  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd |") != std::string::npos);
+  CHECK(md.find("## Solid fraction and coordination against alpha_deg") != std::string::npos);
+  CHECK(slurp(s.dir / "sw" / "report" / "tables" / "solid_fraction.csv").find(",population.pinacoid.alpha_deg,") !=
+        std::string::npos);
+
+  // A path the configuration does not have is bad input: one line naming it, exit 2, nothing written.
+  std::ofstream(s.dir / "typo.json") << R"({"vary": {"population.pinacoid.alpha": [60]}})";
+  const auto typo = s.run("sweep typo.json --out typo");
+  CHECK(typo.code == 2);
+  CHECK(typo.err == "confpack sweep: error: typo.json: vary.population.pinacoid.alpha: unknown configuration path: "
+                    "population.pinacoid has no key alpha (its keys: E, G, alpha_deg)\n");
+  CHECK_FALSE(fs::exists(s.dir / "typo"));
+}
+
+TEST_CASE("the pinacoid shape study of docs/examples expands to its 15 runs") {
+  const ConfpackSession s("cmd_sweep_shape_example");
+  const std::string file = std::string(CONFPACK_SOURCE_DIR) + "/docs/examples/pinacoid-shape.json";
+  const auto list = s.run("sweep '" + file + "' --list");
+  REQUIRE(list.code == 0);
+  CHECK(testing::lineCount(list.out) == 1 + 15);  // alpha 45, 60, 75 at E = 0.5; 60, 75 at E = 1; 3 seeds
+  CHECK_THAT(list.out, Catch::StartsWith("run     deposit family   x_S        W  mu_w   seed backend E   alpha_deg\n"));
+  CHECK(list.out.find("nscd    1   45") == std::string::npos);  // no ridge: not a pinacoid
+  CHECK(s.empty());
+}

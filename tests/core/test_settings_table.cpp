@@ -23,6 +23,7 @@ struct Example {
   long big = 10;
   bool on = false;
   Colour colour = Colour::Red;
+  std::string name = "unnamed";
 };
 
 core::SettingsTable<Example> exampleTable() {
@@ -33,6 +34,7 @@ core::SettingsTable<Example> exampleTable() {
       .integer("big", &Example::big, Range::atLeast(0.0), "-", "a large count")
       .flag("on", &Example::on, "a switch")
       .choice("colour", &Example::colour, {{"red", Colour::Red}, {"blue", Colour::Blue}}, "a choice")
+      .text("name", &Example::name, "a name")
       .rule([](const Example& e) {
         if (e.count > e.big) throw std::invalid_argument("example.count: must be at most big");
       });
@@ -56,22 +58,30 @@ TEST_CASE("settings table: ranges say what they accept") {
 TEST_CASE("settings table: reads the keys given, refuses the rest by name") {
   const auto t = exampleTable();
   Example e;
-  t.read({{"length", 0.5}, {"limit", nullptr}, {"count", 4}, {"on", true}, {"colour", "blue"}, {"big", 1LL << 40}}, e);
+  t.read({{"length", 0.5},
+          {"limit", nullptr},
+          {"count", 4},
+          {"on", true},
+          {"colour", "blue"},
+          {"big", 1LL << 40},
+          {"name", "Scott"}},
+         e);
   CHECK(e.length == 0.5);
   CHECK(e.limit == std::numeric_limits<double>::infinity());
   CHECK(e.count == 4);
   CHECK(e.big == 1LL << 40);
   CHECK(e.on);
   CHECK(e.colour == Colour::Blue);
+  CHECK(e.name == "Scott");
 
   auto refused = [&](const json& j, const std::string& message) {
     Example x;
     INFO(j.dump());
     CHECK_THROWS_WITH(t.read(j, x), message);
   };
-  refused({{"lenght", 1.0}}, "example.lenght: unknown key (known: length, limit, count, big, on, colour)");
+  refused({{"lenght", 1.0}}, "example.lenght: unknown key (known: length, limit, count, big, on, colour, name)");
   refused({{std::string(1000, 'k'), 1.0}},
-          "example." + std::string(40, 'k') + "...: unknown key (known: length, limit, count, big, on, colour)");
+          "example." + std::string(40, 'k') + "...: unknown key (known: length, limit, count, big, on, colour, name)");
   refused({{"length", 0.0}}, "example.length: must be in (0, 2] (got 0)");
   refused({{"length", "long"}}, "example.length: must be a number (got \"long\")");
   refused({{"limit", -1.0}}, "example.limit: must be > 0 (got -1)");
@@ -81,6 +91,8 @@ TEST_CASE("settings table: reads the keys given, refuses the rest by name") {
   refused({{"count", 1LL << 40}}, "example.count: must be in [1, 5] (got 1099511627776)");
   refused({{"on", 1}}, "example.on: must be true or false (got 1)");
   refused({{"colour", "green"}}, "example.colour: must be \"red\" or \"blue\" (got \"green\")");
+  refused({{"name", ""}}, "example.name: must be a non-empty string (got \"\")");
+  refused({{"name", 3}}, "example.name: must be a non-empty string (got 3)");
   refused({{"count", 5}, {"big", 2}}, "example.count: must be at most big");
   refused(json::array(), "example: must be a JSON object (got array)");
 }
@@ -90,6 +102,7 @@ TEST_CASE("settings table: what it writes it reads back, none for infinity") {
   Example e;
   e.length = 1.5;
   e.colour = Colour::Blue;
+  e.name = "a reference";
   const json j = t.write(e);
   CHECK(j["limit"].is_null());
   CHECK(j["colour"] == "blue");

@@ -4,6 +4,7 @@
 // the run folders, and the per-configuration tables in tables/*.csv, read back.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -53,7 +54,10 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
        {{"reached", true}, {"max_force_ratio", 1e-5}, {"max_moment_ratio", 1e-5}, {"max_kinetic_ratio", 1e-9}}},
       {"anisotropy", 0.1},
       {"nematic", {{"bulk", nullptr}, {"boundary", nullptr}}},
-      {"profile_fit", {{"phi_bulk", phiBulk}, {"lambda_L", 1.0 + 0.1 * cfg.population.smallFraction / 10.0}}},
+      {"profile_fit",
+       {{"phi_bulk", phiBulk},
+        {"lambda_L", 1.0 + 0.1 * cfg.population.smallFraction / 10.0},
+        {"lambda_L_over_d_avg", (nscd ? 1.25 : 1.5) + offset}}},
       {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
@@ -396,7 +400,7 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
     CHECK_THAT(zFit[4], Catch::StartsWith("1.200 ± "));
     // The summary row: every run at equilibrium, the same numbers as the fits, the fit quality.
     const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
-    REQUIRE(row.size() == 9);
+    REQUIRE(row.size() == 10);
     CHECK(md.find("| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt) < verdictAt);
     CHECK(row[2] == "15 / 15");
     CHECK(row[3] == phiFit[3]);
@@ -404,10 +408,15 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
     CHECK(row[5] == "chi²/dof " + phiFit[7] + ", Q " + phiFit[8]);
     CHECK(row[6] == zFit[3]);
     CHECK(row[7] == zFit[4]);
-    CHECK_THAT(row[8], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
+    // lambda_L/d_avg of the widest confined sample (W = 20): the replicas' mean and standard error.
+    CHECK(row[8] == fmt::format("{:.3g} ± {:.2g}", backend == "nscd" ? 1.25 : 1.5, kDelta / std::sqrt(3.0)));
+    CHECK_THAT(row[9], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
   }
+  // Without --reference there is no reference column.
+  CHECK(md.find("reference |") == std::string::npos);
   // Quantities are named and defined, never numbered.
   CHECK(md.find("- phi_bulk: solid fraction far from the walls") != std::string::npos);
+  CHECK(md.find("- lambda_L/d_avg: length over which the wall's layering") != std::string::npos);
   if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
 }
 
@@ -513,4 +522,127 @@ TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json")
     CHECK(tableValue(t, key, w, periodic, backend + "_mean") == Approx(mean).epsilon(1e-14));
   }
   fs::remove_all(dir);
+}
+
+TEST_CASE("report with reference values: a reference column beside each quantity, its sources, marks on the figures") {
+  const fs::path dir = makeStudy("reference", false);
+  study::ReportOptions o;
+  o.reference = study::parseReferenceValues(json::parse(R"json({
+    "format": "confpack-reference", "version": 1, "description": "test values",
+    "families": {
+      "MSP": [
+        { "phi_bulk": { "value": 0.64, "uncertainty": 0.01, "citation": "Scott and Kilgour, J. Phys. D 2, 863 (1969)" },
+          "C": { "value": 0.45, "uncertainty": 0.05, "citation": "made-up example, not a publication" },
+          "Z_bulk": { "value": 6, "uncertainty": 0, "citation": "O'Hern et al., Phys. Rev. E 68, 011306 (2003)" } },
+        { "mu_w": 0.5,
+          "phi_bulk": { "value": 0.1, "uncertainty": 0.1, "citation": "never shown: no series has mu_w 0.5" } }
+      ],
+      "BSP": { "lambda_L_over_d_avg": { "value": 9, "uncertainty": 1, "citation": "never shown: no BSP series" } }
+    }})json"),
+                                                "test-reference.json");
+  const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
+  const std::string md = slurp(s.markdown);
+  const std::string html = slurp(s.html);
+  const std::size_t summaryAt = md.find("## Summary");
+  const std::size_t verdictAt = md.find("## Cross-solver verdict");
+  // The columns: each referenced quantity followed by its reference, in the summary only.
+  const std::string head =
+      "| family | backend | runs at equilibrium / total | phi_bulk | phi_bulk reference | C | C reference | phi(W) fit "
+      "quality | Z_bulk | Z_bulk reference | C_Z | lambda_L/d_avg | interpenetration |";
+  CHECK(md.find(head) > summaryAt);
+  CHECK(md.find(head) < verdictAt);
+  for (const std::string backend : {"nscd", "bullet"}) {
+    INFO(backend);
+    const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
+    REQUIRE(row.size() == 13);
+    CHECK_THAT(row[3], Catch::StartsWith(backend == "nscd" ? "0.6400 ± " : "0.6300 ± "));
+    CHECK(row[4] == "0.64 ± 0.01 [1]");
+    CHECK(row[6] == "0.45 ± 0.05 [2]");
+    CHECK(row[9] == "6 ± 0 [3]");
+  }
+  // The sources, numbered as the cells cite them, in both renderings; the file is named.
+  CHECK(md.find("Reference values from test-reference.json (test values); [n] in a reference cell is its source:") !=
+        std::string::npos);
+  CHECK(md.find("- [1] Scott and Kilgour, J. Phys. D 2, 863 (1969)\n- [2] made-up example, not a publication\n- [3] "
+                "O'Hern et al., Phys. Rev. E 68, 011306 (2003)\n") != std::string::npos);
+  CHECK(html.find("<th>phi_bulk reference</th>") != std::string::npos);
+  CHECK(html.find("<td>0.64 ± 0.01 [1]</td>") != std::string::npos);
+  CHECK(html.find("<li>[1] Scott and Kilgour, J. Phys. D 2, 863 (1969)</li>") != std::string::npos);
+  CHECK(html.find("<li>[3] O'Hern et al.") != std::string::npos);
+  CHECK(md.find("never shown") == std::string::npos);
+  // The figures' data: the published bulk value at d_L/W = 0 with its uncertainty, the law as a
+  // dotted line in the script.
+  const fs::path figures = dir / "report" / "figures";
+  CHECK(slurp(figures / "phi_vs_invW.csv").find("\nreference MSP x_S=0 mu_w=0 [1],0,0.64,0.01\n") != std::string::npos);
+  CHECK(slurp(figures / "phi_vs_invW.gp").find("[0:*] 0.64 - 0.45*x lc 1 dt 3 notitle") != std::string::npos);
+  CHECK(slurp(figures / "Z_vs_invW.csv").find("\nreference MSP x_S=0 mu_w=0 [3],0,6,0\n") != std::string::npos);
+  CHECK(slurp(figures / "phi_vs_invW.gp").find("squares: reference values") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("report with reference values for none of the study's families says so") {
+  const fs::path dir = makeStudy("reference_none", false);
+  study::ReportOptions o;
+  o.reference = study::parseReferenceValues(
+      json::parse(R"({"families": {"MPP": {"phi_bulk": {"value": 0.7, "uncertainty": 0.01, "citation": "c"}}}})"),
+      "pinacoids.json");
+  const std::string md = slurp(study::writeReport(dir, dir / "report", o).markdown);
+  CHECK(md.find("The reference file pinacoids.json gives no value for the families of this study.") !=
+        std::string::npos);
+  CHECK(md.find("reference |") == std::string::npos);
+  CHECK(slurp(dir / "report" / "figures" / "phi_vs_invW.csv").find("reference") == std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, tables and a figure against it") {
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_axis_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  // Two runs: pinacoids in the biperiodic box at alpha = 60 and 75 degrees, phi rising with alpha.
+  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
+    "name": "shape", "base": { "box": { "length_x": 6, "height": 4 }, "population": { "shape": "pinacoid" } },
+    "vary": { "width": ["biperiodic"], "population.pinacoid.alpha_deg": [60, 75], "backend": "nscd" } })"));
+  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+                   const study::RunProgressFn&) {
+    const double alpha = cfg.population.pinacoid.alphaDeg;
+    const json r = {{"solid_fraction", 0.5 + alpha / 1000.0},
+                    {"coordination", {{"Z", 8.0 + alpha / 100.0}}},
+                    {"equilibrium", {{"reached", true}}}};
+    std::ofstream(runDir / "result.json") << r.dump();
+    return r;
+  };
+  study::SweepOptions o;
+  o.quiet = true;
+  study::runSweep(spec, dir, o, runner, testing::oneGrainDeposit);
+  const study::ReportSummary s = study::writeReport(dir, dir / "report");
+  const std::string md = slurp(s.markdown);
+  CHECK(md.find("Beyond W, shape, x_S, mu_w, seed and backend this study varies population.pinacoid.alpha_deg "
+                "(alpha_deg): each family below is one combination of its values.") != std::string::npos);
+  // One summary row per value, named by it, in numeric order.
+  const std::size_t summaryAt = md.find("## Summary");
+  const std::size_t at60 = md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 60 | nscd | 1 / 1 |", summaryAt);
+  const std::size_t at75 = md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 |", summaryAt);
+  CHECK(at60 != std::string::npos);
+  CHECK(at75 != std::string::npos);
+  CHECK(at60 < at75);
+  // The runs say their value.
+  CHECK(md.find("| MPP xS=0 W=bi20 mu=0 s1 nscd alpha_deg=75 | done |") != std::string::npos);
+  // tables/: a column for the setting, by its path, a row per value.
+  const study::CsvTable phi = readTable(dir / "report", "solid_fraction.csv");
+  const auto col = std::find(phi.columns.begin(), phi.columns.end(), "population.pinacoid.alpha_deg");
+  REQUIRE(col != phi.columns.end());
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(phi.columns.begin(), phi.columns.end(), name) - phi.columns.begin());
+  };
+  REQUIRE(phi.rows.size() == 2);
+  CHECK(phi.text[0][column("population.pinacoid.alpha_deg")] == "60");
+  CHECK(phi.rows[0][column("nscd_mean")] == Approx(0.56));
+  CHECK(phi.text[1][column("population.pinacoid.alpha_deg")] == "75");
+  CHECK(phi.rows[1][column("nscd_mean")] == Approx(0.575));
+  // phi and Z against the setting: one line through both values.
+  CHECK(md.find("## Solid fraction and coordination against alpha_deg") != std::string::npos);
+  const std::string csv = slurp(dir / "report" / "figures" / "phi_vs_alpha_deg.csv");
+  CHECK(csv == "series,x,y,err\nMPP x_S=0 mu_w=0 W=biperiodic (20) nscd,60,0.56,0\n"
+               "MPP x_S=0 mu_w=0 W=biperiodic (20) nscd,75,0.575,0\n");
+  CHECK(fs::exists(dir / "report" / "figures" / "Z_vs_alpha_deg.csv"));
+  if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
 }

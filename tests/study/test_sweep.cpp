@@ -14,7 +14,9 @@
 
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
+#include "study/reproduce.hpp"
 #include "study/sweep.hpp"
+#include "tests/support/hash.hpp"
 #include "tests/support/scratch.hpp"
 
 namespace fs = std::filesystem;
@@ -313,4 +315,141 @@ TEST_CASE("progress: one line per finished run in the documented form") {
   CHECK(text.find("[1/2] r0000 nscd W=5 phi=0.601") != std::string::npos);
   CHECK(text.find("[2/2] r0001 bullet W=5 phi=0.601") != std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST_CASE("sweep files over the named axes alone give the run tables they gave before setting axes existed") {
+  // The fingerprint of `--list` and of sweep.json (the run table with each run's label and
+  // resolved configuration) for the study's three scales and the example of docs/sweeps.md,
+  // recorded with the code before any configuration key could be an axis: those files must keep
+  // naming the same runs, in the same folders, with the same labels.
+  const json docsExample = json::parse(R"({
+    "format": "confpack-sweep", "version": 1, "name": "confinement",
+    "base": { "box": { "length_x": 20, "height": 16 }, "compaction": { "time_limit": 400 }, "backend_options": { } },
+    "biperiodic_width": 20,
+    "groups": [
+      { "shape": ["sphere"], "small_fraction": [0, 10, 25, 40], "width": [5, 10, 20, "biperiodic"],
+        "wall_friction": [0], "replicas": 3, "backend": ["nscd", "bullet"] },
+      { "shape": ["sphere"], "small_fraction": [0], "width": [5, 10, 20],
+        "wall_friction": [0.3, 0.5, 1.0], "replicas": 3, "backend": ["nscd", "bullet"] } ] })");
+  const std::vector<std::pair<std::string, json>> files = {{"tiny", study::reproductionSweep("tiny")},
+                                                           {"quick", study::reproductionSweep("quick")},
+                                                           {"paper", study::reproductionSweep("paper")},
+                                                           {"docs", docsExample},
+                                                           {"unit", smallSweep()}};
+  const fs::path dir = confpack::testing::scratchPath("sweep_golden");
+  confpack::testing::Fnv1a hash;
+  for (const auto& [name, doc] : files) {
+    const study::SweepSpec spec = study::parseSweepSpec(doc, name);
+    const auto runs = study::expandRuns(spec);
+    hash.mix(study::formatRunTable(runs));
+    study::prepareSweepDir(dir / name, spec, runs);
+    std::ifstream in(dir / name / study::kSweepTable);
+    std::ostringstream text;
+    text << in.rdbuf();
+    hash.mix(text.str());
+  }
+  fs::remove_all(dir);
+  CHECK(hash.value == 0x1511781d1d3aa0ccull);
+}
+
+TEST_CASE("setting axes: any key of the run configuration, by its path, expanded after mu_w and before the seeds") {
+  const json doc = json::parse(R"({
+    "base": { "box": { "length_x": 6, "height": 4 }, "population": { "shape": "pinacoid" } },
+    "vary": { "width": ["biperiodic"], "population.pinacoid.alpha_deg": [45, 60, 75], "population.pinacoid.E": [0.5],
+              "compaction.protocol": ["dynamic", "quasi-static"], "backend_options.tolerance": 1e-8,
+              "replicas": 2, "backend": "nscd" } })");
+  const auto runs = study::expandRuns(study::parseSweepSpec(doc, "s.json"));
+  // The axes nest in the order of their paths (backend_options, compaction, population.pinacoid.E,
+  // population.pinacoid.alpha_deg), the first slowest, then the seeds: 2 x 3 x 2 runs.
+  REQUIRE(runs.size() == 12);
+  const std::vector<double> alpha = {45, 45, 60, 60, 75, 75};
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    INFO(runs[i].name);
+    const core::RunConfig& c = runs[i].config;
+    CHECK(c.population.pinacoid.alphaDeg == alpha[i % 6]);
+    CHECK(c.population.pinacoid.heightRatio == 0.5);
+    CHECK(c.compaction.protocol == (i < 6 ? core::Protocol::Dynamic : core::Protocol::QuasiStatic));
+    CHECK(c.backendOptions == json{{"tolerance", 1e-8}});
+    CHECK(c.seed == 1 + i % 2);
+    CHECK(c.box.periodicY);
+    CHECK(c.box.lengthX == 6.0);  // the base's
+  }
+  // The protocol acts after the deposit: the runs that differ in it alone compact the same pile;
+  // alpha changes the grains, and so the deposit.
+  CHECK(runs[0].depositIndex == runs[6].depositIndex);
+  CHECK(runs[0].depositIndex != runs[2].depositIndex);
+  // What varies is named in the run table and the labels, under the shortest unambiguous names.
+  const std::vector<std::string> varied = study::variedSettings(runs);
+  CHECK(varied == std::vector<std::string>{"compaction.protocol", "population.pinacoid.alpha_deg"});
+  CHECK(study::settingNames(varied) == std::vector<std::string>{"protocol", "alpha_deg"});
+  CHECK(study::settingNames({"population.pinacoid.E", "deposition.E", "seed"}) ==
+        std::vector<std::string>{"pinacoid.E", "deposition.E", "seed"});
+  CHECK(runs[7].label(varied) == "MPP xS=0 W=bi20 mu=0 s2 nscd protocol=quasi-static alpha_deg=45");
+  const std::string table = study::formatRunTable(runs);
+  CHECK_THAT(table,
+             Catch::StartsWith("run     deposit family   x_S        W  mu_w   seed backend protocol     alpha_deg\n"
+                               "r0000   d0000   MPP        0     bi20     0      1 nscd    dynamic      45       \n"));
+  CHECK_THAT(table,
+             Catch::Contains("r0011   d0005   MPP        0     bi20     0      2 nscd    quasi-static 75       \n"));
+  // A sweep over the named axes alone varies no other setting.
+  CHECK(study::variedSettings(study::expandRuns(study::parseSweepSpec(smallSweep()))).empty());
+}
+
+TEST_CASE("setting axes: an unknown path or a value the configuration's readers refuse is refused by name") {
+  auto message = [](const std::string& vary) {
+    try {
+      study::expandRuns(study::parseSweepSpec(json::parse(R"({"vary": )" + vary + "}"), "s.json"));
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  CHECK(message(R"({"population.pinacoid.alpha": [45]})") ==
+        "s.json: vary.population.pinacoid.alpha: unknown configuration path: population.pinacoid has no key alpha "
+        "(its keys: E, G, alpha_deg)");
+  CHECK(message(R"({"colour": [1]})") ==
+        "s.json: vary.colour: unknown key (known: width, shape, small_fraction, wall_friction, seed, replicas, "
+        "backend, or a path of the run configuration under backend, backend_options, box, compaction, deposition, "
+        "population, seed, threads)");
+  CHECK(message(R"({"box.width.x": [1]})") ==
+        "s.json: vary.box.width.x: unknown configuration path: box.width is a setting, not a section");
+  CHECK(message(R"({"population.pinacoid": [{"E": 1}]})") ==
+        "s.json: vary.population.pinacoid: population.pinacoid is a section, not a setting: give one of its keys (E, "
+        "G, alpha_deg)");
+  CHECK(message(R"({"population..shape": ["sphere"]})") ==
+        "s.json: vary.population..shape: not a configuration path (keys of config.json joined by '.', e.g. "
+        "population.pinacoid.alpha_deg)");
+  CHECK(message(R"({"compaction.protocol": ["fast"]})") ==
+        "s.json: vary.compaction.protocol: compaction.protocol: must be \"dynamic\" or \"quasi-static\" (got "
+        "\"fast\")");
+  CHECK(message(R"({"compaction.time_limit": [-1]})") ==
+        "s.json: vary.compaction.time_limit: compaction.time_limit: must be in (0, 1e+09] (got -1)");
+  CHECK(message(R"({"population.pinacoid.alpha_deg": ["sixty"]})") ==
+        "s.json: vary.population.pinacoid.alpha_deg: expected a number (got \"sixty\")");
+  CHECK(message(R"({"compaction.adaptive_dt": [1]})") ==
+        "s.json: vary.compaction.adaptive_dt: expected true or false (got 1)");
+  CHECK(message(R"({"population.pinacoid.alpha": []})") == "s.json: vary.population.pinacoid.alpha: empty list");
+  // Backend options: a key one of the backends knows, a value it accepts; a run whose own backend
+  // does not know the key is refused with the run named.
+  CHECK_THAT(message(R"({"backend_options.tolerence": [1e-8]})"),
+             Catch::StartsWith("s.json: vary.backend_options.tolerence: ") && Catch::Contains("unknown key"));
+  CHECK_THAT(message(R"({"backend_options.tolerance": [-1]})"),
+             Catch::StartsWith("s.json: vary.backend_options.tolerance: nscd.tolerance: must be"));
+  CHECK(message(R"({"backend_options.tolerance.x": [1]})") ==
+        "s.json: vary.backend_options.tolerance.x: a backend option is one key deep: backend_options.KEY (confpack "
+        "options nscd, or bullet)");
+  CHECK(message(R"({"backend_options.tolerance": [1e-8], "backend": ["nscd"]})") == "accepted");
+  CHECK_THAT(message(R"({"backend_options.tolerance": [1e-8], "backend": ["nscd", "bullet"]})"),
+             Catch::StartsWith("sweep run r0001 (MSP xS=0 W=10 mu=0 s1 bullet): bullet.tolerance: unknown key"));
+  // A named axis and its path in one group would fight over the setting.
+  CHECK(message(R"({"small_fraction": [0], "population.small_fraction": [10]})") ==
+        "s.json: vary.population.small_fraction: small_fraction and population.small_fraction vary the same setting: "
+        "give one of them");
+  // A combination the configuration cannot build is the run's to refuse: alpha = 45 degrees leaves
+  // no ridge on a pinacoid as tall as it is long (E = 1), and is fine with E = 0.5.
+  CHECK(message(R"({"shape": "pinacoid", "population.pinacoid.alpha_deg": [45], "population.pinacoid.E": [0.5]})") ==
+        "accepted");
+  CHECK_THAT(message(R"({"shape": "pinacoid", "population.pinacoid.alpha_deg": [45, 60]})"),
+             Catch::StartsWith("sweep run r0000 (MPP xS=0 W=10 mu=0 s1 nscd alpha_deg=45): pinacoid: with E=1 and "
+                               "alpha=45 deg the ridge half-length"));
 }
