@@ -106,11 +106,6 @@ class ContactBackend {
   /// The fully resolved solver settings (written into result.json).
   virtual nlohmann::json settings() const = 0;
 
-  /// The contact solves of the next steps may stop at this relative tolerance when it is looser
-  /// than the backend's own setting (run_config.hpp, CompactionDef::toleranceFactor); the
-  /// backend's setting again with 0. Backends that solve to an iteration count ignore it.
-  virtual void loosenSolveTolerance(double /*tolerance*/) {}
-
   /// Whether quasiStaticStep() is implemented (the quasi-static finisher, docs/model.md).
   virtual bool hasQuasiStaticStep() const { return false; }
   /// One step of the quasi-static finisher: every velocity set to zero, then the implicit Euler

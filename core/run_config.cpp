@@ -74,9 +74,7 @@ const SettingsTable<CompactionDef>& compactionTable() {
                 "quasi-static: the finisher has converged when its last step moved no grain more")
         .number("finisher_max_step", &C::finisherMaxStep, Range::positive(), "t0", "quasi-static: longest finisher step")
         .integer("finisher_max_steps", &C::finisherMaxSteps, Range::atLeast(1), "-",
-                 "quasi-static: finisher steps after which the run stops unequilibrated")
-        .number("tolerance_factor", &C::toleranceFactor, Range::atLeast(0.0), "-",
-                "time steps: solve to this times the last check's force ratio (between the backend's tolerance and 1e-6); 0 = the backend's");
+                 "quasi-static: finisher steps after which the run stops unequilibrated");
     return t;
   }();
   return table;

@@ -23,11 +23,6 @@ std::string toString(Protocol p);  ///< "dynamic", "quasi-static"
 /// (the slowest measured reached rest near 170 t0), and its step count stays exact in a long.
 inline constexpr double kMaxTimeLimit = 1e9;
 
-/// The loosest contact-solve tolerance CompactionDef::toleranceFactor asks for: nscd's MPRGP at
-/// 1e-6 left the 3,655-sphere pile of the bench within 2 % of the settlement of a solve to 1e-10
-/// over 20 t0 of creep (docs/performance.md).
-inline constexpr double kLoosestSolveTolerance = 1e-6;
-
 /// Compaction under gravity and its stopping rule (docs/model.md).
 struct CompactionDef {
   /// Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md, "Time step").
@@ -70,11 +65,6 @@ struct CompactionDef {
   double finisherMaxStep = 1.0;
   /// Quasi-static protocol: finisher steps after which the run stops unequilibrated [-].
   int finisherMaxSteps = 3000;
-  /// Time steps: each contact problem is solved to toleranceFactor x the largest force ratio of
-  /// the last equilibrium check, between the backend's own tolerance and kLoosestSolveTolerance;
-  /// 0 = the backend's tolerance throughout [-]. A pile far from balance needs no solve to 1e-10
-  /// (docs/model.md, "Solve tolerance"); 0 by default, the measured gain being on one pile.
-  double toleranceFactor = 0.0;
 };
 
 template <class T>

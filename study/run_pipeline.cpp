@@ -176,16 +176,6 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                                      eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio));
   };
 
-  // The solve tolerance follows the pile's unbalance (CompactionDef::toleranceFactor): the loosest
-  // until the first check.
-  auto loosenSolve = [&](double forceRatio) {
-    if (def.toleranceFactor > 0.0)
-      backend->loosenSolveTolerance(std::isfinite(forceRatio)
-                                        ? std::min(core::kLoosestSolveTolerance, def.toleranceFactor * forceRatio)
-                                        : core::kLoosestSolveTolerance);
-  };
-  loosenSolve(std::numeric_limits<double>::infinity());
-
   // Stage 1: time steps, until equilibrium, the time limit, or (quasi-static protocol) the end of
   // the fall.
   bool handOver = false;
@@ -211,7 +201,6 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       check(now, std::min(1.0, simTime / timeLimit),
             fmt::format("t={:.1f}{}", simTime, adaptive ? fmt::format(" dt {:.1e}", dt) : ""));
       if (eq.reached) break;
-      loosenSolve(eq.maxForceRatio);
       if (finisher && eq.meanKineticRatio < def.switchKineticRatio) {
         handOver = true;
         break;

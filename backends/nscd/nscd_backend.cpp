@@ -73,7 +73,6 @@ class NscdBackend final : public core::ContactBackend {
     }
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
-    dynamicSolve_ = settings_;
     finisherSettings_ = settings_;
     finisherSettings_.theta = 1.0;
     finisherSettings_.gapCorrection = 1.0;
@@ -99,15 +98,11 @@ class NscdBackend final : public core::ContactBackend {
     if (settings_.damping > 0.0) damp(std::exp(-settings_.damping * dt));
     predict(dt);
     clock.charge(Phase::Integrate);
-    solveContacts(dt, settings_, dynamicSolve_, clock);
+    solveContacts(dt, settings_, settings_, clock);
     correct(dt, settings_.theta);
     clock.charge(Phase::Integrate);
     storeImpulses(dt, settings_.theta);
     clock.charge(Phase::StoreImpulses);
-  }
-
-  void loosenSolveTolerance(double tolerance) override {
-    dynamicSolve_.tolerance = std::max(settings_.tolerance, tolerance);
   }
 
   bool hasQuasiStaticStep() const override { return true; }
@@ -318,7 +313,6 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
   std::vector<double> reach_;
   std::vector<double> radius_;  // bounding radius: a grain's surface moves at most |v| + |w| radius
-  NscdSettings dynamicSolve_;  // settings_ with the tolerance of loosenSolveTolerance()
   NscdSettings finisherSettings_;
   bool lastFinisherStepClipped_ = false;
   // The finisher's per-grain metric weights and each grain's last move (updateMetricWeight()).
