@@ -1,4 +1,4 @@
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include <span>
 #include <stdexcept>
 
-namespace confpack::core {
+namespace confpack::collision {
 
 std::vector<Vec3> PlacedPolyhedron::worldVertices() const {
   std::vector<Vec3> out;
@@ -890,4 +890,4 @@ ContactType classifyPlaneContact(const PlacedPolyhedron& a, const Vec3& inwardNo
                                        : ContactType::Triple;
 }
 
-}  // namespace confpack::core
+}  // namespace confpack::collision
