@@ -61,14 +61,17 @@ void CellList::setColumnsAndRows(double nx, double ny) {
 }
 
 void CellList::clear() {
-  for (Range& r : cells_) r.end = r.begin;
+  std::copy(first_.begin(), first_.end() - 1, end_.begin());
   count_ = 0;
+  points_ = {};
 }
 
 void CellList::build(std::span<const Vec3> positions) {
   const int n = static_cast<int>(positions.size());
   count_ = positions.size();
-  cells_.clear();
+  points_ = positions;
+  first_.assign(1, 0);
+  end_.clear();
   ids_.clear();
   positions_.clear();
   nz_ = 0;
@@ -112,22 +115,16 @@ void CellList::build(std::span<const Vec3> positions) {
   }
   // Counting sort by cell (stable: ascending ids within a cell), the positions copied in slot
   // order so that the pair search reads them contiguously.
-  cells_.assign(cellCount, Range{});
-  for (int c : cellOf_) ++cells_[static_cast<std::size_t>(c)].end;
-  int next = 0;
-  for (Range& r : cells_) {
-    r.begin = next;
-    next += r.end;
-    r.end = r.begin;
-  }
+  first_.assign(cellCount + 1, 0);
+  for (int c : cellOf_) ++first_[static_cast<std::size_t>(c) + 1];
+  for (std::size_t c = 0; c < cellCount; ++c) first_[c + 1] += first_[c];
+  end_.assign(first_.begin(), first_.end() - 1);  // the cursor of the sort, then each cell's end
   ids_.resize(static_cast<std::size_t>(n));
   positions_.resize(static_cast<std::size_t>(n));
-  slotOf_.resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    const int s = cells_[static_cast<std::size_t>(cellOf_[static_cast<std::size_t>(i)])].end++;
+    const int s = end_[static_cast<std::size_t>(cellOf_[static_cast<std::size_t>(i)])]++;
     ids_[static_cast<std::size_t>(s)] = i;
     positions_[static_cast<std::size_t>(s)] = positions[static_cast<std::size_t>(i)];
-    slotOf_[static_cast<std::size_t>(i)] = s;
   }
   neighbourTable(nx_, true, nbX_, countX_);
   neighbourTable(ny_, box_.periodicY, nbY_, countY_);
@@ -137,10 +134,11 @@ void CellList::build(std::span<const Vec3> positions) {
 void CellList::addLayers(int layers) {
   // Appended at the end (the layer is the slowest index), each cell with kRoom free slots.
   const std::size_t added = static_cast<std::size_t>(layers) * static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
-  int next = static_cast<int>(ids_.size());
+  int next = first_.back();
   for (std::size_t k = 0; k < added; ++k) {
-    cells_.push_back({next, next});
+    end_.push_back(next);
     next += kRoom;
+    first_.push_back(next);
   }
   ids_.resize(static_cast<std::size_t>(next));
   positions_.resize(static_cast<std::size_t>(next));
@@ -150,18 +148,21 @@ void CellList::addLayers(int layers) {
 void CellList::relayout() {
   // Every cell gets room for twice its points (at least kRoom), in the same order: the copies
   // stay amortised, as for a growing vector.
+  const std::size_t cellCount = end_.size();
   std::size_t total = 0;
-  for (const Range& r : cells_) total += static_cast<std::size_t>(std::max(kRoom, 2 * (r.end - r.begin)));
+  for (std::size_t c = 0; c < cellCount; ++c) total += static_cast<std::size_t>(std::max(kRoom, 2 * (end_[c] - first_[c])));
   std::vector<int> ids(total);
   std::vector<Vec3> positions(total);
   int next = 0;
-  for (Range& r : cells_) {
-    const int n = r.end - r.begin;
-    std::copy(ids_.begin() + r.begin, ids_.begin() + r.end, ids.begin() + next);
-    std::copy(positions_.begin() + r.begin, positions_.begin() + r.end, positions.begin() + next);
-    r = {next, next + n};
+  for (std::size_t c = 0; c < cellCount; ++c) {
+    const int n = end_[c] - first_[c];
+    std::copy(ids_.begin() + first_[c], ids_.begin() + end_[c], ids.begin() + next);
+    std::copy(positions_.begin() + first_[c], positions_.begin() + end_[c], positions.begin() + next);
+    first_[c] = next;
+    end_[c] = next + n;
     next += std::max(kRoom, 2 * n);
   }
+  first_[cellCount] = next;
   ids_.swap(ids);
   positions_.swap(positions);
 }
@@ -172,8 +173,8 @@ void CellList::insert(int id, const Vec3& position) {
   const int iz = layer > 0.0 ? static_cast<int>(layer) : 0;
   if (iz >= nz_) addLayers(iz + 1 - nz_);
   const std::size_t c = cellIndex(columnOf(p.x()), rowOf(p.y()), iz);
-  if (cells_[c].end == roomEnd(c)) relayout();
-  const int s = cells_[c].end++;
+  if (end_[c] == first_[c + 1]) relayout();
+  const int s = end_[c]++;
   ids_[static_cast<std::size_t>(s)] = id;
   positions_[static_cast<std::size_t>(s)] = p;
   ++count_;

@@ -69,7 +69,9 @@ class CellList {
   /// [d_L]. Throws std::invalid_argument if the cutoff or a box length is not a positive number.
   CellList(const BoxDef& box, double cutoff, double zMin = 0.0);
 
-  /// Replaces the content by positions[0..n), ids 0..n-1, stored as given (not wrapped).
+  /// Replaces the content by positions[0..n), ids 0..n-1, stored as given (not wrapped). The pair
+  /// search also reads `positions` itself (the first point of each pair, in id order): keep them
+  /// alive and unchanged until the last findPairs of this build.
   void build(std::span<const Vec3> positions);
   /// Adds one point (stored wrapped into the box). Points below zMin go to the lowest layer.
   void insert(int id, const Vec3& position);
@@ -125,11 +127,6 @@ class CellList {
   std::vector<ImageHit> near(const Vec3& p, double radius) const;
 
  private:
-  // Slots [begin, end) of one cell; its room ends where the next cell's begins.
-  struct Range {
-    int begin = 0;
-    int end = 0;
-  };
   // Free slots given to every cell of a new layer, and the least room after a re-layout.
   static constexpr int kRoom = 4;
 
@@ -154,10 +151,6 @@ class CellList {
                static_cast<std::size_t>(nx_) +
            static_cast<std::size_t>(ix);
   }
-  // First slot past the room of cell c.
-  int roomEnd(std::size_t c) const {
-    return c + 1 < cells_.size() ? cells_[c + 1].begin : static_cast<int>(ids_.size());
-  }
   void setColumnsAndRows(double nx, double ny);
   void addLayers(int layers);
   void relayout();
@@ -170,14 +163,19 @@ class CellList {
   double zMin_ = 0.0;
   double hx_ = 1.0, hy_ = 1.0, hz_ = 1.0;
   int nx_ = 1, ny_ = 1, nz_ = 0;
-  std::vector<Range> cells_;    // index (iz ny + iy) nx + ix
+  // Cell c = (iz ny + iy) nx + ix holds slots [first_[c], end_[c]); its room ends at first_[c + 1]
+  // (after build(), where end_[c] = first_[c + 1]: the pair search reads first_ alone, as a
+  // compressed-row index whose two bounds share a cache line).
+  std::vector<int> first_{0};
+  std::vector<int> end_;
   std::vector<int> ids_;        // by slot
   std::vector<Vec3> positions_; // by slot
   std::size_t count_ = 0;
-  // build() only: each point's cell and slot, the counting sort's cursor, and the neighbour cells
-  // along each axis, each once (fewer than 3 cells make a cell its own neighbour twice):
-  // neighbours of column c are nbX_[3 c .. 3 c + countX_[c]).
-  std::vector<int> cellOf_, slotOf_, cursor_;
+  // build() only: the points by id, each point's cell, and the neighbour cells along each axis,
+  // each once (fewer than 3 cells make a cell its own neighbour twice): neighbours of column c are
+  // nbX_[3 c .. 3 c + countX_[c]).
+  std::span<const Vec3> points_;
+  std::vector<int> cellOf_;
   std::vector<int> nbX_, nbY_, nbZ_, countX_, countY_, countZ_;
 };
 
@@ -222,13 +220,19 @@ void CellList::findPairs(Emit&& emit, std::vector<Pair>& out, int threads,
 
 template <auto SecondOf, class Pair, class Emit>
 void CellList::pairsOfRange(int begin, int end, Emit& emit, std::vector<Pair>& out) const {
+  // Locals, not members: emit's push_back may call operator new, after which members would be
+  // read again.
   const double lx = box_.lengthX, w = box_.width;
   const double halfX = 0.5 * lx, halfY = 0.5 * w;
   const bool periodicY = box_.periodicY;
+  const int nx = nx_, ny = ny_;
+  const int* cellFirst = first_.data();
+  const int* ids = ids_.data();
+  const Vec3* positions = positions_.data();
   for (int i = begin; i < end; ++i) {
-    const Vec3& p = positions_[static_cast<std::size_t>(slotOf_[static_cast<std::size_t>(i)])];
+    const Vec3& p = points_[static_cast<std::size_t>(i)];
     const int c = cellOf_[static_cast<std::size_t>(i)];  // (iz ny + iy) nx + ix
-    const int ix = c % nx_, iy = (c / nx_) % ny_, iz = c / (nx_ * ny_);
+    const int ix = c % nx, iy = (c / nx) % ny, iz = c / (nx * ny);
     const int kx = countX_[static_cast<std::size_t>(ix)], ky = countY_[static_cast<std::size_t>(iy)],
               kz = countZ_[static_cast<std::size_t>(iz)];
     const int* nbx = &nbX_[3 * static_cast<std::size_t>(ix)];
@@ -238,10 +242,10 @@ void CellList::pairsOfRange(int begin, int end, Emit& emit, std::vector<Pair>& o
     for (int a = 0; a < kz; ++a)
       for (int b = 0; b < ky; ++b)
         for (int d = 0; d < kx; ++d) {
-          const Range cell = cells_[static_cast<std::size_t>((nbz[a] * ny_ + nby[b]) * nx_ + nbx[d])];
+          const int cell = (nbz[a] * ny + nby[b]) * nx + nbx[d];
           // Only j > i: a cell's points are ascending, so walk it down from the top and stop at i.
-          for (int s = cell.end - 1; s >= cell.begin && ids_[static_cast<std::size_t>(s)] > i; --s) {
-            const Vec3 raw = positions_[static_cast<std::size_t>(s)] - p;
+          for (int s = cellFirst[cell + 1] - 1; s >= cellFirst[cell] && ids[s] > i; --s) {
+            const Vec3 raw = positions[s] - p;
             // BoxDef::minimumImage(raw), skipping nearbyint where it is exactly 0 (|x| < L/2
             // gives x / L rounded within [-1/2, 1/2], which rounds to 0): same bits, less time.
             // No early rejection along z: that branch went either way about half the time in the
@@ -249,7 +253,7 @@ void CellList::pairsOfRange(int begin, int end, Emit& emit, std::vector<Pair>& o
             Vec3 sep = raw;
             if (!(std::abs(sep.x()) < halfX)) sep.x() -= lx * std::nearbyint(sep.x() / lx);
             if (periodicY && !(std::abs(sep.y()) < halfY)) sep.y() -= w * std::nearbyint(sep.y() / w);
-            emit(out, i, ids_[static_cast<std::size_t>(s)], s, static_cast<const Vec3&>(sep), raw);
+            emit(out, i, ids[s], s, sep, raw);
           }
         }
     // Sorted by (i, j) whatever the cell layout: the pairs of one i are contiguous and i
@@ -294,8 +298,8 @@ void CellList::forEachInBox(const Vec3& lo, const Vec3& hi, Fn&& fn) const {
         const long cx = wrapIndex(ix, nx_);
         hit.shiftX = static_cast<int>((ix - cx) / nx_);
         const Vec3 shift(static_cast<double>(hit.shiftX) * box_.lengthX, box_.periodicY ? shiftY : 0.0, 0.0);
-        const Range cell = cells_[cellIndex(cx, cy, iz)];
-        for (int s = cell.begin; s < cell.end; ++s) {
+        const std::size_t c = cellIndex(cx, cy, iz);
+        for (int s = first_[c]; s < end_[c]; ++s) {
           const Vec3 image = positions_[static_cast<std::size_t>(s)] + shift;
           if (image.x() < lo.x() || image.x() > hi.x() || image.y() < lo.y() || image.y() > hi.y() ||
               image.z() < lo.z() || image.z() > hi.z())
