@@ -39,7 +39,9 @@ void neighbourTable(int m, bool periodic, std::vector<int>& table, std::vector<i
 
 // Cells of side >= cutoff along a length: as many as fit, at least one (counted in double: a
 // length of 1e16 cutoffs must not overflow an int before build() coarsens it).
-double cellsAlong(double length, double cutoff) { return std::max(1.0, std::floor(length / cutoff)); }
+double cellsAlong(double length, double cutoff) {
+  return std::max(1.0, std::floor(length / cutoff));
+}
 
 }  // namespace
 
@@ -105,7 +107,8 @@ void CellList::build(std::span<const Vec3> positions) {
   zMin_ = zMin;
   hz_ = hz;
   nz_ = static_cast<int>(fz);
-  const std::size_t cellCount = static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) * static_cast<std::size_t>(nz_);
+  const std::size_t cellCount =
+      static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) * static_cast<std::size_t>(nz_);
 
   cellOf_.resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
@@ -133,7 +136,8 @@ void CellList::build(std::span<const Vec3> positions) {
 
 void CellList::addLayers(int layers) {
   // Appended at the end (the layer is the slowest index), each cell with kRoom free slots.
-  const std::size_t added = static_cast<std::size_t>(layers) * static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
+  const std::size_t added =
+      static_cast<std::size_t>(layers) * static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
   int next = first_.back();
   for (std::size_t k = 0; k < added; ++k) {
     end_.push_back(next);
@@ -150,7 +154,8 @@ void CellList::relayout() {
   // stay amortised, as for a growing vector.
   const std::size_t cellCount = end_.size();
   std::size_t total = 0;
-  for (std::size_t c = 0; c < cellCount; ++c) total += static_cast<std::size_t>(std::max(kRoom, 2 * (end_[c] - first_[c])));
+  for (std::size_t c = 0; c < cellCount; ++c)
+    total += static_cast<std::size_t>(std::max(kRoom, 2 * (end_[c] - first_[c])));
   std::vector<int> ids(total);
   std::vector<Vec3> positions(total);
   int next = 0;

@@ -168,8 +168,8 @@ class CellList {
   // compressed-row index whose two bounds share a cache line).
   std::vector<int> first_{0};
   std::vector<int> end_;
-  std::vector<int> ids_;        // by slot
-  std::vector<Vec3> positions_; // by slot
+  std::vector<int> ids_;         // by slot
+  std::vector<Vec3> positions_;  // by slot
   std::size_t count_ = 0;
   // build() only: the points by id, each point's cell, and the neighbour cells along each axis,
   // each once (fewer than 3 cells make a cell its own neighbour twice): neighbours of column c are

@@ -26,13 +26,13 @@ BroadPhase::BroadPhase(const core::BoxDef& box, double maxReach, int threads)
   const double cell = 2.0 * maxReach;
   // The minimum-image convention is exact only if no grain can touch two images of another one.
   if (box.lengthX < 2.0 * cell)
-    throw std::invalid_argument(fmt::format(
-        "nscd: box length_x {} is too short for grains of interaction diameter {} (need >= {})", box.lengthX,
-        cell, 2.0 * cell));
+    throw std::invalid_argument(
+        fmt::format("nscd: box length_x {} is too short for grains of interaction diameter {} (need >= {})",
+                    box.lengthX, cell, 2.0 * cell));
   if (box.periodicY && box.width < 2.0 * cell)
-    throw std::invalid_argument(fmt::format(
-        "nscd: periodic width {} is too short for grains of interaction diameter {} (need >= {})", box.width,
-        cell, 2.0 * cell));
+    throw std::invalid_argument(
+        fmt::format("nscd: periodic width {} is too short for grains of interaction diameter {} (need >= {})",
+                    box.width, cell, 2.0 * cell));
 }
 
 void BroadPhase::findPairs(const std::vector<Vec3>& positions, const std::vector<double>& reach,
@@ -43,10 +43,12 @@ void BroadPhase::findPairs(const std::vector<Vec3>& positions, const std::vector
   cells_.build(positions);
   // The second grain's reach in slot order, read contiguously with its position.
   cells_.toSlotOrder(std::span<const double>(reach), slotReach_);
-  // Raw pointers and values captured by copy: nothing the push_back below calls can change them.
-  auto keepTouching = [reachById = reach.data(), slotReach = slotReach_.data(), lx = cells_.box().lengthX,
-                       w = cells_.box().width, periodicY = cells_.box().periodicY](
-                          std::vector<CandidatePair>& o, int i, int j, int slot, Vec3 d, Vec3 raw) {
+  // Raw pointers and values, captured by copy: nothing the push_back below calls can change them.
+  const double* reachById = reach.data();
+  const double* slotReach = slotReach_.data();
+  const double lx = cells_.box().lengthX, w = cells_.box().width;
+  const bool periodicY = cells_.box().periodicY;
+  auto keepTouching = [=](std::vector<CandidatePair>& o, int i, int j, int slot, Vec3 d, Vec3 raw) {
     const double r = reachById[i] + slotReach[slot];
     if (d.squaredNorm() >= r * r) return;
     CandidatePair pair;

@@ -28,7 +28,8 @@ using Hit = confpack::testing::ImageHit;
 
 std::vector<Hit> fromList(const CellList& list, const Vec3& p, double r) {
   std::vector<Hit> out;
-  list.forEachNear(p, r, [&](const ImageHit& h) { out.emplace_back(h.id, h.position.x(), h.position.y(), h.position.z()); });
+  list.forEachNear(p, r,
+                   [&](const ImageHit& h) { out.emplace_back(h.id, h.position.x(), h.position.y(), h.position.z()); });
   std::sort(out.begin(), out.end());
   return out;
 }
