@@ -10,7 +10,7 @@
 
 #include "analysis/grain_volumes.hpp"
 #include "analysis/solid_fraction.hpp"
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
 namespace confpack::analysis {
 
@@ -62,10 +62,10 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
     if (ga.shape == core::ShapeKind::Pinacoid) {
       const PlacedGrain pa(ga);
       if (core::isWall(m.b)) {
-        m.type = core::classifyPlaneContact(pa.placed, core::BoxDef::wallNormal(static_cast<core::WallId>(m.b)));
+        m.type = collision::classifyPlaneContact(pa.placed, core::BoxDef::wallNormal(static_cast<core::WallId>(m.b)));
       } else if (packing.grains[m.b].shape == core::ShapeKind::Pinacoid) {
         const PlacedGrain pb(packing.grains[m.b], ga.position + m.branch);
-        m.type = core::classifyContact(pa.placed, pb.placed);
+        m.type = collision::classifyContact(pa.placed, pb.placed);
       }
     }
     out.push_back(m);

@@ -9,9 +9,9 @@
 // (analysis/geometric_contacts.hpp) all carry force.
 //
 // Contact type. Spheres: Simple. Pinacoid pairs: the shared geometric classifier
-// core::classifyContact(a, b) on the two grains' poses (b at its minimum image), so both
+// collision::classifyContact(a, b) on the two grains' poses (b at its minimum image), so both
 // backends are classified identically, whatever number of points they used. Pinacoid-wall:
-// core::classifyPlaneContact.
+// collision::classifyPlaneContact.
 //
 // Counting (bulk grains: centre in the bulk region). Each force-carrying grain-grain contact adds
 // one to each of its grains that is in the bulk, so

@@ -7,7 +7,7 @@
 
 #include "analysis/grain_volumes.hpp"
 #include "analysis/neighbour_pairs.hpp"
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
 namespace confpack::analysis {
 
@@ -20,7 +20,7 @@ void GeometricContactDef::validate() const {
 
 namespace {
 
-core::Contact fromPolyhedronContact(int a, int b, const core::PolyhedronContact& pc) {
+core::Contact fromPolyhedronContact(int a, int b, const collision::PolyhedronContact& pc) {
   core::Contact c;
   c.a = a;
   c.b = b;
@@ -61,7 +61,7 @@ std::vector<core::Contact> geometricContacts(const core::Packing& packing, const
       out.push_back(c);
     } else {
       const PlacedGrain pa(a), pb(b, a.position + np.separation);
-      if (auto pc = core::collidePolyhedra(pa.placed, pb.placed, tol))
+      if (auto pc = collision::collidePolyhedra(pa.placed, pb.placed, tol))
         out.push_back(fromPolyhedronContact(np.i, np.j, *pc));
     }
   }
@@ -91,7 +91,7 @@ std::vector<core::Contact> geometricContacts(const core::Packing& packing, const
         out.push_back(c);
       } else {
         const PlacedGrain pg(g);
-        if (auto pc = core::collidePolyhedronPlane(pg.placed, point, inward, tol))
+        if (auto pc = collision::collidePolyhedronPlane(pg.placed, point, inward, tol))
           out.push_back(fromPolyhedronContact(i, static_cast<int>(w), *pc));
       }
     }

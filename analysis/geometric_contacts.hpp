@@ -6,7 +6,7 @@
 //   tol = absTolerance + relTolerance * (mean size of the two grains)   [d_L]
 // (defaults 1e-6 d_L + 1e-6 d: a packing written from a solver touches to rounding, and overlaps
 // of any depth count). Spheres: exact centre distances; pinacoids: the exact narrow phase of
-// core/polyhedron_contact.hpp (type, normal, points). Geometric contacts have no force: every
+// collision/polyhedron_contact.hpp (type, normal, points). Geometric contacts have no force: every
 // point carries normalForce = 1 as a marker that the contact is counted (all geometric contacts
 // are force-carrying), never a physical value.
 #include <vector>

@@ -19,7 +19,7 @@ double grainSlabVolume(const core::Grain& g, int axis, double lo, double hi) {
   if (!(hi > lo)) return 0.0;
   if (g.shape == core::ShapeKind::Sphere) return sphereSlabVolume(0.5 * g.size, g.position[axis], lo, hi);
   const PlacedGrain p(g);
-  return core::slabVolume(p.placed, axis, lo, hi);
+  return collision::slabVolume(p.placed, axis, lo, hi);
 }
 
 std::vector<double> grainSlabVolumes(const core::Grain& g, int axis, std::span<const double> edges, double period) {
@@ -49,7 +49,7 @@ std::vector<double> grainSlabVolumes(const core::Grain& g, int axis, std::span<c
       while (last > first && shifted[last - 1] > g.position[axis] + reach) --last;
       if (first >= last) continue;
       const std::vector<double> v =
-          core::slabVolumes(poly->placed, axis, std::span<const double>(shifted.data() + first, last - first + 1));
+          collision::slabVolumes(poly->placed, axis, std::span<const double>(shifted.data() + first, last - first + 1));
       for (std::size_t k = 0; k < v.size(); ++k) out[first + k] += v[k];
     }
   }
@@ -60,17 +60,17 @@ double grainBoxVolume(const core::Grain& g, const core::Vec3& lo, const core::Ve
   if (g.shape == core::ShapeKind::Sphere)
     throw std::invalid_argument("grainBoxVolume: exact sphere-box volumes are not implemented");
   const PlacedGrain p(g);
-  return core::boxVolume(p.placed, lo, hi);
+  return collision::boxVolume(p.placed, lo, hi);
 }
 
-core::ConvexPolytope pinacoidIntersection(const core::PlacedPolyhedron& a, const core::PlacedPolyhedron& b) {
-  core::ConvexPolytope cur = core::toPolytope(a), next;
+collision::ConvexPolytope pinacoidIntersection(const collision::PlacedPolyhedron& a, const collision::PlacedPolyhedron& b) {
+  collision::ConvexPolytope cur = collision::toPolytope(a), next;
   const auto& normals = b.shape->faceNormals();
   const auto& offsets = b.shape->faceOffsets();
   for (std::size_t f = 0; f < normals.size() && !cur.empty(); ++f) {
     // Body-frame face n.x <= o becomes (R n).y <= o + (R n).p in the world.
     const core::Vec3 n = b.rotation * normals[f];
-    core::clip(cur, core::Plane{n, offsets[f] + n.dot(b.position)}, next);
+    collision::clip(cur, collision::Plane{n, offsets[f] + n.dot(b.position)}, next);
     std::swap(cur, next);
   }
   return cur;

@@ -1,12 +1,12 @@
 #pragma once
 // Exact volumes of grains cut by planes and of grain-grain overlaps, for either shape: spheres
 // by the closed forms of sphere_geometry, pinacoids by exact convex clipping
-// (core/polyhedron_clip.hpp). Every volume-based measurement goes through here.
+// (collision/polyhedron_clip.hpp). Every volume-based measurement goes through here.
 #include <span>
 #include <vector>
 
 #include "core/grain.hpp"
-#include "core/polyhedron_clip.hpp"
+#include "collision/polyhedron_clip.hpp"
 
 namespace confpack::analysis {
 
@@ -14,7 +14,7 @@ namespace confpack::analysis {
 /// own its shape).
 struct PlacedGrain {
   core::ConvexPolyhedron shape;
-  core::PlacedPolyhedron placed;
+  collision::PlacedPolyhedron placed;
 
   /// Places g's polyhedron at `position` (default: the grain's own position). Pinacoids only.
   explicit PlacedGrain(const core::Grain& g);
@@ -44,6 +44,6 @@ double grainBoxVolume(const core::Grain& g, const core::Vec3& lo, const core::Ve
 double grainOverlapVolume(const core::Grain& a, const core::Grain& b, const core::Vec3& separation);
 
 /// The intersection of two placed pinacoids as a polytope (for bounds and further clipping).
-core::ConvexPolytope pinacoidIntersection(const core::PlacedPolyhedron& a, const core::PlacedPolyhedron& b);
+collision::ConvexPolytope pinacoidIntersection(const collision::PlacedPolyhedron& a, const collision::PlacedPolyhedron& b);
 
 }  // namespace confpack::analysis

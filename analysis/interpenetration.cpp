@@ -26,7 +26,7 @@ namespace {
 
 struct OverlapPair {
   int a = 0, b = 0;
-  core::ConvexPolytope intersection;  // in the slab, in a's frame (unwrapped)
+  collision::ConvexPolytope intersection;  // in the slab, in a's frame (unwrapped)
 };
 
 // Splits `poly` into the cells of a lattice with origin `origin` and cell sides h, calling
@@ -34,7 +34,7 @@ struct OverlapPair {
 // then y columns, then z cells), each of an ever smaller polytope, so the cost follows the number
 // of cells the polytope actually crosses, not its bounding box.
 template <class Fn>
-void forEachCellPiece(const core::ConvexPolytope& poly, const core::Vec3& origin, const core::Vec3& h, Fn&& fn) {
+void forEachCellPiece(const collision::ConvexPolytope& poly, const core::Vec3& origin, const core::Vec3& h, Fn&& fn) {
   if (poly.empty()) return;
   const auto [lo, hi] = poly.bounds();
   std::array<int, 3> first{}, last{};
@@ -43,15 +43,15 @@ void forEachCellPiece(const core::ConvexPolytope& poly, const core::Vec3& origin
     last[d] = static_cast<int>(std::floor((hi[d] - origin[d]) / h[d]));
   }
   // Cuts along `axis` from index first..last; level 0 = x, 1 = y, 2 = z.
-  std::array<core::ConvexPolytope, 3> rest, piece, next;
+  std::array<collision::ConvexPolytope, 3> rest, piece, next;
   std::array<int, 3> index{};
-  auto sweep = [&](auto&& self, const core::ConvexPolytope& in, int axis) -> void {
+  auto sweep = [&](auto&& self, const collision::ConvexPolytope& in, int axis) -> void {
     core::Vec3 e = core::Vec3::Zero();
     e[axis] = 1.0;
     rest[axis] = in;
     for (int i = first[axis]; i <= last[axis] && !rest[axis].empty(); ++i) {
       const double upper = origin[axis] + (i + 1) * h[axis];
-      core::clip(rest[axis], core::Plane{e, upper}, piece[axis]);
+      collision::clip(rest[axis], collision::Plane{e, upper}, piece[axis]);
       if (!piece[axis].empty()) {
         index[axis] = i;
         if (axis == 2)
@@ -59,7 +59,7 @@ void forEachCellPiece(const core::ConvexPolytope& poly, const core::Vec3& origin
         else
           self(self, piece[axis], axis + 1);
       }
-      core::clip(rest[axis], core::Plane{-e, -upper}, next[axis]);
+      collision::clip(rest[axis], collision::Plane{-e, -upper}, next[axis]);
       std::swap(rest[axis], next[axis]);
     }
   };
@@ -88,7 +88,7 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
   };
   std::vector<std::pair<std::uint64_t, int>> entries;
   for (int p = 0; p < static_cast<int>(pairs.size()); ++p) {
-    forEachCellPiece(pairs[p].intersection, origin, h, [&](int ix, int iy, int iz, const core::ConvexPolytope&) {
+    forEachCellPiece(pairs[p].intersection, origin, h, [&](int ix, int iy, int iz, const collision::ConvexPolytope&) {
       if (iz < 0 || iz >= nz) return;
       entries.emplace_back(key(ix, iy, iz), p);
     });
@@ -104,13 +104,13 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
   }
   // Each grain's polytope at its own position, built once; a cell is moved into the grain's
   // periodic frame instead of moving the grain.
-  std::vector<core::ConvexPolytope> polytope(n);
+  std::vector<collision::ConvexPolytope> polytope(n);
   std::vector<std::pair<core::Vec3, core::Vec3>> bounds(n);
   std::vector<char> built(n, 0);
   std::vector<std::size_t> stamp(n, 0);
   std::vector<double> volumeOf(n, 0.0);
   std::vector<int> candidates;
-  core::ConvexPolytope work[2];
+  collision::ConvexPolytope work[2];
   std::size_t cellId = 0;
   for (std::size_t begin = 0; begin < entries.size();) {
     std::size_t end = begin;
@@ -141,19 +141,19 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
       const core::Vec3 cLo = lo + shift, cHi = lo + h + shift;
       if (!built[g]) {
         const PlacedGrain placed(grain);
-        polytope[g] = core::toPolytope(placed.placed);
+        polytope[g] = collision::toPolytope(placed.placed);
         bounds[g] = polytope[g].bounds();
         built[g] = 1;
       }
       volumeOf[g] = 0.0;
       if ((bounds[g].first.array() >= cHi.array()).any() || (bounds[g].second.array() <= cLo.array()).any()) continue;
-      const core::Plane planes[6] = {{core::Vec3::UnitX(), cHi.x()}, {-core::Vec3::UnitX(), -cLo.x()},
+      const collision::Plane planes[6] = {{core::Vec3::UnitX(), cHi.x()}, {-core::Vec3::UnitX(), -cLo.x()},
                                      {core::Vec3::UnitY(), cHi.y()}, {-core::Vec3::UnitY(), -cLo.y()},
                                      {core::Vec3::UnitZ(), cHi.z()}, {-core::Vec3::UnitZ(), -cLo.z()}};
-      core::clip(polytope[g], planes[0], work[0]);
+      collision::clip(polytope[g], planes[0], work[0]);
       int cur = 0;
       for (int pl = 1; pl < 6 && !work[cur].empty(); ++pl) {
-        core::clip(work[cur], planes[pl], work[1 - cur]);
+        collision::clip(work[cur], planes[pl], work[1 - cur]);
         cur = 1 - cur;
       }
       volumeOf[g] = work[cur].volume();
@@ -182,7 +182,7 @@ Interpenetration interpenetration(const core::Packing& packing, const BulkRegion
   std::vector<OverlapPair> pinacoidPairs;
   bool anyPinacoid = false;
   for (const core::Grain& g : packing.grains) anyPinacoid = anyPinacoid || g.shape == core::ShapeKind::Pinacoid;
-  const core::Plane below{-core::Vec3::UnitZ(), -region.zLow}, above{core::Vec3::UnitZ(), region.zHigh};
+  const collision::Plane below{-core::Vec3::UnitZ(), -region.zLow}, above{core::Vec3::UnitZ(), region.zHigh};
   for (const NeighbourPair& np : neighbours) {
     const core::Grain& a = packing.grains[np.i];
     const core::Grain& b = packing.grains[np.j];
@@ -201,9 +201,9 @@ Interpenetration interpenetration(const core::Packing& packing, const BulkRegion
       ++r.overlappingPairs;
     } else {
       const PlacedGrain pa(a), pb(b, a.position + np.separation);
-      core::ConvexPolytope inter = pinacoidIntersection(pa.placed, pb.placed);
+      collision::ConvexPolytope inter = pinacoidIntersection(pa.placed, pb.placed);
       if (inter.empty()) continue;
-      inter = core::clipped(core::clipped(inter, below), above);
+      inter = collision::clipped(collision::clipped(inter, below), above);
       if (inter.empty()) continue;
       const double v = inter.volume();
       if (!(v > 0.0)) continue;

@@ -3,7 +3,7 @@
 // "Solid fraction", "Solid-fraction profiles and their fit"): spherical segments
 // (a sphere cut by two parallel planes) and lenses (the intersection of two spheres).
 //
-// These are closed forms, not sampling. Polyhedra use core/polyhedron_clip.hpp instead.
+// These are closed forms, not sampling. Polyhedra use collision/polyhedron_clip.hpp instead.
 
 namespace confpack::analysis {
 

@@ -24,7 +24,7 @@
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "core/deposition.hpp"
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 #include "core/population.hpp"
 #include "core/random.hpp"
 
@@ -133,14 +133,14 @@ double exactGap(const Grain& a, const Vec3& pa, const Grain& b, const Vec3& pb) 
   if (sphereA && sphereB) return (pb - pa).norm() - 0.5 * (a.size + b.size);
   if (sphereA) return exactGap(b, pb, a, pa);
   const core::ConvexPolyhedron polyA = a.polyhedron();
-  const core::PlacedPolyhedron placedA{&polyA, pa, a.orientation.toRotationMatrix()};
-  std::optional<core::PolyhedronContact> pc;
+  const collision::PlacedPolyhedron placedA{&polyA, pa, a.orientation.toRotationMatrix()};
+  std::optional<collision::PolyhedronContact> pc;
   if (sphereB) {
-    pc = core::collidePolyhedronSphere(placedA, pb, 0.5 * b.size, kNoAlert);
+    pc = collision::collidePolyhedronSphere(placedA, pb, 0.5 * b.size, kNoAlert);
   } else {
     const core::ConvexPolyhedron polyB = b.polyhedron();
     pc =
-        core::collidePolyhedra(placedA, core::PlacedPolyhedron{&polyB, pb, b.orientation.toRotationMatrix()}, kNoAlert);
+        collision::collidePolyhedra(placedA, collision::PlacedPolyhedron{&polyB, pb, b.orientation.toRotationMatrix()}, kNoAlert);
   }
   if (!pc) throw std::runtime_error("narrow-phase fixture: no gap for a pose");
   return pc->gap;

@@ -42,8 +42,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "collision/cell_list.hpp"
 #include "core/settings_table.hpp"
-#include "core/spatial_grid.hpp"
 
 namespace confpack::core {
 
@@ -298,10 +298,10 @@ class Pile {
     out.clear();
     double minGap = std::numeric_limits<double>::infinity();
     const double touch = kTouchTol * d_;
-    grid_.forEachNear(c, d_ + touch, [&](int id, const Vec3& k) {
-      const double gap = (c - k).norm() - d_;
+    grid_.forEachNear(c, d_ + touch, [&](const collision::ImageHit& k) {
+      const double gap = (c - k.position).norm() - d_;
       minGap = std::min(minGap, gap);
-      if (gap <= touch) out.push_back({SupportKind::Sphere, id, k, gap});
+      if (gap <= touch) out.push_back({SupportKind::Sphere, k.id, k.position, gap});
     });
     auto plane = [&](SupportKind kind, double gap) {
       minGap = std::min(minGap, gap);
@@ -336,8 +336,8 @@ class Pile {
     for (double zTop = c.z();; zTop -= slab) {
       const double zBottom = zTop - slab;
       grid_.forEachInBox(Vec3(c.x() - d_, c.y() - d_, zBottom), Vec3(c.x() + d_, c.y() + d_, zTop),
-                         [&](int, const Vec3& k) {
-                           const Vec3 w = c - k;
+                         [&](const collision::ImageHit& k) {
+                           const Vec3 w = c - k.position;
                            const double h2 = w.x() * w.x() + w.y() * w.y();
                            const double dz = w.z();
                            if (h2 >= d2 || dz <= 0.0) return;  // never met, or moving away
@@ -440,9 +440,9 @@ class Pile {
     double psi = a.psiEnd;
     if (psi > 0.0) {
       const double d2 = d_ * d_;
-      grid_.forEachNear(a.m, a.rho + d_ * (1.0 + kTouchTol), [&](int id, const Vec3& k) {
-        if (isActiveSphere(active, id, k)) return;
-        const Vec3 w = a.m - k;
+      grid_.forEachNear(a.m, a.rho + d_ * (1.0 + kTouchTol), [&](const collision::ImageHit& k) {
+        if (isActiveSphere(active, k.id, k.position)) return;
+        const Vec3 w = a.m - k.position;
         const double aa = w.squaredNorm() + a.rho * a.rho - d2;
         const double bb = 2.0 * a.rho * w.dot(a.e1);
         const double cc = 2.0 * a.rho * w.dot(a.e2);
@@ -470,7 +470,7 @@ class Pile {
   BoxDef box_;
   double d_;
   double r_;
-  SpatialGrid grid_;
+  collision::CellList grid_;
   double top_ = 0.0;
 };
 

@@ -21,10 +21,9 @@ struct ImagePair {
 };
 
 /// Finds image pairs among grains wrapped into the box. Only grains within `reach` of a periodic
-/// face can have one, so only those are binned; a periodic cell list (cells at least `reach`
-/// wide, at least 3 per periodic direction so that two cells are neighbours in one way only)
-/// then visits each candidate pair once. Boxes too short for 3 cells fall back to testing every
-/// candidate pair against every image, so any box longer than one grain works.
+/// face can have one, so only those go into the shared cell list (collision/cell_list.hpp),
+/// whose region query returns every periodic image near a grain: in short boxes, where one grain
+/// can touch two images of another, each of them.
 class PeriodicPairFinder {
  public:
   /// `reach` is the largest centre distance at which two grains can interact: twice the largest
@@ -40,8 +39,6 @@ class PeriodicPairFinder {
  private:
   core::BoxDef box_;
   double reach_ = 0.0;
-  int cellsX_ = 0;  ///< periodic cells along x (0 = too few, brute force)
-  int cellsY_ = 0;  ///< periodic cells along y when periodic in y (0 = too few, brute force)
 };
 
 }  // namespace confpack::bullet

@@ -1,11 +1,12 @@
 #pragma once
-// Broad phase of the nscd backend: a uniform cell grid rebuilt every step by counting sort, with
-// periodic wrapping along x (and y when the box is biperiodic). Each candidate pair comes out once,
-// a < b, together with the periodic image of b that is close to a.
+// Broad phase of the nscd backend: the shared cell list (collision/cell_list.hpp) rebuilt every
+// step, with cells of twice the largest grain reach. Each candidate pair comes out once, a < b,
+// together with the periodic image of b that is close to a.
 #include <cstdint>
 #include <vector>
 
 #include "backends/nscd/thread_choice.hpp"
+#include "collision/cell_list.hpp"
 #include "core/box.hpp"
 
 namespace confpack::nscd {
@@ -40,20 +41,10 @@ class BroadPhase {
                  std::vector<CandidatePair>& out);
 
  private:
-  // Appends the pairs whose first grain is in [begin, end) to out, sorted by (a, b).
-  void searchRange(int begin, int end, const std::vector<core::Vec3>& positions, const std::vector<double>& reach,
-                   std::vector<CandidatePair>& out) const;
-
-  core::BoxDef box_;
-  double cell_ = 1.0;
-  int nx_ = 1, ny_ = 1, nz_ = 1;
+  collision::CellList cells_;
   int threads_ = 1;
   ThreadChoice choice_;
-  // Per-step buffers (kept to avoid allocation).
-  std::vector<int> cellOf_, cellStart_, cellItems_, cursor_;
-  std::vector<int> nbx_, nby_, nbz_, countX_, countY_, countZ_;  // neighbour cells per axis
-  std::vector<core::Vec3> cellPositions_;  // positions[cellItems_[s]]
-  std::vector<double> cellReach_;          // reach[cellItems_[s]]
+  std::vector<double> slotReach_;                        // reach in the cell list's slot order
   std::vector<std::vector<CandidatePair>> threadPairs_;  // pairs of threads 1.. (thread 0 writes `out`)
 };
 

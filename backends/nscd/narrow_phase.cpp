@@ -45,15 +45,15 @@ bool collideSphereWall(const Vec3& pa, double ra, WallId w, const core::BoxDef& 
   return true;
 }
 
-std::uint32_t featureKey(const core::Feature& a, const core::Feature& b) {
-  // 2 bits of kind and 14 bits of (index + 1) per body; index -1 (see core::Feature) maps to 0.
-  auto pack = [](const core::Feature& f) {
+std::uint32_t featureKey(const collision::Feature& a, const collision::Feature& b) {
+  // 2 bits of kind and 14 bits of (index + 1) per body; index -1 (see collision::Feature) maps to 0.
+  auto pack = [](const collision::Feature& f) {
     return (static_cast<std::uint32_t>(f.kind) << 14) | (static_cast<std::uint32_t>(f.index + 1) & 0x3fffu);
   };
   return (pack(a) << 16) | pack(b);
 }
 
-void fromPolyhedronContact(const core::PolyhedronContact& pc, bool flip, ContactGeometry& out) {
+void fromPolyhedronContact(const collision::PolyhedronContact& pc, bool flip, ContactGeometry& out) {
   out.type = pc.type;
   out.normal = flip ? Vec3(-pc.normal) : pc.normal;
   out.feature = flip ? featureKey(pc.featureB, pc.featureA) : featureKey(pc.featureA, pc.featureB);
@@ -99,18 +99,18 @@ void NarrowPhase::collidePair(const CandidatePair& pair, const std::vector<Vec3>
     if (collideSphereSphere(positions[a], radius_[a], pb, radius_[b], alert, c)) out.push_back(c);
     return;
   }
-  // Polyhedra: the exact SAT routines of core/polyhedron_contact (shared with analysis).
+  // Polyhedra: the exact SAT routines of collision/polyhedron_contact (shared with analysis).
   auto placed = [&](int i, const Vec3& p) {
-    return core::PlacedPolyhedron{&poly_[i], p, orientations[i].toRotationMatrix()};
+    return collision::PlacedPolyhedron{&poly_[i], p, orientations[i].toRotationMatrix()};
   };
-  std::optional<core::PolyhedronContact> pc;
+  std::optional<collision::PolyhedronContact> pc;
   bool flip = false;
   if (!sphereA && !sphereB) {
-    pc = core::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert);
+    pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert);
   } else if (!sphereA) {
-    pc = core::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
+    pc = collision::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
   } else {
-    pc = core::collidePolyhedronSphere(placed(b, pb), positions[a], radius_[a], alert);
+    pc = collision::collidePolyhedronSphere(placed(b, pb), positions[a], radius_[a], alert);
     flip = true;
   }
   if (!pc || pc->points.empty()) return;
@@ -126,10 +126,10 @@ void NarrowPhase::collideWalls(int i, const std::vector<Vec3>& positions,
   ContactGeometry c;
   c.a = i;
   if (shape_[i] == core::ShapeKind::Pinacoid) {
-    const core::PlacedPolyhedron placed{&poly_[i], p, orientations[i].toRotationMatrix()};
+    const collision::PlacedPolyhedron placed{&poly_[i], p, orientations[i].toRotationMatrix()};
     auto wall = [&](WallId w, double distance) {
       if (distance - radius_[i] >= alert) return;  // bounding-sphere rejection
-      const auto pc = core::collidePolyhedronPlane(placed, box_.wallPoint(w), core::BoxDef::wallNormal(w), alert);
+      const auto pc = collision::collidePolyhedronPlane(placed, box_.wallPoint(w), core::BoxDef::wallNormal(w), alert);
       if (!pc || pc->points.empty()) return;
       c.b = static_cast<int>(w);
       fromPolyhedronContact(*pc, false, c);

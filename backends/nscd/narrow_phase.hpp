@@ -12,12 +12,12 @@
 #include "core/box.hpp"
 #include "core/contact.hpp"
 #include "core/grain.hpp"
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
 namespace confpack::nscd {
 
 /// Largest number of points of one contact: every vertex of a face-face clip of two pinacoids.
-inline constexpr int kMaxContactPoints = core::kMaxPolyhedronContactPoints;
+inline constexpr int kMaxContactPoints = collision::kMaxPolyhedronContactPoints;
 
 /// One contact plane between grain a and grain b (or a wall, b < 0) with its points.
 struct ContactGeometry {
@@ -44,11 +44,11 @@ bool collideSphereWall(const core::Vec3& pa, double ra, core::WallId w, const co
                        ContactGeometry& out);
 
 /// Packs the feature pair of a polyhedron contact into a cache-key word (kind and index of each).
-std::uint32_t featureKey(const core::Feature& a, const core::Feature& b);
+std::uint32_t featureKey(const collision::Feature& a, const collision::Feature& b);
 
-/// Copies a polyhedron contact (core/polyhedron_contact.hpp) into `out`; `flip` reverses the
+/// Copies a polyhedron contact (collision/polyhedron_contact.hpp) into `out`; `flip` reverses the
 /// normal and swaps the features (when the routine was called with the bodies exchanged).
-void fromPolyhedronContact(const core::PolyhedronContact& pc, bool flip, ContactGeometry& out);
+void fromPolyhedronContact(const collision::PolyhedronContact& pc, bool flip, ContactGeometry& out);
 
 /// Shape data of every grain, and the dispatch over pairs of shapes.
 class NarrowPhase {

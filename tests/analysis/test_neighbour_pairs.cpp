@@ -1,8 +1,9 @@
-// neighbourPairs (analysis/neighbour_pairs.hpp): the cell list finds exactly the pairs of a
-// brute-force search over every periodic image, each once, with the minimum-image separation.
+// neighbourPairs (analysis/neighbour_pairs.hpp): exactly the pairs of a brute-force search over
+// every periodic image, each once, sorted by (i, j), with the minimum-image separation.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <set>
+#include <tuple>
 #include <vector>
 
 #include "analysis/neighbour_pairs.hpp"
@@ -34,7 +35,10 @@ TEST_CASE("neighbour pairs are exactly the brute-force pairs over the periodic i
       const auto expected = testing::pairsWithin(p.box, positions, radii, extra);
       std::set<testing::ImagePairKey> found;
       std::size_t count = 0;
-      for (const auto& q : analysis::neighbourPairs(p, extra)) {
+      const auto pairs = analysis::neighbourPairs(p, extra);
+      for (std::size_t k = 1; k < pairs.size(); ++k)
+        CHECK(std::tie(pairs[k - 1].i, pairs[k - 1].j) < std::tie(pairs[k].i, pairs[k].j));
+      for (const auto& q : pairs) {
         ++count;
         CHECK(q.i < q.j);
         // separation = x_j + (sx L_x, sy W, 0) - x_i with whole shifts.

@@ -1,11 +1,12 @@
 #pragma once
-// O(n^2) references for the cell lists (core::SpatialGrid, nscd::BroadPhase,
-// bullet::PeriodicPairFinder): every periodic image is tried, so a cell list that misses or
-// duplicates one shows up as a difference.
+// O(n^2) references for the cell list (collision::CellList) and its users (nscd::BroadPhase,
+// bullet::PeriodicPairFinder, analysis::neighbourPairs): every periodic image is tried, so a
+// search that misses or duplicates one shows up as a difference.
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "core/box.hpp"
@@ -59,6 +60,25 @@ inline std::set<ImagePairKey> pairsWithin(const core::BoxDef& box, const std::ve
           const core::Vec3 shift(i * box.lengthX, j * box.width, 0.0);
           if ((p[b] + shift - p[a]).norm() < radius[a] + radius[b] + threshold) out.insert({a, b, i, j});
         }
+  return out;
+}
+
+/// Every pair (a, b), a < b, whose closest periodic image lies within `cutoff` (|d| < cutoff),
+/// sorted by (a, b): the order collision::CellList::findPairs documents. Positions may lie up to
+/// one period outside the box.
+inline std::vector<std::pair<int, int>> pairsWithinCutoff(const core::BoxDef& box, const std::vector<core::Vec3>& p,
+                                                          double cutoff) {
+  std::vector<std::pair<int, int>> out;
+  const int ky = box.periodicY ? 2 : 0;
+  const int n = static_cast<int>(p.size());
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      double closest = 1e300;
+      for (int i = -2; i <= 2; ++i)
+        for (int j = -ky; j <= ky; ++j)
+          closest = std::min(closest, (p[b] + core::Vec3(i * box.lengthX, j * box.width, 0.0) - p[a]).norm());
+      if (closest < cutoff) out.emplace_back(a, b);
+    }
   return out;
 }
 

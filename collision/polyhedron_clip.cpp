@@ -1,4 +1,4 @@
-#include "core/polyhedron_clip.hpp"
+#include "collision/polyhedron_clip.hpp"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <stdexcept>
 
-namespace confpack::core {
+namespace confpack::collision {
 
 namespace {
 
@@ -312,4 +312,4 @@ void forEachCellVolume(const PlacedPolyhedron& p, const Vec3& origin, double h,
   });
 }
 
-}  // namespace confpack::core
+}  // namespace confpack::collision

@@ -16,9 +16,9 @@
 #include <span>
 #include <vector>
 
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
-namespace confpack::core {
+namespace confpack::collision {
 
 /// Half-space {x : normal.x <= offset}. normal need not be unit (offset scales with it).
 struct Plane {
@@ -69,4 +69,4 @@ std::vector<double> slabVolumes(const PlacedPolyhedron& p, int axis, std::span<c
 void forEachCellVolume(const PlacedPolyhedron& p, const Vec3& origin, double h,
                        const std::function<void(int, int, int, double)>& fn);
 
-}  // namespace confpack::core
+}  // namespace confpack::collision

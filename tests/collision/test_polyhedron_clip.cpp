@@ -1,4 +1,4 @@
-// Exact clipped and intersection volumes (core/polyhedron_clip): analytic answers only.
+// Exact clipped and intersection volumes (collision/polyhedron_clip): analytic answers only.
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
@@ -7,9 +7,10 @@
 #include <vector>
 
 #include "core/pinacoid.hpp"
-#include "core/polyhedron_clip.hpp"
+#include "collision/polyhedron_clip.hpp"
 
 using namespace confpack::core;
+using namespace confpack::collision;
 
 namespace {
 

@@ -1,4 +1,4 @@
-// Pinacoid narrow phase and contact classifier (core/polyhedron_contact): hand-placed pairs with
+// Pinacoid narrow phase and contact classifier (collision/polyhedron_contact): hand-placed pairs with
 // known answers, symmetry, and FCL / brute-force cross-checks.
 #include <fcl/fcl.h>
 
@@ -10,9 +10,10 @@
 #include <stdexcept>
 
 #include "core/pinacoid.hpp"
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
 using namespace confpack::core;
+using namespace confpack::collision;
 
 namespace {
 

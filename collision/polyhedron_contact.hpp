@@ -56,7 +56,13 @@
 #include "core/convex_polyhedron.hpp"
 #include "core/small_vector.hpp"
 
-namespace confpack::core {
+namespace confpack::collision {
+
+using core::ContactType;
+using core::ConvexPolyhedron;
+using core::Mat3;
+using core::SmallVector;
+using core::Vec3;
 
 /// A convex polyhedron placed in the world: world = position + rotation * body.
 /// Does not own the shape: the ConvexPolyhedron must outlive it.
@@ -146,4 +152,4 @@ ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b
 ContactType classifyPlaneContact(const PlacedPolyhedron& a, const Vec3& inwardNormal,
                                  double angleTol = kFeatureAngleTol);
 
-}  // namespace confpack::core
+}  // namespace confpack::collision

@@ -1,4 +1,4 @@
-#include "core/polyhedron_contact.hpp"
+#include "collision/polyhedron_contact.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include <span>
 #include <stdexcept>
 
-namespace confpack::core {
+namespace confpack::collision {
 
 std::vector<Vec3> PlacedPolyhedron::worldVertices() const {
   std::vector<Vec3> out;
@@ -474,172 +474,214 @@ struct Region {
   SmallVector<std::pair<Vec3, Vec3>, 4> pairs;  // (on A, on B) per point when exactPair
 };
 
-// The contact region of feature sets sa (of A, near max along n) and sb (of B, near min along n)
-// projected on the contact plane; its dimension gives the contact type.
-Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& B, const SupportSet& sb,
-                     const Frame& fr, FeatureSurface& surfA, FeatureSurface& surfB) {
-  const double lenTol = kRelativeLengthTol * (A.radius + B.radius);
-  auto surfaceOf = [&](const WorldPoly& w, const SupportSet& s, FeatureSurface& out, Polygon2& poly,
-                       bool ccwAlongN) {
-    out.kind = s.feature.kind;
-    if (s.feature.kind == FeatureKind::Vertex) {
-      out.p0 = w.v[s.verts[0]];
-      poly = {fr.lateral(out.p0)};
-    } else if (s.feature.kind == FeatureKind::Edge) {
-      out.p0 = w.v[s.verts[0]];
-      out.p1 = w.v[s.verts[1]];
-      poly = {fr.lateral(out.p0), fr.lateral(out.p1)};
-    } else {
-      const int f = s.feature.index;
-      out.faceN = w.n[f];
-      out.faceOff = w.off[f];
-      poly.clear();
-      for (int i : w.shape->faces()[f]) poly.push_back(fr.lateral(w.v[i]));
-      // A's face (normal ~ +n) is CCW in (u, v); B's face (normal ~ -n) is CW: reverse it.
-      if (!ccwAlongN) std::reverse(poly.begin(), poly.end());
-    }
-  };
+// The two support features, each as a surface (for heights) and as its outline projected on the
+// contact plane (a point, a segment, or a face polygon counter-clockwise in (u, v)), with what
+// every step of contactRegion needs.
+struct FeaturePair {
+  const WorldPoly& A;
+  const SupportSet& sa;
+  const WorldPoly& B;
+  const SupportSet& sb;
+  const Frame& fr;
+  double lenTol;  // lengths below this are zero (kRelativeLengthTol x the pair's size)
   Polygon2 pa, pb;
-  surfaceOf(A, sa, surfA, pa, true);
-  surfaceOf(B, sb, surfB, pb, false);
+};
 
-  Region r;
-  const FeatureKind ka = sa.feature.kind, kb = sb.feature.kind;
-  auto finishSegmentOrPoint = [&](const Polygon2& pts) {
-    // Reduce a degenerate region to its two most distant points (segment) or one point.
-    if (pts.empty()) return;
-    std::size_t bi = 0, bj = 0;
-    double best = -1.0;
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      for (std::size_t j = i; j < pts.size(); ++j)
-        if ((pts[i] - pts[j]).squaredNorm() > best) {
-          best = (pts[i] - pts[j]).squaredNorm();
-          bi = i;
-          bj = j;
-        }
-    if (std::sqrt(best) > lenTol) {
-      r.type = ContactType::Double;
-      r.points = {pts[bi], pts[bj]};
-    } else {
-      r.type = ContactType::Simple;
-      r.points = {0.5 * (pts[bi] + pts[bj])};
-    }
-  };
+// Surface and projected outline of support feature s of w. A's face (normal ~ +n) is CCW in
+// (u, v); B's face (normal ~ -n) is CW, so it is reversed (ccwAlongN = false).
+void projectFeature(const WorldPoly& w, const SupportSet& s, const Frame& fr, bool ccwAlongN, FeatureSurface& out,
+                    Polygon2& poly) {
+  out.kind = s.feature.kind;
+  if (s.feature.kind == FeatureKind::Vertex) {
+    out.p0 = w.v[s.verts[0]];
+    poly = {fr.lateral(out.p0)};
+  } else if (s.feature.kind == FeatureKind::Edge) {
+    out.p0 = w.v[s.verts[0]];
+    out.p1 = w.v[s.verts[1]];
+    poly = {fr.lateral(out.p0), fr.lateral(out.p1)};
+  } else {
+    const int f = s.feature.index;
+    out.faceN = w.n[f];
+    out.faceOff = w.off[f];
+    poly.clear();
+    for (int i : w.shape->faces()[f]) poly.push_back(fr.lateral(w.v[i]));
+    if (!ccwAlongN) std::reverse(poly.begin(), poly.end());
+  }
+}
 
-  // Fallback for a single-point contact whose lateral construction does not fall on both
-  // features (vertex-vertex, vertex-edge, or projections that miss each other, which a large
-  // angular tolerance allows): the closest pair of points of the two 3D features, found over
-  // their boundary segments and over vertices projecting inside a face.
-  auto closestFeaturePair = [&]() {
-    auto loopOf = [](const WorldPoly& w, const SupportSet& s) {
-      VertexArray<Vec3> loop;
-      if (s.feature.kind == FeatureKind::Face)
-        for (int i : w.shape->faces()[s.feature.index]) loop.push_back(w.v[i]);
-      else
-        for (int i : s.verts) loop.push_back(w.v[i]);
-      return loop;
-    };
-    const VertexArray<Vec3> la = loopOf(A, sa), lb = loopOf(B, sb);
-    auto segCount = [](const VertexArray<Vec3>& l) { return l.size() <= 2 ? std::size_t{1} : l.size(); };
-    double best = kInf;
-    std::pair<Vec3, Vec3> pair{la[0], lb[0]};
-    for (std::size_t i = 0; i < segCount(la); ++i)
-      for (std::size_t j = 0; j < segCount(lb); ++j) {
-        double s, t;
-        Vec3 c1, c2;
-        const double d2 =
-            closestSegmentSegment(la[i], la[(i + 1) % la.size()], lb[j], lb[(j + 1) % lb.size()], s, t, c1, c2);
-        if (d2 < best) {
-          best = d2;
-          pair = {c1, c2};
-        }
+// A degenerate region reduced to its two most distant points (a segment, Double) or, if they
+// are closer than lenTol, to their midpoint (Simple).
+void segmentOrPoint(const Polygon2& pts, double lenTol, Region& r) {
+  if (pts.empty()) return;
+  std::size_t bi = 0, bj = 0;
+  double best = -1.0;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t j = i; j < pts.size(); ++j)
+      if ((pts[i] - pts[j]).squaredNorm() > best) {
+        best = (pts[i] - pts[j]).squaredNorm();
+        bi = i;
+        bj = j;
       }
-    auto facePoints = [&](const WorldPoly& w, const SupportSet& s, const VertexArray<Vec3>& other, bool faceIsA) {
-      if (s.feature.kind != FeatureKind::Face) return;
-      const int f = s.feature.index;
-      for (const Vec3& x : other) {
-        if (!projectsInsideFace(w, f, x)) continue;
-        const Vec3 proj = x - (w.n[f].dot(x) - w.off[f]) * w.n[f];
-        const double d2 = (x - proj).squaredNorm();
-        if (d2 < best) {
-          best = d2;
-          pair = faceIsA ? std::make_pair(proj, x) : std::make_pair(x, proj);
-        }
-      }
-    };
-    facePoints(A, sa, lb, true);
-    facePoints(B, sb, la, false);
+  if (std::sqrt(best) > lenTol) {
+    r.type = ContactType::Double;
+    r.points = {pts[bi], pts[bj]};
+  } else {
     r.type = ContactType::Simple;
-    r.points = {0.5 * (fr.lateral(pair.first) + fr.lateral(pair.second))};
-    r.exactPair = true;
-    r.pairs = {pair};
-  };
-  auto insideConvex = [&](const Vec2& x, const Polygon2& poly) {
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-      const Vec2 e = poly[(k + 1) % poly.size()] - poly[k];
-      if (cross2(e, x - poly[k]) < -lenTol * e.norm()) return false;
-    }
-    return true;
-  };
+    r.points = {0.5 * (pts[bi] + pts[bj])};
+  }
+}
 
-  if (ka == FeatureKind::Vertex && kb == FeatureKind::Face && insideConvex(pa[0], pb)) {
-    r.points = {pa[0]};
-  } else if (kb == FeatureKind::Vertex && ka == FeatureKind::Face && insideConvex(pb[0], pa)) {
-    r.points = {pb[0]};
-  } else if (ka == FeatureKind::Vertex || kb == FeatureKind::Vertex) {
-    closestFeaturePair();
-  } else if (ka == FeatureKind::Edge && kb == FeatureKind::Edge) {
-    const Vec2 da = pa[1] - pa[0], db = pb[1] - pb[0];
-    const double sinAngle = std::abs(cross2(da, db)) / std::max(da.norm() * db.norm(), 1e-300);
-    if (sinAngle > kParallelEdgeSin * 1e3) {
-      // Crossing edges: one point, where the closest points of the 3D segments project.
+// Fallback for a single-point contact whose lateral construction does not fall on both
+// features (vertex-vertex, vertex-edge, or projections that miss each other, which a large
+// angular tolerance allows): the closest pair of points of the two 3D features, found over
+// their boundary segments and over vertices projecting inside a face.
+Region closestFeaturePair(const FeaturePair& fp) {
+  auto loopOf = [](const WorldPoly& w, const SupportSet& s) {
+    VertexArray<Vec3> loop;
+    if (s.feature.kind == FeatureKind::Face)
+      for (int i : w.shape->faces()[s.feature.index]) loop.push_back(w.v[i]);
+    else
+      for (int i : s.verts) loop.push_back(w.v[i]);
+    return loop;
+  };
+  const VertexArray<Vec3> la = loopOf(fp.A, fp.sa), lb = loopOf(fp.B, fp.sb);
+  auto segCount = [](const VertexArray<Vec3>& l) { return l.size() <= 2 ? std::size_t{1} : l.size(); };
+  double best = kInf;
+  std::pair<Vec3, Vec3> pair{la[0], lb[0]};
+  for (std::size_t i = 0; i < segCount(la); ++i)
+    for (std::size_t j = 0; j < segCount(lb); ++j) {
       double s, t;
       Vec3 c1, c2;
-      closestSegmentSegment(surfA.p0, surfA.p1, surfB.p0, surfB.p1, s, t, c1, c2);
-      r.points = {0.5 * (fr.lateral(c1) + fr.lateral(c2))};
-      r.exactPair = true;
-      r.pairs = {{c1, c2}};
-    } else {
-      // Parallel edges: overlap of their projections on A's edge line (a line contact).
-      const Vec2 dir = da.normalized();
-      const double a0 = 0.0, a1 = da.norm();
-      const double b0 = dir.dot(pb[0] - pa[0]), b1 = dir.dot(pb[1] - pa[0]);
-      const double lo = std::max(a0, std::min(b0, b1)), hi = std::min(a1, std::max(b0, b1));
-      // The two lines may be offset laterally by rounding or tilt: put points midway across.
-      if (hi >= lo)
-        finishSegmentOrPoint(Polygon2{pa[0] + lo * dir, pa[0] + hi * dir});
-      else
-        r.points = {pa[0] + 0.5 * (lo + hi) * dir};
-      // Surface points: the same abscissa along the common direction on each 3D edge (the
-      // lateral lines may be offset by the tilt allowed by the tolerance).
-      r.exactPair = true;
-      for (const Vec2& x : r.points) {
-        const double lam = dir.dot(x - pa[0]);
-        const double ta = std::clamp(lam / a1, 0.0, 1.0);
-        const double tb = std::abs(b1 - b0) > 1e-300 ? std::clamp((lam - b0) / (b1 - b0), 0.0, 1.0) : 0.0;
-        r.pairs.emplace_back(surfA.p0 + ta * (surfA.p1 - surfA.p0), surfB.p0 + tb * (surfB.p1 - surfB.p0));
+      const double d2 =
+          closestSegmentSegment(la[i], la[(i + 1) % la.size()], lb[j], lb[(j + 1) % lb.size()], s, t, c1, c2);
+      if (d2 < best) {
+        best = d2;
+        pair = {c1, c2};
       }
     }
-  } else if (ka == FeatureKind::Edge || kb == FeatureKind::Edge) {
-    const Polygon2& seg = ka == FeatureKind::Edge ? pa : pb;
-    const Polygon2& face = ka == FeatureKind::Edge ? pb : pa;
-    Vec2 p = seg[0], q = seg[1];
-    if (clipSegment(p, q, face))
-      finishSegmentOrPoint(Polygon2{p, q});
-    else
-      closestFeaturePair();  // the edge's projection misses the face
-  } else {
-    const Polygon2 poly = clipPolygon(pa, pb);
-    if (poly.size() >= 3 && std::abs(polygonArea(poly)) > lenTol * (A.radius + B.radius)) {
-      r.type = ContactType::Triple;
-      r.points = poly;  // kept whole up to 8 vertices in buildContact (keptPoints)
-    } else if (!poly.empty()) {
-      finishSegmentOrPoint(poly);
-    } else {
-      closestFeaturePair();  // the faces' projections do not overlap
+  auto facePoints = [&](const WorldPoly& w, const SupportSet& s, const VertexArray<Vec3>& other, bool faceIsA) {
+    if (s.feature.kind != FeatureKind::Face) return;
+    const int f = s.feature.index;
+    for (const Vec3& x : other) {
+      if (!projectsInsideFace(w, f, x)) continue;
+      const Vec3 proj = x - (w.n[f].dot(x) - w.off[f]) * w.n[f];
+      const double d2 = (x - proj).squaredNorm();
+      if (d2 < best) {
+        best = d2;
+        pair = faceIsA ? std::make_pair(proj, x) : std::make_pair(x, proj);
+      }
     }
+  };
+  facePoints(fp.A, fp.sa, lb, true);
+  facePoints(fp.B, fp.sb, la, false);
+  Region r;
+  r.type = ContactType::Simple;
+  r.points = {0.5 * (fp.fr.lateral(pair.first) + fp.fr.lateral(pair.second))};
+  r.exactPair = true;
+  r.pairs = {pair};
+  return r;
+}
+
+// True if x lies in the convex CCW polygon, allowing lenTol outside each edge.
+bool insideConvex(const Vec2& x, const Polygon2& poly, double lenTol) {
+  for (std::size_t k = 0; k < poly.size(); ++k) {
+    const Vec2 e = poly[(k + 1) % poly.size()] - poly[k];
+    if (cross2(e, x - poly[k]) < -lenTol * e.norm()) return false;
+  }
+  return true;
+}
+
+// Edge against edge: crossing edges touch in one point, where the closest points of the 3D
+// segments project; parallel edges along a segment, the overlap of their projections on A's edge
+// line (a line contact), with the surface points at the same abscissa on each 3D edge.
+Region edgeEdgeRegion(const FeaturePair& fp, const FeatureSurface& surfA, const FeatureSurface& surfB) {
+  Region r;
+  const Polygon2 &pa = fp.pa, &pb = fp.pb;
+  const Vec2 da = pa[1] - pa[0], db = pb[1] - pb[0];
+  const double sinAngle = std::abs(cross2(da, db)) / std::max(da.norm() * db.norm(), 1e-300);
+  if (sinAngle > kParallelEdgeSin * 1e3) {
+    double s, t;
+    Vec3 c1, c2;
+    closestSegmentSegment(surfA.p0, surfA.p1, surfB.p0, surfB.p1, s, t, c1, c2);
+    r.points = {0.5 * (fp.fr.lateral(c1) + fp.fr.lateral(c2))};
+    r.exactPair = true;
+    r.pairs = {{c1, c2}};
+    return r;
+  }
+  const Vec2 dir = da.normalized();
+  const double a0 = 0.0, a1 = da.norm();
+  const double b0 = dir.dot(pb[0] - pa[0]), b1 = dir.dot(pb[1] - pa[0]);
+  const double lo = std::max(a0, std::min(b0, b1)), hi = std::min(a1, std::max(b0, b1));
+  // The two lines may be offset laterally by rounding or tilt: put points midway across.
+  if (hi >= lo)
+    segmentOrPoint(Polygon2{pa[0] + lo * dir, pa[0] + hi * dir}, fp.lenTol, r);
+  else
+    r.points = {pa[0] + 0.5 * (lo + hi) * dir};
+  // Surface points: the same abscissa along the common direction on each 3D edge (the lateral
+  // lines may be offset by the tilt allowed by the tolerance).
+  r.exactPair = true;
+  for (const Vec2& x : r.points) {
+    const double lam = dir.dot(x - pa[0]);
+    const double ta = std::clamp(lam / a1, 0.0, 1.0);
+    const double tb = std::abs(b1 - b0) > 1e-300 ? std::clamp((lam - b0) / (b1 - b0), 0.0, 1.0) : 0.0;
+    r.pairs.emplace_back(surfA.p0 + ta * (surfA.p1 - surfA.p0), surfB.p0 + tb * (surfB.p1 - surfB.p0));
   }
   return r;
+}
+
+// Edge against face: the edge's projection clipped to the face's (a segment or a point), or the
+// closest feature pair if it misses the face.
+Region edgeFaceRegion(const FeaturePair& fp) {
+  const bool edgeIsA = fp.sa.feature.kind == FeatureKind::Edge;
+  const Polygon2& seg = edgeIsA ? fp.pa : fp.pb;
+  const Polygon2& face = edgeIsA ? fp.pb : fp.pa;
+  Vec2 p = seg[0], q = seg[1];
+  if (!clipSegment(p, q, face)) return closestFeaturePair(fp);
+  Region r;
+  segmentOrPoint(Polygon2{p, q}, fp.lenTol, r);
+  return r;
+}
+
+// Face against face: the intersection of the two projected faces. A polygon of non-negligible
+// area is a Triple contact (its vertices kept whole up to 8 in buildContact, keptPoints); a
+// sliver is a segment or a point; no overlap falls back to the closest feature pair.
+Region faceFaceRegion(const FeaturePair& fp) {
+  const Polygon2 poly = clipPolygon(fp.pa, fp.pb);
+  if (poly.size() >= 3 && std::abs(polygonArea(poly)) > fp.lenTol * (fp.A.radius + fp.B.radius)) {
+    Region r;
+    r.type = ContactType::Triple;
+    r.points = poly;
+    return r;
+  }
+  if (poly.empty()) return closestFeaturePair(fp);
+  Region r;
+  segmentOrPoint(poly, fp.lenTol, r);
+  return r;
+}
+
+// The contact region of feature sets sa (of A, near max along n) and sb (of B, near min along n)
+// projected on the contact plane; its dimension gives the contact type. One step per pair of
+// feature kinds; surfA and surfB receive the features' surfaces for the heights of the points.
+Region contactRegion(const WorldPoly& A, const SupportSet& sa, const WorldPoly& B, const SupportSet& sb,
+                     const Frame& fr, FeatureSurface& surfA, FeatureSurface& surfB) {
+  FeaturePair fp{A, sa, B, sb, fr, kRelativeLengthTol * (A.radius + B.radius), {}, {}};
+  projectFeature(A, sa, fr, true, surfA, fp.pa);
+  projectFeature(B, sb, fr, false, surfB, fp.pb);
+  const FeatureKind ka = sa.feature.kind, kb = sb.feature.kind;
+  if (ka == FeatureKind::Vertex && kb == FeatureKind::Face && insideConvex(fp.pa[0], fp.pb, fp.lenTol)) {
+    Region r;  // the vertex over the face
+    r.points = {fp.pa[0]};
+    return r;
+  }
+  if (kb == FeatureKind::Vertex && ka == FeatureKind::Face && insideConvex(fp.pb[0], fp.pa, fp.lenTol)) {
+    Region r;
+    r.points = {fp.pb[0]};
+    return r;
+  }
+  if (ka == FeatureKind::Vertex || kb == FeatureKind::Vertex) return closestFeaturePair(fp);
+  if (ka == FeatureKind::Edge && kb == FeatureKind::Edge) return edgeEdgeRegion(fp, surfA, surfB);
+  if (ka == FeatureKind::Edge || kb == FeatureKind::Edge) return edgeFaceRegion(fp);
+  return faceFaceRegion(fp);
 }
 
 Frame frameFor(const Vec3& n) {
@@ -890,4 +932,4 @@ ContactType classifyPlaneContact(const PlacedPolyhedron& a, const Vec3& inwardNo
                                        : ContactType::Triple;
 }
 
-}  // namespace confpack::core
+}  // namespace confpack::collision
