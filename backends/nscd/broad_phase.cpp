@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/parallel_failure.hpp"
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -117,12 +119,17 @@ void BroadPhase::findPairs(const std::vector<Vec3>& positions, const std::vector
     const int wanted = choice_.next() > 1 ? useful : 1;
     if (static_cast<int>(threadPairs_.size()) < wanted) threadPairs_.resize(wanted);
     for (auto& buffer : threadPairs_) buffer.clear();  // a smaller team leaves some unused
+    // A pair list that cannot grow throws std::bad_alloc in a thread: rethrown after the region.
+    core::ParallelFailure failure;
 #pragma omp parallel num_threads(wanted) if (wanted > 1)
     {
       const int t = omp_get_thread_num(), team = omp_get_num_threads();
-      searchRange(chunkBegin(n, t, team), chunkBegin(n, t + 1, team), positions, reach,
-                  t == 0 ? out : threadPairs_[t]);
+      failure.capture([&] {
+        searchRange(chunkBegin(n, t, team), chunkBegin(n, t + 1, team), positions, reach,
+                    t == 0 ? out : threadPairs_[t]);
+      });
     }
+    failure.rethrow();
     for (std::size_t t = 1; t < threadPairs_.size(); ++t)
       out.insert(out.end(), threadPairs_[t].begin(), threadPairs_[t].end());
     choice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
