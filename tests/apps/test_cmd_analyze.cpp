@@ -68,7 +68,7 @@ TEST_CASE("confpack analyze writes result.json and profiles", "[apps][cli]") {
   CHECK(thin.code == 2);
   CHECK(thin.err ==
         "confpack analyze: error: analysis: about 8e+09 cells (200 grains x phi(y) slices of 1e-07 d_L), more than "
-        "max_cells (1e+09); check the slice or cell size, or raise the limit with --max-cells\n");
+        "max_cells (2e+08); check the slice or cell size, or raise the limit with --max-cells\n");
   CHECK_FALSE(fs::exists(dir / "thin"));
   CHECK(s.run("analyze packing.json --out low --max-cells 39999").code == 2);
   CHECK_FALSE(fs::exists(dir / "low"));
