@@ -8,6 +8,7 @@
 #include "analysis/grain_volumes.hpp"
 #include "analysis/neighbour_pairs.hpp"
 #include "collision/polyhedron_contact.hpp"
+#include "core/interrupt.hpp"
 
 namespace confpack::analysis {
 
@@ -41,7 +42,11 @@ std::vector<core::Contact> geometricContacts(const core::Packing& packing, const
     return def.absTolerance + def.relTolerance * 0.5 * (sizeA + sizeB);
   };
   const double maxTol = def.absTolerance + def.relTolerance * 2.0;  // generous pre-filter
-  for (const NeighbourPair& np : neighbourPairs(packing, maxTol + 1e-9)) {
+  const std::vector<NeighbourPair> pairs = neighbourPairs(packing, maxTol + 1e-9);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    core::stopIfRequested(
+        [&] { return fmt::format("while finding the geometric contacts (pair {} of {})", k + 1, pairs.size()); });
+    const NeighbourPair& np = pairs[k];
     const core::Grain& a = grains[np.i];
     const core::Grain& b = grains[np.j];
     const double tol = tolerance(a.size, b.size);

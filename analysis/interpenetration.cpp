@@ -14,6 +14,7 @@
 #include "analysis/neighbour_pairs.hpp"
 #include "analysis/solid_fraction.hpp"
 #include "analysis/sphere_geometry.hpp"
+#include "core/interrupt.hpp"
 
 namespace confpack::analysis {
 
@@ -88,6 +89,10 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
   };
   std::vector<std::pair<std::uint64_t, int>> entries;
   for (int p = 0; p < static_cast<int>(pairs.size()); ++p) {
+    core::stopIfRequested([&] {
+      return fmt::format("while cutting overlaps into the interpenetration lattice (pair {} of {})", p + 1,
+                         pairs.size());
+    });
     forEachCellPiece(pairs[p].intersection, origin, h, [&](int ix, int iy, int iz, const collision::ConvexPolytope&) {
       if (iz < 0 || iz >= nz) return;
       entries.emplace_back(key(ix, iy, iz), p);
@@ -113,6 +118,11 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
   collision::ConvexPolytope work[2];
   std::size_t cellId = 0;
   for (std::size_t begin = 0; begin < entries.size();) {
+    // Each cell clips every grain near it: the longest loop of an analysis of pinacoids.
+    core::stopIfRequested([&] {
+      return fmt::format("while computing the interpenetration's lattice bounds (cell {}, entry {} of {})", cellId + 1,
+                         begin + 1, entries.size());
+    });
     std::size_t end = begin;
     while (end < entries.size() && entries[end].first == entries[begin].first) ++end;
     ++cellId;
@@ -183,7 +193,11 @@ Interpenetration interpenetration(const core::Packing& packing, const BulkRegion
   bool anyPinacoid = false;
   for (const core::Grain& g : packing.grains) anyPinacoid = anyPinacoid || g.shape == core::ShapeKind::Pinacoid;
   const collision::Plane below{-core::Vec3::UnitZ(), -region.zLow}, above{core::Vec3::UnitZ(), region.zHigh};
-  for (const NeighbourPair& np : neighbours) {
+  for (std::size_t k = 0; k < neighbours.size(); ++k) {
+    core::stopIfRequested([&] {
+      return fmt::format("while computing the interpenetration's overlaps (pair {} of {})", k + 1, neighbours.size());
+    });
+    const NeighbourPair& np = neighbours[k];
     const core::Grain& a = packing.grains[np.i];
     const core::Grain& b = packing.grains[np.j];
     if (a.shape != b.shape)

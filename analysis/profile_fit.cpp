@@ -14,6 +14,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include "core/interrupt.hpp"
+
 namespace confpack::analysis {
 
 double ProfileLaw::operator()(double y) const {
@@ -116,8 +118,40 @@ struct Attempt {
   bool valid = false;
 };
 
+// What gsl_multifit_nlinear_driver does (iterate, test for convergence with xtol = gtol = ftol =
+// 1e-10, up to maxIterations; GSL_ENOPROG on the first iteration ends it), the same calls in the
+// same order, with a safe point between iterations: GSL's own loop cannot be left early (a
+// callback that fails only makes each remaining iteration fail, and it goes on to maxIterations,
+// seconds on a long profile). Returns false, the fit unfinished, when SIGINT or SIGTERM asked to
+// stop.
+bool drive(gsl_multifit_nlinear_workspace* w, int maxIterations, int& status, int& info) {
+  constexpr double tolerance = 1e-10;
+  std::size_t iteration = 0;
+  do {
+    if (core::stopSignal() != 0) return false;
+    status = gsl_multifit_nlinear_iterate(w);
+    if (status == GSL_ENOPROG && iteration == 0) {
+      info = status;
+      status = GSL_EMAXITER;
+      return true;
+    }
+    ++iteration;
+    status = gsl_multifit_nlinear_test(tolerance, tolerance, tolerance, &info, w);
+  } while (status == GSL_CONTINUE && iteration < static_cast<std::size_t>(maxIterations));
+  // Converged to machine precision (a tolerance below it): success, the reason in info.
+  if (status == GSL_ETOLF || status == GSL_ETOLX || status == GSL_ETOLG) {
+    info = status;
+    status = GSL_SUCCESS;
+  }
+  if (iteration >= static_cast<std::size_t>(maxIterations) && status != GSL_SUCCESS) status = GSL_EMAXITER;
+  return true;
+}
+
+// fitProfile's starts: alpha and lambda of the initial guess each times 1, 1/2 and 2.
+constexpr int kStarts = 9;
+
 Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, const ProfileLaw& start,
-               const ProfileFitDef& def) {
+               const ProfileFitDef& def, int attempt) {
   Attempt at;
   const bool bi = def.bidisperse;
   const std::size_t n = y.size(), p = parameterCount(bi);
@@ -137,8 +171,16 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   toVector(start, x0);
   int info = 0;
   int status = gsl_multifit_nlinear_init(x0, &fdf, w);
-  if (status == GSL_SUCCESS)
-    status = gsl_multifit_nlinear_driver(def.maxIterations, 1e-10, 1e-10, 1e-10, nullptr, nullptr, &info, w);
+  if (status == GSL_SUCCESS && !drive(w, def.maxIterations, status, info)) {
+    // Stopped: GSL's memory freed before the exception (none may cross GSL's C frames anyway).
+    const int iterations = static_cast<int>(gsl_multifit_nlinear_niter(w));
+    gsl_matrix_free(covar);
+    gsl_vector_free(x0);
+    gsl_multifit_nlinear_free(w);
+    throw core::Interrupted(core::stopSignal(),
+                            fmt::format("while fitting the phi(y) profile ({} points, start {} of {}, iteration {})", n,
+                                        attempt, kStarts, iterations + 1));
+  }
   ProfileFit& f = at.fit;
   f.iterations = static_cast<int>(gsl_multifit_nlinear_niter(w));
   const gsl_vector* x = gsl_multifit_nlinear_position(w);
@@ -239,13 +281,14 @@ ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>
   const ProfileLaw guess = initialGuess(y, phi, def.bidisperse);
   bool found = false;
   std::string lastReason;
+  int attempt = 0;
   for (double fa : {1.0, 0.5, 2.0})
     for (double fl : {1.0, 0.5, 2.0}) {
       ProfileLaw start = guess;
       start.alpha *= fa;
       start.lambda[0] *= fl;
       start.lambda[1] *= fl;
-      Attempt at = runFit(y, phi, start, def);
+      Attempt at = runFit(y, phi, start, def, ++attempt);
       if (!at.valid) {
         lastReason = at.fit.reason;
         continue;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "analysis/grain_volumes.hpp"
+#include "core/interrupt.hpp"
 
 namespace confpack::analysis {
 
@@ -50,7 +51,12 @@ SolidFractionProfile solidFractionProfile(const core::Packing& packing, const Bu
   const std::size_t n = edges.size() - 1;
   prof.slice = edges[1] - edges[0];
   std::vector<double> volume(n, 0.0);
-  for (const core::Grain& g : packing.grains) {
+  for (std::size_t i = 0; i < packing.grains.size(); ++i) {
+    // Each grain runs over every slice: with thin slices one grain is a long step.
+    core::stopIfRequested([&] {
+      return fmt::format("while computing the phi(y) profile (grain {} of {})", i + 1, packing.grains.size());
+    });
+    const core::Grain& g = packing.grains[i];
     if (!region.contains(g.position.z())) continue;
     const std::vector<double> v = grainSlabVolumes(g, 1, edges, box.periodicY ? box.width : 0.0);
     for (std::size_t k = 0; k < n; ++k) volume[k] += v[k];

@@ -1,8 +1,12 @@
 #include "analysis/voronoi.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+
+#include "core/interrupt.hpp"
 
 #ifdef CONFPACK_HAVE_VORO
 #include <voro++/voro++.hh>
@@ -40,7 +44,13 @@ std::optional<VoronoiFraction> voronoiSolidFraction(const core::Packing& packing
   double solid = 0.0, cellVolume = 0.0;
   voro::c_loop_all loop(con);
   voro::voronoicell cell;
+  int visited = 0;
   if (loop.start()) do {
+      core::stopIfRequested([&] {
+        return fmt::format("while computing the radical Voronoi cells (grain {} of {})", visited + 1,
+                           packing.grains.size());
+      });
+      ++visited;
       const int id = loop.pid();
       const core::Grain& g = packing.grains[id];
       if (!region.contains(g.position.z())) continue;

@@ -243,6 +243,10 @@ void checkInput(std::string_view command, const std::function<void()>& checks) {
     throw;
   } catch (const std::bad_alloc&) {
     throw;
+  } catch (const core::Interrupted& e) {
+    // A check can be long work (analyze analyses the packing before it writes anything): a stop
+    // there is no refusal of the input. Nothing is written yet.
+    failWith(command, e, 128 + e.signal());
   } catch (const std::exception& e) {
     failWith(command, e, kExitBadInput);
   }

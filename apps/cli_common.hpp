@@ -84,7 +84,8 @@ class WorkStep {
 /// Runs input checks of subcommand `command` (a string literal; empty for a program without
 /// subcommands): a std::exception becomes one line "<program> <command>: error: <what>" and exit
 /// code 2 (CLI::RuntimeError); <program> is the name of the app parseAndRun ran. std::bad_alloc
-/// is not bad input: it goes on to parseAndRun (exit 1).
+/// is not bad input: it goes on to parseAndRun (exit 1); nor is core::Interrupted (exit 128 + its
+/// signal).
 void checkInput(std::string_view command, const std::function<void()>& checks);
 /// Runs the work of a subcommand: any std::exception becomes one line and exit code 1;
 /// core::Interrupted exit code 128 + its signal; std::bad_alloc goes on to parseAndRun.

@@ -7,7 +7,9 @@
 //
 // The file is read, validated, checked for plausibility (analysis/plausibility.hpp; unless
 // --allow-implausible) and analysed before anything is written: a bad file gives one line on
-// stderr, exit code 2 and no output directory.
+// stderr, exit code 2 and no output directory. SIGINT or SIGTERM stops the analysis at its next
+// grain, slice, fit iteration, cell or pair (analysis polls core::stopSignal()): one line saying
+// where, exit 130 or 143, nothing written.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>

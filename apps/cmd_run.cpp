@@ -4,7 +4,10 @@
 //
 //   DIR/result.json    docs/model.md, "Results" (written last: its presence means the run finished)
 //   DIR/packing.json   final packing with contacts and forces (docs/packing-format.md)
-//   DIR/config.json    the fully resolved RunConfig
+//   DIR/config.json    the fully resolved RunConfig: the time step taken and the backend's
+//                      resolved settings as its backend_options, so that `confpack run --config
+//                      DIR/config.json` (with --from the same packing, for a run from one)
+//                      reruns it
 //   DIR/*.csv          profiles
 //   DIR/vtk/           ParaView frames (frame_grains.pvd, frame_contacts.pvd)
 #include <fmt/format.h>
@@ -40,6 +43,7 @@ struct RunState {
   std::string backendOptions;  ///< --backend-options JSON text
   std::string compactionOptions;  ///< --compaction-options JSON text
   std::string from;            ///< --from PACKING: start from its grains instead of a deposit
+  std::string configFile;      ///< --config FILE: the configuration instead of the flags
   bool allowImplausible = false;  ///< --allow-implausible: take an implausible --from packing
   CLI::App* sub = nullptr;
 };
@@ -49,8 +53,40 @@ constexpr const char* kGivenByPacking[] = {"--length-x", "--width", "--periodic-
                                            "--small-fraction", "--grains", "--pinacoid-G", "--pinacoid-E",
                                            "--pinacoid-alpha"};
 
+/// Flags that --config may go with: they set nothing the configuration holds.
+constexpr const char* kBesideConfig[] = {"--help", "--config",           "--out", "--quiet", "--verbose",
+                                         "--from", "--allow-implausible"};
+
+/// The configuration of `run --config FILE` (config.json of a run, or part of one: missing keys
+/// take their defaults), read by the RunConfig reader. The file holds the whole configuration: a
+/// flag that sets part of it is refused rather than silently merged.
+core::RunConfig readConfigFile(const RunState& st) {
+  for (const CLI::Option* option : st.sub->get_options()) {
+    const std::string name = option->get_name();
+    if (option->count() > 0 &&
+        std::find(std::begin(kBesideConfig), std::end(kBesideConfig), name) == std::end(kBesideConfig))
+      throw std::invalid_argument(
+          fmt::format("--config gives the whole configuration; drop {} (or change it in the file)", name));
+  }
+  const nlohmann::json j = core::readJsonFile(st.configFile, "run configuration");
+  try {
+    return j.get<core::RunConfig>();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(fmt::format("{}: {}", st.configFile, e.what()));
+  }
+}
+
+/// config.json of a finished run: `cfg` with what the run resolved, the time step it took and the
+/// backend's settings (every key, the defaults included) as backend_options, so that the same
+/// reader takes it back and the rerun does not depend on this version's defaults.
+nlohmann::json resolvedConfig(core::RunConfig cfg, const nlohmann::json& result) {
+  cfg.compaction.dt = result["config"]["compaction"]["dt"].get<double>();
+  cfg.backendOptions = result["config"]["backend_settings"];
+  return cfg;
+}
+
 /// The starting state of `run --from`: the packing's grains at rest, with cfg's box and population
-/// taken from it (the side walls' friction from --wall-friction when that is given).
+/// taken from it (the side walls' friction from --wall-friction or --config when given).
 core::Deposit startFromPacking(RunState& st) {
   for (const char* name : kGivenByPacking)
     if (st.sub->count(name) > 0)
@@ -58,7 +94,8 @@ core::Deposit startFromPacking(RunState& st) {
   const core::Packing packing = core::readPacking(st.from);
   analysis::checkPlausible(packing, st.from, st.allowImplausible);
   core::RunConfig& cfg = st.cfg;
-  const double wallFriction = st.sub->count("--wall-friction") > 0 ? cfg.box.wallFriction : packing.box.wallFriction;
+  const bool frictionGiven = st.sub->count("--wall-friction") > 0 || !st.configFile.empty();
+  const double wallFriction = frictionGiven ? cfg.box.wallFriction : packing.box.wallFriction;
   cfg.box = packing.box;
   cfg.box.wallFriction = wallFriction;
   core::Deposit start = study::depositFromPacking(packing, st.from);
@@ -74,6 +111,7 @@ void runRun(RunState& st) {
   core::RunConfig& cfg = st.cfg;
   std::optional<core::Deposit> start;
   checkInput("run", [&] {
+    if (!st.configFile.empty()) cfg = readConfigFile(st);
     if (!st.backendOptions.empty()) cfg.backendOptions = core::parseJsonText(st.backendOptions, "--backend-options");
     // After the flags: a key given both ways takes the JSON's value.
     if (!st.compactionOptions.empty())
@@ -97,7 +135,7 @@ void runRun(RunState& st) {
         start ? &*start : nullptr);
     progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
     step.next("writing config.json");
-    writeJson(output.dir() / "config.json", result["config"]);
+    writeJson(output.dir() / "config.json", resolvedConfig(cfg, result));
     step.next("moving the output into place");
     output.commit();
     fmt::print("run: {} {} grains, phi = {}, Z = {}, interpenetration {} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
@@ -156,6 +194,10 @@ void registerRun(CLI::App& app) {
                   "from the file")
       ->type_name("PACKING");
   addAllowImplausibleFlag(*sub, st->allowImplausible);
+  sub->add_option("--config", st->configFile,
+                  "Take the whole configuration from this file, e.g. DIR/config.json of an earlier run to rerun it "
+                  "(missing keys take their defaults; goes with --out, --quiet, --verbose and --from only)")
+      ->type_name("FILE");
   sub->add_option("--backend-options", st->backendOptions,
                   "Backend settings as JSON, e.g. '{\"tolerance\": 1e-5}' (see the README for the keys)");
   sub->add_option("--compaction-options", st->compactionOptions,

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "core/box.hpp"
+#include "core/parallel_failure.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -202,12 +203,17 @@ void CellList::findPairs(Emit&& emit, std::vector<Pair>& out, int threads,
     auto chunkBegin = [n](int t, int team) { return static_cast<int>(static_cast<long long>(n) * t / team); };
     if (static_cast<int>(teamOut.size()) < threads) teamOut.resize(static_cast<std::size_t>(threads));
     for (auto& buffer : teamOut) buffer.clear();  // a smaller team leaves some unused
+    // A pair list that cannot grow throws std::bad_alloc in a thread: rethrown after the region.
+    core::ParallelFailure failure;
 #pragma omp parallel num_threads(threads)
     {
       const int t = omp_get_thread_num(), team = omp_get_num_threads();
-      pairsOfRange<SecondOf>(chunkBegin(t, team), chunkBegin(t + 1, team), emit,
-                             t == 0 ? out : teamOut[static_cast<std::size_t>(t)]);
+      failure.capture([&] {
+        pairsOfRange<SecondOf>(chunkBegin(t, team), chunkBegin(t + 1, team), emit,
+                               t == 0 ? out : teamOut[static_cast<std::size_t>(t)]);
+      });
     }
+    failure.rethrow();
     for (std::size_t t = 1; t < teamOut.size(); ++t) out.insert(out.end(), teamOut[t].begin(), teamOut[t].end());
     return;
   }

@@ -32,6 +32,20 @@ void onlyKeys(const json& j, std::string_view where, std::initializer_list<std::
   }
 }
 
+/// The keys of a section read with j.value() (box, population and its pinacoid) against those of
+/// its defaults (`known`, as JSON): those readers take a misspelt key's default without a word.
+void knownKeysOnly(const json& j, const json& known, const std::string& where) {
+  if (!j.is_object()) return;  // the section's own reader refuses it
+  for (const auto& [key, value] : j.items()) {
+    if (!known.contains(key)) {
+      std::string list;
+      for (const auto& [k, v] : known.items()) list += fmt::format("{}{}", list.empty() ? "" : ", ", k);
+      throw std::invalid_argument(fmt::format("{}.{}: unknown key (allowed: {})", where, textExcerpt(key), list));
+    }
+    if (value.is_object() && known.at(key).is_object()) knownKeysOnly(value, known.at(key), where + "." + key);
+  }
+}
+
 /// j.value(key, fallback) with the key named in the error when the type is wrong (nlohmann's own
 /// message does not say which key).
 template <class T>
@@ -112,6 +126,8 @@ void from_json(const json& j, RunConfig& c) {
       throw std::invalid_argument(fmt::format("{}.{}: {}", w, key, e.what()));
     }
   };
+  if (j.contains("box")) knownKeysOnly(j.at("box"), json(d.box), fmt::format("{}.box", w));
+  if (j.contains("population")) knownKeysOnly(j.at("population"), json(d.population), fmt::format("{}.population", w));
   c.box = d.box;
   c.population = d.population;
   c.deposition = d.deposition;

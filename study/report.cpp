@@ -43,12 +43,18 @@ BackendDifference backendDifference(const ReplicaStat& a, const ReplicaStat& b) 
 
 namespace {
 
-void flattenInto(const json& j, const std::string& path, std::map<std::string, std::optional<double>>& out) {
+// Deepest object nesting followed: a result.json that confpack writes is 4 levels deep
+// (timing/phases/...); a hand-edited one 200,000 levels deep overflowed the stack (SIGSEGV).
+constexpr int kMaxResultDepth = 16;
+
+void flattenInto(const json& j, const std::string& path, std::map<std::string, std::optional<double>>& out,
+                 int depth = 0) {
   if (j.is_object()) {
+    if (depth == kMaxResultDepth) return;
     for (const auto& [key, v] : j.items()) {
       const std::string here = path.empty() ? key : path + "/" + key;
       if (here == "config" || here == "backend_settings" || here == "seed") continue;
-      flattenInto(v, here, out);
+      flattenInto(v, here, out, depth + 1);
     }
   } else if (j.is_number()) {
     out[path] = j.get<double>();

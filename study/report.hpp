@@ -66,7 +66,8 @@ struct RunRecord {
 std::vector<RunRecord> loadStudy(const std::filesystem::path& sweepDir, SweepSpec* spec = nullptr);
 
 /// Numeric (and boolean, as 0/1) leaves of a result, keyed by their path joined with '/'. Arrays
-/// and strings are skipped; null leaves are kept as nullopt (a quantity that does not apply).
+/// and strings are skipped, and so are objects nested more than 16 deep (a hand-edited file); null
+/// leaves are kept as nullopt (a quantity that does not apply).
 /// The resolved configuration and the backend settings are not quantities and are skipped.
 std::map<std::string, std::optional<double>> flattenResult(const nlohmann::json& result);
 

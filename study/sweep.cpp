@@ -705,37 +705,80 @@ void prepareSweepDir(const fs::path& dir, const SweepSpec& spec, const std::vect
     return;
   }
   // Several tasks of a job array may get here at once: each writes the same bytes atomically.
-  const json doc = {{"format", "confpack-sweep-table"},
-                    {"version", 1},
-                    {"name", spec.name},
-                    {"sweep", spec.source},
-                    {"runs", table}};
-  core::writeFileAtomically(tablePath, doc.dump(1));
+  core::writeFileAtomically(tablePath, runTableDocument(spec, runs).dump(1));
+}
+
+json runTableDocument(const SweepSpec& spec, const std::vector<SweepRun>& runs) {
+  return {{"format", kSweepTableFormat},
+          {"version", 1},
+          {"name", spec.name},
+          {"sweep", spec.source},
+          {"runs", runTableJson(runs)}};
+}
+
+std::vector<SweepRun> parseRunTable(const json& doc, std::string_view source, SweepSpec* spec) {
+  if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
+  for (const auto& [key, v] : doc.items())
+    if (key != "format" && key != "version" && key != "name" && key != "sweep" && key != "runs")
+      bad(source, core::textExcerpt(key), "unknown key (known: format, version, name, sweep, runs)");
+  if (!doc.contains("format") || doc.at("format") != kSweepTableFormat)
+    bad(source, "format", fmt::format("not a confpack sweep table (expected \"{}\")", kSweepTableFormat));
+  if (doc.contains("version") && doc.at("version") != 1) bad(source, "version", "expected 1");
+  if (!doc.contains("runs") || !doc.at("runs").is_array()) bad(source, "runs", "expected an array (the run table)");
+  if (!doc.contains("sweep")) bad(source, "sweep", "missing (the sweep file that made the table)");
+  const json& table = doc.at("runs");
+  // The table on disk was listed already, under whatever --max-runs its sweep was given.
+  SweepSpec parsed =
+      parseSweepSpec(doc.at("sweep"), fmt::format("{}: sweep", source), std::max(kDefaultMaxRuns, table.size()));
+  // A user may edit the table: every field is checked, and a name must stay one folder of runs/.
+  std::vector<SweepRun> runs;
+  std::set<std::string> names;
+  for (const json& r : table) {
+    const std::string where = fmt::format("runs[{}]", runs.size());
+    if (!r.is_object()) bad(source, where, "expected an object (name, deposit, label, config)");
+    for (const auto& [key, v] : r.items())
+      if (key != "name" && key != "deposit" && key != "label" && key != "config")
+        bad(source, fmt::format("{}.{}", where, core::textExcerpt(key)),
+            "unknown key (known: name, deposit, label, config)");
+    for (const char* key : {"name", "deposit", "config"})
+      if (!r.contains(key)) bad(source, fmt::format("{}.{}", where, key), "missing");
+    SweepRun run;
+    run.index = runs.size();
+    const json& name = r.at("name");
+    if (!name.is_string() || name.get<std::string>().empty() || name.get<std::string>().size() > 64 ||
+        name.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+            std::string::npos)
+      bad(source, where + ".name",
+          fmt::format("expected a run folder's name: letters, digits, '_' or '-' (got {})", core::jsonExcerpt(name)));
+    run.name = name.get<std::string>();
+    if (!names.insert(run.name).second) bad(source, where + ".name", fmt::format("\"{}\" names two runs", run.name));
+    const json& deposit = r.at("deposit");
+    const std::string dep = deposit.is_string() ? deposit.get<std::string>() : std::string();
+    if (dep.size() < 2 || dep.size() > 10 || dep[0] != 'd' ||
+        dep.find_first_not_of("0123456789", 1) != std::string::npos || std::stoul(dep.substr(1)) >= table.size())
+      bad(source, where + ".deposit",
+          fmt::format("expected \"d\" and the index of a deposit below the number of runs (got {})",
+                      core::jsonExcerpt(deposit)));
+    run.depositIndex = static_cast<std::size_t>(std::stoul(dep.substr(1)));
+    try {
+      core::from_json(r.at("config"), run.config);
+      run.config.validate();
+    } catch (const std::invalid_argument& e) {
+      bad(source, where + ".config", e.what());
+    } catch (const json::exception& e) {
+      bad(source, where + ".config", e.what());
+    }
+    runs.push_back(std::move(run));
+  }
+  if (spec) *spec = std::move(parsed);
+  return runs;
 }
 
 std::vector<SweepRun> readRunTable(const fs::path& dir, SweepSpec* spec) {
   const fs::path tablePath = dir / kSweepTable;
   if (!fs::exists(tablePath))
     throw std::invalid_argument(fmt::format("{}: not a sweep folder (no {})", dir.string(), kSweepTable));
-  const json doc = core::readJsonFile(tablePath, "sweep table");
-  if (doc.value("format", std::string()) != "confpack-sweep-table" || !doc.contains("runs") || !doc.at("runs").is_array())
-    throw std::invalid_argument(fmt::format("{}: format: not a confpack sweep table", tablePath.string()));
-  // The table on disk was listed already, under whatever --max-runs its sweep was given.
-  if (spec)
-    *spec = parseSweepSpec(doc.at("sweep"), tablePath.string() + ": sweep",
-                           std::max(kDefaultMaxRuns, doc.at("runs").size()));
-  std::vector<SweepRun> runs;
-  std::map<std::string, std::size_t> deposits;
-  for (const json& r : doc.at("runs")) {
-    SweepRun run;
-    run.index = runs.size();
-    run.name = r.at("name").get<std::string>();
-    core::from_json(r.at("config"), run.config);
-    const std::string dep = r.at("deposit").get<std::string>();
-    run.depositIndex = static_cast<std::size_t>(std::stoul(dep.substr(1)));
-    runs.push_back(std::move(run));
-  }
-  return runs;
+  return parseRunTable(core::readJsonFile(tablePath, "sweep table"), tablePath.string(), spec);
 }
 
 std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& dir, std::optional<std::size_t> taskIndex,

@@ -173,7 +173,20 @@ SweepSummary runSweep(const SweepSpec& spec, const std::filesystem::path& dir, c
 std::string formatRunTable(const std::vector<SweepRun>& runs, const std::filesystem::path& dir = {},
                            std::optional<std::size_t> taskIndex = {}, std::size_t taskCount = 1);
 
-/// Reads the run table back from SWEEPDIR/sweep.json (for the report).
+/// The format name of SWEEPDIR/sweep.json.
+inline constexpr std::string_view kSweepTableFormat = "confpack-sweep-table";
+
+/// SWEEPDIR/sweep.json's document: the sweep file as given (spec.source) and the run table.
+nlohmann::json runTableDocument(const SweepSpec& spec, const std::vector<SweepRun>& runs);
+
+/// The run table of a sweep.json document, `source` naming it in messages. sweep.json is written
+/// by confpack but a user may edit it: every field is checked (the sweep file it holds, each run's
+/// name, a folder name used once, its deposit, its configuration, validated), and a bad one is
+/// refused with std::invalid_argument "SOURCE: runs[3].deposit: ...". `spec`, if given, receives
+/// the parsed sweep file.
+std::vector<SweepRun> parseRunTable(const nlohmann::json& doc, std::string_view source, SweepSpec* spec = nullptr);
+
+/// Reads the run table back from SWEEPDIR/sweep.json (for the report): parseRunTable of the file.
 std::vector<SweepRun> readRunTable(const std::filesystem::path& dir, SweepSpec* spec = nullptr);
 
 }  // namespace confpack::study

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/parallel_failure.hpp"
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -172,34 +174,49 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
       tc.walls.clear();
     }
     auto chunk = [](std::size_t n, int t, int team) { return n * static_cast<std::size_t>(t) / team; };
+    // A contact list that cannot grow throws std::bad_alloc in a thread: kept, every thread still
+    // reaches the barrier, the joining is skipped and the exception rethrown after the region.
+    core::ParallelFailure failure;
 #pragma omp parallel num_threads(wanted)
     {
       const int t = omp_get_thread_num(), team = omp_get_num_threads();
       ThreadContacts& mine = threadContacts_[t];
       std::vector<ContactGeometry>& pairOut = t == 0 ? out : mine.pairs;
-      for (std::size_t k = chunk(nPairs, t, team); k < chunk(nPairs, t + 1, team); ++k)
-        collidePair(pairs[k], positions, orientations, pairOut);
-      for (std::size_t i = chunk(nGrains, t, team); i < chunk(nGrains, t + 1, team); ++i)
-        collideWalls(static_cast<int>(i), positions, orientations, mine.walls);
+      failure.capture([&] {
+        for (std::size_t k = chunk(nPairs, t, team); k < chunk(nPairs, t + 1, team); ++k)
+          collidePair(pairs[k], positions, orientations, pairOut);
+        for (std::size_t i = chunk(nGrains, t, team); i < chunk(nGrains, t + 1, team); ++i)
+          collideWalls(static_cast<int>(i), positions, orientations, mine.walls);
+      });
 #pragma omp barrier
 #pragma omp single
       {
-        // Layout: pairs of thread 0 (already in place), 1, ..., then walls of thread 0, 1, ...
-        std::size_t at = out.size();
-        threadContacts_[0].pairStart = 0;
-        for (std::size_t u = 1; u < threadContacts_.size(); ++u) {
-          threadContacts_[u].pairStart = at;
-          at += threadContacts_[u].pairs.size();
-        }
-        for (ThreadContacts& tc : threadContacts_) {
-          tc.wallStart = at;
-          at += tc.walls.size();
-        }
-        out.resize(at);
+        failure.capture([&] {
+          if (failure.failed()) return;
+          // Layout: pairs of thread 0 (already in place), 1, ..., then walls of thread 0, 1, ...
+          std::size_t at = out.size();
+          threadContacts_[0].pairStart = 0;
+          for (std::size_t u = 1; u < threadContacts_.size(); ++u) {
+            threadContacts_[u].pairStart = at;
+            at += threadContacts_[u].pairs.size();
+          }
+          for (ThreadContacts& tc : threadContacts_) {
+            tc.wallStart = at;
+            at += tc.walls.size();
+          }
+          out.resize(at);
+        });
       }
-      if (t != 0) std::copy(mine.pairs.begin(), mine.pairs.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.pairStart));
-      std::copy(mine.walls.begin(), mine.walls.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.wallStart));
+      // After the single's barrier every thread sees the same failed().
+      if (!failure.failed()) {
+        failure.capture([&] {
+          if (t != 0)
+            std::copy(mine.pairs.begin(), mine.pairs.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.pairStart));
+          std::copy(mine.walls.begin(), mine.walls.end(), out.begin() + static_cast<std::ptrdiff_t>(mine.wallStart));
+        });
+      }
     }
+    failure.rethrow();
     record();
     return;
   }

@@ -136,8 +136,12 @@ TEST_CASE("an analysis with far more cells than max_cells is refused before any 
   const auto start = std::chrono::steady_clock::now();
   CHECK_THROWS_WITH(analysis::analyze(p, o),
                     "analysis: about 8e+09 cells (200 grains x phi(y) slices of 1e-07 d_L), more than max_cells "
-                    "(1e+09); check the slice or cell size, or raise the limit with --max-cells");
+                    "(2e+08); check the slice or cell size, or raise the limit with --max-cells");
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+  // 4e8 cells, minutes of work that the old limit (1e9, itself 6.4 min) let through.
+  o.profile.slice = 2e-6;
+  CHECK_THROWS_WITH(analysis::analyze(p, o), Catch::StartsWith("analysis: about 4e+08 cells"));
+  CHECK(analysis::AnalysisOptions{}.maxCells == 2e8);
   // The limit is the options' own: lowered, it refuses the default analysis; at the estimate, it
   // lets it through.
   o = {};

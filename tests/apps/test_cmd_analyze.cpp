@@ -1,10 +1,18 @@
 // `confpack analyze` (apps/cmd_analyze.cpp) end to end: a packing file with a known answer in,
-// result.json and the CSV profiles out; a bad file refused with exit code 2 and nothing written.
+// result.json and the CSV profiles out; a bad file refused with exit code 2 and nothing written;
+// SIGTERM stops a long analysis.
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
+#include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <thread>
 
 #include "core/packing_io.hpp"
 #include "tests/support/confpack_binary.hpp"
@@ -60,7 +68,7 @@ TEST_CASE("confpack analyze writes result.json and profiles", "[apps][cli]") {
   CHECK(thin.code == 2);
   CHECK(thin.err ==
         "confpack analyze: error: analysis: about 8e+09 cells (200 grains x phi(y) slices of 1e-07 d_L), more than "
-        "max_cells (1e+09); check the slice or cell size, or raise the limit with --max-cells\n");
+        "max_cells (2e+08); check the slice or cell size, or raise the limit with --max-cells\n");
   CHECK_FALSE(fs::exists(dir / "thin"));
   CHECK(s.run("analyze packing.json --out low --max-cells 39999").code == 2);
   CHECK_FALSE(fs::exists(dir / "low"));
@@ -134,4 +142,36 @@ TEST_CASE("packings written by runs of either backend are plausible", "[apps][cl
     INFO("stderr: " << r.err);
     CHECK(r.code == 0);
   }
+}
+
+TEST_CASE("SIGTERM stops a long analysis: one line saying where, exit 143, nothing written", "[apps][cli]") {
+  const ConfpackSession s("cmd_analyze_sigterm");
+  REQUIRE(s.run("deposit --length-x 5 --width 5 --height 6 --out dep -q").code == 0);
+  const fs::path err = s.dir.string() + ".err";
+  const pid_t pid = fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    if (::chdir(s.dir.c_str()) != 0) _exit(127);
+    const int out = ::open("/dev/null", O_WRONLY);
+    const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(errFile, 2);
+    // 170 grains and 250,000 slices of phi(y): some 10 s of work (mostly the profile fit), stopped
+    // after one.
+    ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "analyze", "dep/packing.json", "--slice", "2e-5", "--out", "out", "-q",
+            (char*)nullptr);
+    _exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const std::string message = confpack::testing::slurp(err);
+  fs::remove(err);
+  INFO(message);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 143);
+  CHECK(lineCount(message) == 1);
+  CHECK(message.find("confpack analyze: error: interrupted by SIGTERM while ") != std::string::npos);
+  CHECK(s.entries() == std::vector<std::string>{"dep"});  // neither out/ nor its staging folder
 }

@@ -207,3 +207,26 @@ TEST_CASE("report --reference: a bad reference file is refused by its field, exi
   CHECK(md.find("| 0.64 ± 0.01 [1] |") != std::string::npos);
   CHECK(md.find("- [1] random close packing: G. D. Scott and D. M. Kilgour") != std::string::npos);
 }
+
+TEST_CASE("report: a hand-edited sweep.json that no longer holds is refused by field, exit 2, nothing written") {
+  ConfpackSession s("cmd_report_bad_table");
+  makeSweep(s.dir / "sweep");
+  const fs::path table = s.dir / "sweep" / "sweep.json";
+  json doc = json::parse(slurp(table));
+  // Once "confpack report: error: stoul" (the deposit) and, without the sweep file, exit 1 after
+  // the staging folder was made.
+  doc["runs"][1]["deposit"] = "dx";
+  std::ofstream(table) << doc.dump();
+  const auto deposit = s.run("report sweep --no-figures");
+  CHECK(deposit.code == 2);
+  CHECK(deposit.err ==
+        "confpack report: error: sweep/sweep.json: runs[1].deposit: expected \"d\" and the index of a "
+        "deposit below the number of runs (got \"dx\")\n");
+  doc["runs"][1]["deposit"] = "d0000";
+  doc.erase("sweep");
+  std::ofstream(table) << doc.dump();
+  const auto sweep = s.run("report sweep --no-figures");
+  CHECK(sweep.code == 2);
+  CHECK(sweep.err == "confpack report: error: sweep/sweep.json: sweep: missing (the sweep file that made the table)\n");
+  CHECK_FALSE(fs::exists(s.dir / "sweep" / "report"));
+}

@@ -177,6 +177,17 @@ TEST_CASE("flattened result: numbers and booleans kept, nulls kept as not applic
   CHECK(v.count("backend") == 0);
 }
 
+TEST_CASE("flattened result: a hand-edited result.json nested 200,000 objects deep is read, its depths skipped") {
+  // Once a stack overflow (SIGSEGV) of `confpack report`.
+  std::string text = R"({"solid_fraction": 0.6, "deep": )";
+  for (int k = 0; k < 200000; ++k) text += R"({"a": )";
+  text += "1";
+  text += std::string(200000, '}') + "}";
+  const auto v = study::flattenResult(json::parse(text));
+  CHECK(v.at("solid_fraction") == Approx(0.6));
+  CHECK(v.size() == 1);
+}
+
 TEST_CASE("report of a synthetic study: fits recover phi_bulk and C, tables side by side") {
   const fs::path dir = makeStudy("complete", false);
   const study::ReportSummary s = study::writeReport(dir, dir / "report");

@@ -6,12 +6,14 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "study/deposit_store.hpp"
 #include "study/reproduce.hpp"
@@ -452,4 +454,58 @@ TEST_CASE("setting axes: an unknown path or a value the configuration's readers 
   CHECK_THAT(message(R"({"shape": "pinacoid", "population.pinacoid.alpha_deg": [45, 60]})"),
              Catch::StartsWith("sweep run r0000 (MPP xS=0 W=10 mu=0 s1 nscd alpha_deg=45): pinacoid: with E=1 and "
                                "alpha=45 deg the ridge half-length"));
+}
+
+TEST_CASE("sweep table: what prepareSweepDir writes reads back, and a hand-edited table is refused by field") {
+  const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
+  const std::vector<study::SweepRun> runs = study::expandRuns(spec);
+  const json doc = study::runTableDocument(spec, runs);
+  study::SweepSpec back;
+  const std::vector<study::SweepRun> read = study::parseRunTable(doc, "t/sweep.json", &back);
+  CHECK(study::runTableDocument(back, read) == doc);
+  REQUIRE(read.size() == runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    CHECK(read[i].name == runs[i].name);
+    CHECK(read[i].depositIndex == runs[i].depositIndex);
+    CHECK(json(read[i].config) == json(runs[i].config));
+  }
+  // Each edit once came out as nlohmann's or the standard library's words without the file (key
+  // 'deposit' not found, stoul, basic_string::substr), or was taken: a name that leaves runs/,
+  // two runs of one name (the report counted the folder twice), a box key misspelt.
+  const std::vector<std::pair<std::function<void(json&)>, std::string>> edits = {
+      {[](json& d) { d["runs"][0].erase("deposit"); }, "t/sweep.json: runs[0].deposit: missing"},
+      {[](json& d) { d["runs"][0]["deposit"] = ""; }, "t/sweep.json: runs[0].deposit: expected \"d\""},
+      {[](json& d) { d["runs"][0]["deposit"] = "dx"; }, "t/sweep.json: runs[0].deposit: expected \"d\""},
+      {[](json& d) { d["runs"][0]["deposit"] = "d0099"; }, "t/sweep.json: runs[0].deposit: expected \"d\""},
+      {[](json& d) { d["runs"][1]["name"] = 3; }, "t/sweep.json: runs[1].name: expected a run folder's name"},
+      {[](json& d) { d["runs"][1]["name"] = "../../x"; }, "t/sweep.json: runs[1].name: expected a run folder's name"},
+      {[](json& d) { d["runs"][1]["name"] = "r0000"; }, "t/sweep.json: runs[1].name: \"r0000\" names two runs"},
+      {[](json& d) { d["runs"][2] = "hello"; }, "t/sweep.json: runs[2]: expected an object"},
+      {[](json& d) { d["runs"][2]["colour"] = 1; }, "t/sweep.json: runs[2].colour: unknown key"},
+      {[](json& d) { d["runs"][2]["config"]["box"]["widht"] = 3; },
+       "t/sweep.json: runs[2].config: config.box.widht: unknown key"},
+      {[](json& d) { d["runs"][2]["config"]["box"]["width"] = -3; }, "t/sweep.json: runs[2].config: "},
+      {[](json& d) { d.erase("sweep"); }, "t/sweep.json: sweep: missing"},
+      {[](json& d) { d["sweep"] = 5; }, "t/sweep.json: sweep: (document): expected a JSON object"},
+      {[](json& d) { d["runs"] = json::object(); }, "t/sweep.json: runs: expected an array"},
+      {[](json& d) { d["format"] = "confpack-sweep"; }, "t/sweep.json: format: not a confpack sweep table"},
+  };
+  for (const auto& [edit, message] : edits) {
+    json edited = doc;
+    edit(edited);
+    INFO(message);
+    CHECK_THROWS_WITH(study::parseRunTable(edited, "t/sweep.json"), Catch::StartsWith(message));
+  }
+}
+
+TEST_CASE("the sweep.json seeds of the fuzz corpus are accepted tables") {
+  int seeds = 0;
+  for (const auto& entry : fs::directory_iterator(CONFPACK_SOURCE_DIR "/fuzz/corpus/sweep_table")) {
+    INFO(entry.path());
+    study::SweepSpec spec;
+    const auto runs = study::parseRunTable(core::readJsonFile(entry.path(), "sweep table"), "seed", &spec);
+    CHECK(!runs.empty());
+    ++seeds;
+  }
+  CHECK(seeds >= 4);
 }

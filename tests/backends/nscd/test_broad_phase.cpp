@@ -1,7 +1,9 @@
 // The nscd broad phase (backends/nscd/broad_phase.hpp): exactly the pairs of a brute-force
-// search over the periodic images, on one thread or a team.
+// search over the periodic images, on one thread or a team; an out-of-memory in a thread of the
+// team comes out of it as std::bad_alloc.
 #include <catch2/catch.hpp>
 #include <cstdint>
+#include <new>
 #include <set>
 #include <tuple>
 #include <vector>
@@ -9,6 +11,7 @@
 #include "backends/nscd/broad_phase.hpp"
 #include "core/random.hpp"
 #include "tests/support/brute_force.hpp"
+#include "tests/support/failing_allocation.hpp"
 
 using namespace confpack;
 using core::Vec3;
@@ -78,4 +81,29 @@ TEST_CASE("nscd broad phase: 2 threads give the single-thread pair list, which i
   std::set<testing::ImagePairKey> found;
   for (const auto& c : parallel) found.insert({c.a, c.b, c.shiftX, c.shiftY});
   CHECK(found == testing::pairsWithin(bx, p, reach));
+}
+
+TEST_CASE("nscd broad phase: an allocation failing in a thread of the team comes out of findPairs as std::bad_alloc",
+          "[nscd][threads]") {
+  // Before, the exception left the OpenMP region and the runtime aborted the program (SIGABRT).
+  core::BoxDef bx;
+  bx.lengthX = 14.0;
+  bx.width = 8.0;
+  const auto [p, reach] = randomPoints(bx, 1500, 12.0, 21);
+  nscd::BroadPhase bp2(bx, 0.55, 2);
+  std::vector<nscd::CandidatePair> sequential, parallel;
+  {
+    // The first call runs the team (ThreadChoice's trial); the second thread's pair list is empty.
+    const testing::FailAllocationsOffThisThread outOfMemory;
+    CHECK_THROWS_AS(bp2.findPairs(p, reach, parallel), std::bad_alloc);
+    CHECK(testing::FailAllocationsOffThisThread::refused() > 0);
+  }
+  // Whole afterwards: the single-thread pair list.
+  nscd::BroadPhase(bx, 0.55, 1).findPairs(p, reach, sequential);
+  bp2.findPairs(p, reach, parallel);
+  REQUIRE(parallel.size() == sequential.size());
+  bool same = true;
+  for (std::size_t k = 0; k < sequential.size(); ++k)
+    same = same && sequential[k].a == parallel[k].a && sequential[k].b == parallel[k].b;
+  CHECK(same);
 }

@@ -1,11 +1,14 @@
 // The nscd narrow phase (backends/nscd/narrow_phase.hpp): collideAll on a team of threads gives
-// the single-thread contacts, bit for bit and in the same order.
+// the single-thread contacts, bit for bit and in the same order, and an out-of-memory in a thread
+// of the team comes out of it as std::bad_alloc.
 #include <catch2/catch.hpp>
+#include <new>
 #include <set>
 #include <vector>
 
 #include "backends/nscd/narrow_phase.hpp"
 #include "tests/backends/nscd/nscd_problems.hpp"
+#include "tests/support/failing_allocation.hpp"
 
 using namespace confpack;
 using core::Vec3;
@@ -59,5 +62,37 @@ TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread 
       bad += !same;
     }
   }
+  CHECK(bad == 0);
+}
+
+TEST_CASE("nscd narrow phase: an allocation failing in a thread of the team comes out of collideAll as std::bad_alloc",
+          "[nscd][threads]") {
+  // Before, the exception left the OpenMP region and the runtime aborted the program (SIGABRT)
+  // instead of "out of memory while ...", exit 1.
+  const core::SystemDef s = pile(core::ShapeKind::Pinacoid, 10.0, 6.0, 800);
+  std::vector<Vec3> positions;
+  std::vector<core::Quat> orientations;
+  for (const core::Grain& g : s.grains) {
+    positions.push_back(g.position);
+    orientations.push_back(g.orientation);
+  }
+  nscd::NarrowPhase narrow(s.box, s.grains, 0.5);
+  const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
+  REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
+  std::vector<nscd::ContactGeometry> one, two;
+  {
+    // The first call of a phase runs the team (ThreadChoice's trial), whose second thread's
+    // contact list is still empty: its first contact allocates.
+    const testing::FailAllocationsOffThisThread outOfMemory;
+    CHECK_THROWS_AS(narrow.collideAll(pairs, positions, orientations, two, 2), std::bad_alloc);
+    CHECK(testing::FailAllocationsOffThisThread::refused() > 0);
+  }
+  // The phase is whole afterwards: the next calls give the single-thread contacts.
+  narrow.collideAll(pairs, positions, orientations, one, 1);
+  narrow.collideAll(pairs, positions, orientations, two, 2);
+  REQUIRE(two.size() == one.size());
+  std::size_t bad = 0;
+  for (std::size_t c = 0; c < one.size(); ++c)
+    bad += one[c].a != two[c].a || one[c].b != two[c].b || !sameBits(one[c].normal, two[c].normal);
   CHECK(bad == 0);
 }
