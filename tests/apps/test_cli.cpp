@@ -219,22 +219,8 @@ namespace {
 /// its exit code (-1 if a signal ended it) and stderr.
 CommandResult runWithMemoryLimit(const fs::path& dir, std::size_t limitMiB, std::vector<std::string> args) {
   const fs::path err = dir.string() + ".err";
-  const pid_t pid = fork();
+  const pid_t pid = confpack::testing::startConfpack(dir, std::move(args), err, limitMiB);
   REQUIRE(pid >= 0);
-  if (pid == 0) {
-    if (::chdir(dir.c_str()) != 0) _exit(127);
-    const int null = ::open("/dev/null", O_WRONLY);
-    const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(null, 1);
-    ::dup2(errFile, 2);
-    const rlimit limit{limitMiB << 20, limitMiB << 20};
-    if (::setrlimit(RLIMIT_AS, &limit) != 0) _exit(126);
-    std::vector<char*> argv{const_cast<char*>(CONFPACK_BINARY)};
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::execv(CONFPACK_BINARY, argv.data());
-    _exit(127);
-  }
   int status = 0;
   ::waitpid(pid, &status, 0);
   CommandResult r;

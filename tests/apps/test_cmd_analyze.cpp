@@ -148,20 +148,11 @@ TEST_CASE("SIGTERM stops a long analysis: one line saying where, exit 143, nothi
   const ConfpackSession s("cmd_analyze_sigterm");
   REQUIRE(s.run("deposit --length-x 5 --width 5 --height 6 --out dep -q").code == 0);
   const fs::path err = s.dir.string() + ".err";
-  const pid_t pid = fork();
+  // 170 grains and 250,000 slices of phi(y): some 10 s of work (mostly the profile fit), stopped
+  // after one.
+  const pid_t pid = confpack::testing::startConfpack(
+      s.dir, {"analyze", "dep/packing.json", "--slice", "2e-5", "--out", "out", "-q"}, err);
   REQUIRE(pid >= 0);
-  if (pid == 0) {
-    if (::chdir(s.dir.c_str()) != 0) _exit(127);
-    const int out = ::open("/dev/null", O_WRONLY);
-    const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out, 1);
-    ::dup2(errFile, 2);
-    // 170 grains and 250,000 slices of phi(y): some 10 s of work (mostly the profile fit), stopped
-    // after one.
-    ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "analyze", "dep/packing.json", "--slice", "2e-5", "--out", "out", "-q",
-            (char*)nullptr);
-    _exit(127);
-  }
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
   ::kill(pid, SIGTERM);
   int status = 0;

@@ -139,17 +139,8 @@ TEST_CASE("report: SIGTERM or SIGKILL while gnuplot hangs leaves the previous re
     INFO("signal " << signal);
     fs::remove(started);
     const fs::path err = s.dir.string() + ".err";
-    const pid_t pid = fork();
+    const pid_t pid = testing::startConfpack(s.dir, {"report", "sw", "--gnuplot", gnuplot.string()}, err);
     REQUIRE(pid >= 0);
-    if (pid == 0) {
-      if (::chdir(s.dir.c_str()) != 0) _exit(127);
-      const int null = ::open("/dev/null", O_WRONLY);
-      const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      ::dup2(null, 1);
-      ::dup2(errFile, 2);
-      ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "report", "sw", "--gnuplot", gnuplot.c_str(), (char*)nullptr);
-      _exit(127);
-    }
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
     while (slurp(started).empty() && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -164,19 +164,10 @@ TEST_CASE("run --config DIR/config.json reruns the run: the same configuration r
 TEST_CASE("SIGTERM stops a run at its next step: one line saying where, exit 143, nothing written") {
   ConfpackSession s("cmd_run_sigterm");
   const fs::path err = s.dir.string() + ".err";
-  const pid_t pid = fork();
+  // A compaction of about 1,000 spheres for 400 t0: minutes of work, stopped after a second.
+  const pid_t pid = testing::startConfpack(
+      s.dir, {"run", "--length-x", "10", "--width", "10", "--height", "10", "--out", "out", "-q"}, err);
   REQUIRE(pid >= 0);
-  if (pid == 0) {
-    if (::chdir(s.dir.c_str()) != 0) _exit(127);
-    const int out = ::open("/dev/null", O_WRONLY);
-    const int errFile = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out, 1);
-    ::dup2(errFile, 2);
-    // A compaction of about 1,000 spheres for 400 t0: minutes of work, stopped after a second.
-    ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "run", "--length-x", "10", "--width", "10", "--height", "10", "--out",
-            "out", "-q", (char*)nullptr);
-    _exit(127);
-  }
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ::kill(pid, SIGTERM);
   int status = 0;

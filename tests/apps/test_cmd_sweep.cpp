@@ -33,16 +33,8 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
     "name": "kill",
     "base": { "box": { "length_x": 3, "height": 3 }, "compaction": { "time_limit": 1.5 } },
     "vary": { "width": [3, 4], "seed": [1], "backend": ["nscd", "bullet"] } })";
-  const pid_t pid = fork();
+  const pid_t pid = testing::startConfpack(dir, {"sweep", "s.json", "--out", "sw", "--jobs", "1"});
   REQUIRE(pid >= 0);
-  if (pid == 0) {
-    if (::chdir(dir.c_str()) != 0) _exit(127);
-    const int null = ::open("/dev/null", O_WRONLY);
-    ::dup2(null, 1);
-    ::dup2(null, 2);
-    ::execl(CONFPACK_BINARY, CONFPACK_BINARY, "sweep", "s.json", "--out", "sw", "--jobs", "1", (char*)nullptr);
-    _exit(127);
-  }
   // Kill as soon as the first run is finished (the second is then in progress or about to be).
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (!fs::exists(dir / "sw" / "runs" / "r0000" / study::kDoneMarker) && std::chrono::steady_clock::now() < deadline)

@@ -2,8 +2,12 @@
 // Runs a real binary (`confpack`, CONFPACK_BINARY, or `confpack-bench`, CONFPACK_BENCH_BINARY, set
 // by tests/CMakeLists.txt) as a user runs it, in a scratch folder of its own, with its exit code
 // and its stdout and stderr.
+#include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <cstddef>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -55,6 +59,29 @@ struct ConfpackSession {
   }
   bool empty() const { return std::filesystem::is_empty(dir); }
 };
+
+/// Starts CONFPACK_BINARY with `args` in `dir` as a child process, stdout to /dev/null and stderr
+/// to `errFile` (nowhere if empty), under an address-space limit of `limitMiB` (RLIMIT_AS; 0 = none),
+/// and returns its PID at once, for a test that signals or waits for it; -1 if fork failed.
+inline pid_t startConfpack(const std::filesystem::path& dir, std::vector<std::string> args,
+                           const std::filesystem::path& errFile = {}, std::size_t limitMiB = 0) {
+  const pid_t pid = fork();
+  if (pid != 0) return pid;
+  if (::chdir(dir.c_str()) != 0) _exit(127);
+  const int null = ::open("/dev/null", O_WRONLY);
+  const int err = errFile.empty() ? null : ::open(errFile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ::dup2(null, 1);
+  ::dup2(err, 2);
+  if (limitMiB > 0) {
+    const rlimit limit{limitMiB << 20, limitMiB << 20};
+    if (::setrlimit(RLIMIT_AS, &limit) != 0) _exit(126);
+  }
+  std::vector<char*> argv{const_cast<char*>(CONFPACK_BINARY)};
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  ::execv(CONFPACK_BINARY, argv.data());
+  _exit(127);
+}
 
 /// Number of lines (newline characters) of a captured output.
 inline int lineCount(const std::string& s) {

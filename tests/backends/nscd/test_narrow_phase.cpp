@@ -16,16 +16,30 @@ using testing::candidatePairs;
 using testing::pile;
 using testing::sameBits;
 
+namespace {
+
+/// A deposited pinacoid pile, with its poses as the phase takes them.
+struct PinacoidPile {
+  core::SystemDef s = pile(core::ShapeKind::Pinacoid, 10.0, 6.0, 800);
+  std::vector<Vec3> positions;
+  std::vector<core::Quat> orientations;
+  PinacoidPile() {
+    for (const core::Grain& g : s.grains) {
+      positions.push_back(g.position);
+      orientations.push_back(g.orientation);
+    }
+  }
+};
+
+}  // namespace
+
 TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread contacts in the same order",
           "[nscd][threads]") {
   // A deposited pinacoid pile: polyhedron pairs (all contact types) and wall contacts.
-  const core::SystemDef s = pile(core::ShapeKind::Pinacoid, 10.0, 6.0, 800);
-  std::vector<Vec3> positions;
-  std::vector<core::Quat> orientations;
-  for (const core::Grain& g : s.grains) {
-    positions.push_back(g.position);
-    orientations.push_back(g.orientation);
-  }
+  const PinacoidPile p;
+  const core::SystemDef& s = p.s;
+  const std::vector<Vec3>& positions = p.positions;
+  const std::vector<core::Quat>& orientations = p.orientations;
   // A large alert distance so that many pairs, of every kind, become contacts.
   nscd::NarrowPhase narrow(s.box, s.grains, 0.5);
   const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
@@ -69,13 +83,10 @@ TEST_CASE("nscd narrow phase: an allocation failing in a thread of the team come
           "[nscd][threads]") {
   // Before, the exception left the OpenMP region and the runtime aborted the program (SIGABRT)
   // instead of "out of memory while ...", exit 1.
-  const core::SystemDef s = pile(core::ShapeKind::Pinacoid, 10.0, 6.0, 800);
-  std::vector<Vec3> positions;
-  std::vector<core::Quat> orientations;
-  for (const core::Grain& g : s.grains) {
-    positions.push_back(g.position);
-    orientations.push_back(g.orientation);
-  }
+  const PinacoidPile p;
+  const core::SystemDef& s = p.s;
+  const std::vector<Vec3>& positions = p.positions;
+  const std::vector<core::Quat>& orientations = p.orientations;
   nscd::NarrowPhase narrow(s.box, s.grains, 0.5);
   const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
