@@ -6,9 +6,7 @@
 #include <string>
 
 #include "backends/bullet/bullet_backend.hpp"
-#include "backends/bullet/bullet_settings.hpp"
 #include "backends/nscd/nscd_backend.hpp"
-#include "backends/nscd/nscd_settings.hpp"
 
 namespace confpack::backends {
 
@@ -21,22 +19,6 @@ std::unique_ptr<core::ContactBackend> makeBackend(std::string_view name, const c
                                                   const nlohmann::json& options) {
   if (name == "nscd") return nscd::makeNscdBackend(system, options);
   if (name == "bullet") return bullet::makeBulletBackend(system, options);
-  throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
-}
-
-void checkBackendOptions(std::string_view name, const nlohmann::json& options) {
-  if (name == "nscd") {
-    nscd::settingsFromJson(options);
-  } else if (name == "bullet") {
-    bullet::bulletSettingsFromJson(options);
-  } else {
-    throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
-  }
-}
-
-std::string optionsMarkdown(std::string_view name) {
-  if (name == "nscd") return nscd::settingsTable().markdown(nscd::NscdSettings{});
-  if (name == "bullet") return bullet::settingsTable().markdown(bullet::BulletSettings{});
   throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
 }
 
