@@ -190,9 +190,8 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
       });
 #pragma omp barrier
 #pragma omp single
-      {
+      if (!failure.failed()) {
         failure.capture([&] {
-          if (failure.failed()) return;
           // Layout: pairs of thread 0 (already in place), 1, ..., then walls of thread 0, 1, ...
           std::size_t at = out.size();
           threadContacts_[0].pairStart = 0;

@@ -12,17 +12,26 @@
 
 using namespace confpack;
 
+namespace {
+
+/// This thread's index in the team (0 without OpenMP).
+int threadIndex() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+}  // namespace
+
 TEST_CASE("ParallelFailure carries the first exception of a parallel region out of it") {
   SECTION("no exception: nothing thrown, every thread's work done") {
     core::ParallelFailure failure;
     int done[2] = {0, 0};
 #pragma omp parallel num_threads(2)
     {
-#ifdef _OPENMP
-      const int t = omp_get_thread_num();
-#else
-      const int t = 0;
-#endif
+      const int t = threadIndex();
       failure.capture([&] { done[t] = 1; });
     }
     CHECK_NOTHROW(failure.rethrow());
@@ -33,11 +42,7 @@ TEST_CASE("ParallelFailure carries the first exception of a parallel region out 
     core::ParallelFailure failure;
 #pragma omp parallel num_threads(2)
     {
-#ifdef _OPENMP
-      const int t = omp_get_thread_num();
-#else
-      const int t = 0;
-#endif
+      const int t = threadIndex();
       failure.capture([&] { throw std::out_of_range("thread " + std::to_string(t)); });
     }
     CHECK(failure.failed());

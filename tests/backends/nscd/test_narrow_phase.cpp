@@ -18,11 +18,15 @@ using testing::sameBits;
 
 namespace {
 
-/// A deposited pinacoid pile, with its poses as the phase takes them.
+/// A deposited pinacoid pile (polyhedron pairs of all contact types, and wall contacts), its poses
+/// as the phase takes them, and its candidate pairs at a large alert distance, so that many pairs,
+/// of every kind, become contacts.
 struct PinacoidPile {
   core::SystemDef s = pile(core::ShapeKind::Pinacoid, 10.0, 6.0, 800);
   std::vector<Vec3> positions;
   std::vector<core::Quat> orientations;
+  nscd::NarrowPhase narrow{s.box, s.grains, 0.5};
+  std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
   PinacoidPile() {
     for (const core::Grain& g : s.grains) {
       positions.push_back(g.position);
@@ -35,14 +39,8 @@ struct PinacoidPile {
 
 TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread contacts in the same order",
           "[nscd][threads]") {
-  // A deposited pinacoid pile: polyhedron pairs (all contact types) and wall contacts.
-  const PinacoidPile p;
-  const core::SystemDef& s = p.s;
-  const std::vector<Vec3>& positions = p.positions;
-  const std::vector<core::Quat>& orientations = p.orientations;
-  // A large alert distance so that many pairs, of every kind, become contacts.
-  nscd::NarrowPhase narrow(s.box, s.grains, 0.5);
-  const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
+  PinacoidPile p;
+  auto& [s, positions, orientations, narrow, pairs] = p;
   INFO("candidate pairs " << pairs.size());
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
 
@@ -83,12 +81,8 @@ TEST_CASE("nscd narrow phase: an allocation failing in a thread of the team come
           "[nscd][threads]") {
   // Before, the exception left the OpenMP region and the runtime aborted the program (SIGABRT)
   // instead of "out of memory while ...", exit 1.
-  const PinacoidPile p;
-  const core::SystemDef& s = p.s;
-  const std::vector<Vec3>& positions = p.positions;
-  const std::vector<core::Quat>& orientations = p.orientations;
-  nscd::NarrowPhase narrow(s.box, s.grains, 0.5);
-  const std::vector<nscd::CandidatePair> pairs = candidatePairs(s, narrow);
+  PinacoidPile p;
+  auto& [s, positions, orientations, narrow, pairs] = p;
   REQUIRE(pairs.size() >= 2 * nscd::NarrowPhase::kMinPairsPerThread);
   std::vector<nscd::ContactGeometry> one, two;
   {
