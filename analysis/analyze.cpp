@@ -28,15 +28,13 @@ void AnalysisOptions::validate() const {
     throw std::invalid_argument(fmt::format("analysis: density must be positive (got {})", density));
 }
 
-double estimatedCells(const core::Packing& packing, const AnalysisOptions& options, std::string* what) {
-  const double grains = static_cast<double>(packing.grains.size());
-  const core::BoxDef& box = packing.box;
+double estimatedCells(const core::BoxDef& box, double grains, const AnalysisOptions& options, std::string* what) {
   const double surface =
       std::ceil(box.lengthX / options.region.cellSize) * std::ceil(box.width / options.region.cellSize);
   // phi(y) takes every grain's slab volumes over every slice (solidFractionProfile).
   const std::pair<double, std::string> counts[] = {
       {std::max(grains, 1.0) * std::ceil(box.width / options.profile.slice),
-       fmt::format("{} grains x phi(y) slices of {:g} d_L", packing.grains.size(), options.profile.slice)},
+       fmt::format("{:.0f} grains x phi(y) slices of {:g} d_L", grains, options.profile.slice)},
       {std::ceil(box.width / options.coordination.slice),
        fmt::format("Z(y) slices of {:g} d_L", options.coordination.slice)},
       {surface, fmt::format("free-surface cells of {:g} d_L", options.region.cellSize)}};
@@ -47,15 +45,21 @@ double estimatedCells(const core::Packing& packing, const AnalysisOptions& optio
   return most->first;
 }
 
-Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
-  options.validate();
+double estimatedCells(const core::Packing& packing, const AnalysisOptions& options, std::string* what) {
+  return estimatedCells(packing.box, static_cast<double>(packing.grains.size()), options, what);
+}
+
+void checkCells(const core::BoxDef& box, double grains, const AnalysisOptions& options, std::string_view remedy) {
   std::string what;
-  const double cells = estimatedCells(packing, options, &what);
+  const double cells = estimatedCells(box, grains, options, &what);
   if (!(cells <= options.maxCells))
     throw std::invalid_argument(fmt::format(
-        "analysis: about {:.3g} cells ({}), more than max_cells ({:g}); check the slice or cell size, or raise the "
-        "limit with --max-cells",
-        cells, what, options.maxCells));
+        "analysis: about {:.3g} cells ({}), more than max_cells ({:g}); {}", cells, what, options.maxCells, remedy));
+}
+
+Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
+  options.validate();
+  checkCells(packing.box, static_cast<double>(packing.grains.size()), options);
   Analysis a;
   a.grains = static_cast<int>(packing.grains.size());
   bool large = false, small = false;

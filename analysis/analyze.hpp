@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string_view>
 
 #include "analysis/bulk_region.hpp"
 #include "analysis/coordination.hpp"
@@ -81,6 +82,16 @@ struct Analysis {
 /// (each grain's slab volumes are computed over every slice), the Z(y) slices and the cells of the
 /// free-surface grid. `what` (if given) receives which one it is.
 double estimatedCells(const core::Packing& packing, const AnalysisOptions& options, std::string* what = nullptr);
+/// The same for `grains` grains in `box`, known before a packing exists (a run's estimate).
+double estimatedCells(const core::BoxDef& box, double grains, const AnalysisOptions& options,
+                      std::string* what = nullptr);
+
+/// Throws std::invalid_argument naming the largest count when the analysis of `grains` grains in
+/// `box` would visit more than options.maxCells cells: what `run` and `sweep` check before they
+/// deposit, so that an oversized run is refused before its work rather than after its compaction.
+/// `remedy` ends the message: what the caller's user can change.
+void checkCells(const core::BoxDef& box, double grains, const AnalysisOptions& options,
+                std::string_view remedy = "check the slice or cell size, or raise the limit with --max-cells");
 
 /// Runs every measurement. Throws std::invalid_argument for an unusable packing (e.g. a contact
 /// with an out-of-range grain, mixed sphere-pinacoid pairs), bad options, or more cells than

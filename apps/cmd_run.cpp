@@ -121,6 +121,7 @@ void runRun(RunState& st) {
       start = startFromPacking(st);
     }
     cfg.validate();
+    study::checkRunCells(cfg, start ? static_cast<double>(start->grains.size()) : cfg.estimatedGrainCount());
     // Here, not when the backend is built: an unknown key is bad input (exit 2), as bad JSON is.
     backends::checkBackendOptions(cfg.backend, cfg.backendOptions);
     checkOutputTarget(st.opts.out);

@@ -12,6 +12,7 @@
 #include "apps/commands.hpp"
 #include "backends/backend_factory.hpp"
 #include "study/sweep.hpp"
+#include "study/run_pipeline.hpp"
 #include "study/sweep_runner.hpp"
 
 namespace confpack::app {
@@ -47,6 +48,12 @@ void runSweepCommand(const SweepState& st) {
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(fmt::format("{}: run {} ({}): backend_options: {}", st.file.string(), run.name,
                                                 run.label(varied), e.what()));
+      }
+      try {
+        study::checkRunCells(run.config, run.config.estimatedGrainCount());
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(
+            fmt::format("{}: run {} ({}): {}", st.file.string(), run.name, run.label(varied), e.what()));
       }
     }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));

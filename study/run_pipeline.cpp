@@ -80,6 +80,11 @@ analysis::AnalysisOptions analysisOptions() {
   return o;
 }
 
+void checkRunCells(const core::RunConfig& cfg, double grains) {
+  analysis::checkCells(cfg.box, grains, analysisOptions(),
+                       "a run analyses with the default slices and cells: make the box smaller");
+}
+
 double defaultTimeStep(const core::RunConfig& cfg, const core::Deposit& deposit) {
   const double volume = core::totalVolume(deposit.grains);
   const double finalHeight = volume / (cfg.box.lengthX * cfg.box.width * cfg.deposition.expectedSolidFraction);

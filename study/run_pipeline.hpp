@@ -100,6 +100,12 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
 /// block (the pipeline writes the real one, with velocities).
 analysis::AnalysisOptions analysisOptions();
 
+/// Refuses (std::invalid_argument), before any work, a run whose analysis would visit more than
+/// the analysis's max_cells cells (analysis::checkCells) with `grains` grains in cfg's box: `run`
+/// and `sweep` call it with the configuration's estimated grain count, so that an oversized run
+/// fails before its deposit and compaction rather than after them.
+void checkRunCells(const core::RunConfig& cfg, double grains);
+
 /// The result.json of a run (docs/model.md, "Results"): the measurements of the final packing, the
 /// equilibrium block, timing, backend, seed and the resolved configuration.
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,

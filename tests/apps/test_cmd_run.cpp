@@ -86,6 +86,19 @@ TEST_CASE("run --from refuses box options and unreadable files with one line, ex
   CHECK(!fs::exists(s.dir / "out"));
 }
 
+TEST_CASE("run refuses a run whose analysis would exceed max_cells before depositing: one line, exit 2, no output") {
+  ConfpackSession s("cmd_run_max_cells");
+  // ~6.9e4 grains (below max_grains) x 1e6 phi(y) slices of 0.02 d_L across a 20,000 d_L width:
+  // refused at once, where the deposit and the compaction would take hours before the analysis.
+  const auto start = std::chrono::steady_clock::now();
+  const auto wide = s.run("run --length-x 2 --width 20000 --height 1.5 --out out");
+  CHECK(wide.code == 2);
+  CHECK_THAT(wide.err, Catch::Contains("grains x phi(y) slices of 0.02 d_L), more than max_cells (2e+08)"));
+  CHECK(testing::lineCount(wide.err) == 1);
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(20));
+  CHECK(!fs::exists(s.dir / "out"));
+}
+
 TEST_CASE("run --compaction-options sets compaction keys (over the flags) and refuses bad ones by name") {
   ConfpackSession s("cmd_run_compaction_options");
   core::writePacking(looseColumn(), s.dir / "column.json");

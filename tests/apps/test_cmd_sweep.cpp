@@ -82,6 +82,18 @@ TEST_CASE("confpack sweep refuses a sweep file listing more runs than --max-runs
   CHECK(entries == std::vector<std::string>{"huge.json", "two.json"});  // nothing written
 }
 
+TEST_CASE("confpack sweep refuses a run whose analysis would exceed max_cells before any run: one line, exit 2") {
+  const ConfpackSession s("cmd_sweep_max_cells");
+  std::ofstream(s.dir / "wide.json") << R"({"base": {"box": {"length_x": 2, "height": 1.5}},
+                                            "vary": {"width": [4, 20000]}})";
+  const auto wide = s.run("sweep wide.json --out sw");
+  CHECK(wide.code == 2);
+  CHECK_THAT(wide.err, Catch::Contains("wide.json: run r0001 (MSP xS=0 W=20000 mu=0 s1 nscd): analysis: about"));
+  CHECK_THAT(wide.err, Catch::Contains("more than max_cells (2e+08)"));
+  CHECK(testing::lineCount(wide.err) == 1);
+  CHECK(!fs::exists(s.dir / "sw"));
+}
+
 TEST_CASE("a sweep over a configuration path: two real runs, listed, run and reported by the setting") {
   const ConfpackSession s("cmd_sweep_setting_axis");
   // Two small piles of pinacoids in the biperiodic box, alpha = 60 and 75 degrees; 1 t0 of compaction.
