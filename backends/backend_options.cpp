@@ -12,7 +12,29 @@
 
 namespace confpack::backends {
 
+namespace {
+
+/// A key of the other backend's table and not of `name`'s: what a run's config.json (which lists
+/// every setting of its backend) holds after its "backend" was changed by hand. Named as such,
+/// since the unknown-key message lists only the right keys.
+void refuseOtherBackendsKey(std::string_view name, const nlohmann::json& options) {
+  if (!options.is_object()) return;
+  const bool nscd = name == "nscd";
+  for (const auto& item : options.items()) {
+    const std::string& key = item.key();
+    const bool own = nscd ? nscd::settingsTable().has(key) : bullet::settingsTable().has(key);
+    const bool other = nscd ? bullet::settingsTable().has(key) : nscd::settingsTable().has(key);
+    if (!own && other)
+      throw std::invalid_argument(fmt::format(
+          "{}.{}: a setting of {}, not of {} (when changing a config.json's backend, drop its backend_options)", name,
+          key, nscd ? "bullet" : "nscd", name));
+  }
+}
+
+}  // namespace
+
 void checkBackendOptions(std::string_view name, const nlohmann::json& options) {
+  if (name == "nscd" || name == "bullet") refuseOtherBackendsKey(name, options);
   if (name == "nscd") {
     nscd::settingsFromJson(options);
   } else if (name == "bullet") {

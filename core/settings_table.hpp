@@ -61,6 +61,7 @@ class SettingsTable {
 
   const std::string& where() const { return where_; }
   const std::vector<Field>& fields() const { return fields_; }
+  bool has(const std::string& key) const { return find(key) != nullptr; }
 
   SettingsTable& number(const char* key, double T::*member, Range range, const char* unit, const char* help) {
     return add(key, unit, range.text(), help,

@@ -39,3 +39,16 @@ TEST_CASE("the run configuration accepts exactly the factory's backend names") {
   c.backend = "ode";
   CHECK_THROWS_WITH(c.validate(), Catch::Contains("backend"));
 }
+
+TEST_CASE("checkBackendOptions names a key of the other backend as such, and an unknown key with the known ones") {
+  using backends::checkBackendOptions;
+  CHECK_NOTHROW(checkBackendOptions("nscd", {{"alert_distance", 0.1}}));
+  CHECK_NOTHROW(checkBackendOptions("bullet", {{"iterations", 30}}));
+  // A config.json of an nscd run whose "backend" was changed to bullet.
+  CHECK_THROWS_WITH(checkBackendOptions("bullet", {{"iterations", 30}, {"alert_distance", 0.1}}),
+                    "bullet.alert_distance: a setting of nscd, not of bullet (when changing a config.json's backend, "
+                    "drop its backend_options)");
+  CHECK_THROWS_WITH(checkBackendOptions("nscd", {{"erp", 0.2}}), Catch::Contains("nscd.erp: a setting of bullet"));
+  CHECK_THROWS_WITH(checkBackendOptions("nscd", {{"bogus", 1}}), Catch::StartsWith("nscd.bogus: unknown key (known: theta"));
+  CHECK_THROWS_WITH(checkBackendOptions("nscd", nlohmann::json::array()), Catch::Contains("must be a JSON object"));
+}
