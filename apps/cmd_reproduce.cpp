@@ -1,4 +1,4 @@
-// `confpack reproduce --scale tiny|quick|paper --out DIR`: runs the confinement study
+// `confpack reproduce --scale tiny|quick|medium|paper --out DIR`: runs the confinement study
 // (docs/model.md, "The study and its report"; study/reproduce.hpp)
 // into DIR (a resumable sweep folder) and writes its report into DIR/report/.
 #include <fmt/format.h>
@@ -84,9 +84,10 @@ void registerReproduce(CLI::App& app) {
       "reproduce",
       "Run the confinement study (docs/model.md) with both backends and write its report (DIR/report/report.html). "
       "Rerunning the same command resumes an interrupted study.");
-  sub->add_option("--scale", st->scale, "tiny (smoke test, minutes), quick (shrunk box, < 20 min on 2 cores) or "
-                                        "paper (the paper's sizes, for a cluster)")
-      ->check(CLI::IsMember({"tiny", "quick", "paper"}))
+  sub->add_option("--scale", st->scale,
+                  "tiny (smoke test, minutes), quick (shrunk box, about 20 min on 2 cores), medium (830 to 4,300 "
+                  "monodisperse grains a run, meant to run overnight on 2 cores) or paper (the paper's sizes, for a cluster)")
+      ->check(CLI::IsMember({"tiny", "quick", "medium", "paper"}))
       ->capture_default_str();
   sub->add_option("--out", st->out, "Study folder (sweep runs, deposits, report/)")->required();
   sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096))->capture_default_str();

@@ -9,7 +9,7 @@ namespace confpack::study {
 using nlohmann::json;
 
 const std::vector<std::string_view>& reproductionScales() {
-  static const std::vector<std::string_view> s = {"tiny", "quick", "paper"};
+  static const std::vector<std::string_view> s = {"tiny", "quick", "medium", "paper"};
   return s;
 }
 
@@ -54,6 +54,24 @@ json reproductionSweep(std::string_view scale) {
             {"groups", studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3,
                                    true)}};
   }
+  if (scale == "medium") {
+    // Between quick and paper: the paper's families, widths and seeds in a smaller box,
+    // L_x = 12 d_L, h = 12 d_L (biperiodic period 12): about 830 (spheres, W = 5) to 4,300
+    // (pinacoids, W = 20) grains a monodisperse run, up to 12,500 for x_S = 40 at W = 20 (the
+    // small grains' count), and a bulk region (3 d_L from the floor and from the free surface)
+    // about 6 d_L thick, some 410 grains at W = 5. nscd on the quasi-static protocol with its fall
+    // bounded at 40 t0 (pinacoid piles of the quick study fall for 17 to 20 t0; deeper piles
+    // longer); Bullet, which has no finisher, stops at 20 t0 and is reported as not at rest.
+    return {{"format", kSweepFormat},
+            {"version", kSweepVersion},
+            {"name", "medium"},
+            {"description", "the confinement study in a 12 x W x 12 box, meant to run overnight on 2 cores"},
+            {"base", {{"box", {{"length_x", 12.0}, {"height", 12.0}}},
+                      {"compaction", {{"time_limit", 20.0}, {"fall_time_limit", 40.0}, {"protocol", "quasi-static"}}}}},
+            {"biperiodic_width", 12.0},
+            {"groups", studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3,
+                                   true)}};
+  }
   if (scale == "quick") {
     // Shrunken box: L_x = 4 d_L, h = 7 d_L (the bulk region, 3 d_L away from the floor and from
     // the free surface, is then about 1 d_L thick: the smallest height with a bulk at all), widths
@@ -89,7 +107,7 @@ json reproductionSweep(std::string_view scale) {
              {{"shape", {"sphere"}}, {"small_fraction", {0.0}}, {"width", {3.0, 5.0, "biperiodic"}},
               {"wall_friction", {0.0}}, {"seed", {1}}, {"backend", {"nscd", "bullet"}}}}};
   }
-  throw std::invalid_argument(fmt::format("--scale: expected tiny, quick or paper (got '{}')", scale));
+  throw std::invalid_argument(fmt::format("--scale: expected tiny, quick, medium or paper (got '{}')", scale));
 }
 
 }  // namespace confpack::study

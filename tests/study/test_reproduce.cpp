@@ -47,3 +47,25 @@ TEST_CASE("reproduce: the paper scale is the full study") {
   CHECK(study::expandRuns(study::parseSweepSpec(study::reproductionSweep("tiny"))).size() == 6);
   CHECK_THROWS_AS(study::reproductionSweep("huge"), std::invalid_argument);
 }
+
+TEST_CASE("reproduce: the medium scale is the paper's study in a box of 830 to 4,300 monodisperse grains") {
+  const auto runs = study::expandRuns(study::parseSweepSpec(study::reproductionSweep("medium")));
+  CHECK(runs.size() == (16 + 9 + 4) * 3 * 2);  // the paper's families, widths, seeds and backends
+  std::set<double> widths;
+  for (const study::SweepRun& r : runs) {
+    const core::RunConfig& c = r.config;
+    if (!c.box.periodicY) widths.insert(c.box.width);
+    CHECK(c.compaction.protocol == core::Protocol::QuasiStatic);
+    // Grains at the expected solid fraction: 830 (spheres, W = 5) to 4,300 (pinacoids, W = 20)
+    // monodisperse, the small grains of x_S = 40 raising W = 20 to 12,500.
+    const double grains = c.estimatedGrainCount();
+    CHECK(grains < 13000.0);
+    if (c.population.smallFraction == 0.0) {
+      CHECK(grains > 800.0);
+      CHECK(grains < 4400.0);
+      // The bulk region (3 d_L from the floor and from the free surface) holds several hundred grains.
+      CHECK(grains * (c.box.height - 6.0) / c.box.height > 400.0);
+    }
+  }
+  CHECK(widths == std::set<double>{5.0, 10.0, 20.0});
+}
