@@ -18,26 +18,48 @@ namespace {
 // The three families of the confinement study (docs/model.md, "The study and its report") as groups
 // of one sweep file. Values that do not vary within a group are given as one-element lists so that
 // the file reads as the study's definition.
-json studyGroups(const json& widths, const json& fractions, const json& frictions, int replicas,
-                 bool pinacoids) {
+json studyGroups(const json& widths, const json& fractions, const json& frictions, int replicas, bool pinacoids) {
   const json backends = {"nscd", "bullet"};
   json groups = json::array();
   // Spheres, mono- and bidisperse, frictionless walls: phi(W), Z(W), profiles, lambda_L(x_S).
-  groups.push_back({{"shape", {"sphere"}}, {"small_fraction", fractions}, {"width", widths},
-                    {"wall_friction", {0.0}}, {"replicas", replicas}, {"backend", backends}});
+  groups.push_back({{"shape", {"sphere"}},
+                    {"small_fraction", fractions},
+                    {"width", widths},
+                    {"wall_friction", {0.0}},
+                    {"replicas", replicas},
+                    {"backend", backends}});
   // Wall friction (docs/model.md, "Wall friction"), monodisperse spheres, confined widths only
   // (biperiodic has no wall).
   json confined = json::array();
   for (const json& w : widths)
     if (w.is_number()) confined.push_back(w);
   if (frictions.size() > 1)
-    groups.push_back({{"shape", {"sphere"}}, {"small_fraction", {0.0}}, {"width", confined},
-                      {"wall_friction", frictions}, {"replicas", replicas}, {"backend", backends}});
+    groups.push_back({{"shape", {"sphere"}},
+                      {"small_fraction", {0.0}},
+                      {"width", confined},
+                      {"wall_friction", frictions},
+                      {"replicas", replicas},
+                      {"backend", backends}});
   // Monodisperse pinacoids.
   if (pinacoids)
-    groups.push_back({{"shape", {"pinacoid"}}, {"small_fraction", {0.0}}, {"width", widths},
-                      {"wall_friction", {0.0}}, {"replicas", replicas}, {"backend", backends}});
+    groups.push_back({{"shape", {"pinacoid"}},
+                      {"small_fraction", {0.0}},
+                      {"width", widths},
+                      {"wall_friction", {0.0}},
+                      {"replicas", replicas},
+                      {"backend", backends}});
   return groups;
+}
+
+// A sweep file of the study: the box L_x x W x h (biperiodic period `biperiodic`), the compaction
+// settings that differ from the defaults, and the groups.
+json studySweep(std::string_view name, std::string_view description, double lengthX, double height,
+                const json& compaction, double biperiodic, json groups) {
+  json base = {{"box", {{"length_x", lengthX}, {"height", height}}}};
+  if (!compaction.empty()) base["compaction"] = compaction;
+  return {{"format", kSweepFormat},     {"version", kSweepVersion}, {"name", name},
+          {"description", description}, {"base", std::move(base)},  {"biperiodic_width", biperiodic},
+          {"groups", std::move(groups)}};
 }
 
 }  // namespace
@@ -45,14 +67,9 @@ json studyGroups(const json& widths, const json& fractions, const json& friction
 json reproductionSweep(std::string_view scale) {
   if (scale == "paper") {
     // The paper's sizes: L_x = 20 d_L, h = 16 d_L, biperiodic period 20 d_L; the study in full.
-    return {{"format", kSweepFormat},
-            {"version", kSweepVersion},
-            {"name", "paper"},
-            {"description", "the confinement study at the paper's sizes"},
-            {"base", {{"box", {{"length_x", 20.0}, {"height", 16.0}}}}},
-            {"biperiodic_width", 20.0},
-            {"groups", studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3,
-                                   true)}};
+    return studySweep(
+        "paper", "the confinement study at the paper's sizes", 20.0, 16.0, json::object(), 20.0,
+        studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3, true));
   }
   if (scale == "medium") {
     // Between quick and paper: the paper's families, widths and seeds in a smaller box,
@@ -62,15 +79,10 @@ json reproductionSweep(std::string_view scale) {
     // about 6 d_L thick, some 410 grains at W = 5. nscd on the quasi-static protocol with its fall
     // bounded at 40 t0 (pinacoid piles of the quick study fall for 17 to 20 t0; deeper piles
     // longer); Bullet, which has no finisher, stops at 20 t0 and is reported as not at rest.
-    return {{"format", kSweepFormat},
-            {"version", kSweepVersion},
-            {"name", "medium"},
-            {"description", "the confinement study in a 12 x W x 12 box, meant to run overnight on 2 cores"},
-            {"base", {{"box", {{"length_x", 12.0}, {"height", 12.0}}},
-                      {"compaction", {{"time_limit", 20.0}, {"fall_time_limit", 40.0}, {"protocol", "quasi-static"}}}}},
-            {"biperiodic_width", 12.0},
-            {"groups", studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3,
-                                   true)}};
+    return studySweep(
+        "medium", "the confinement study in a 12 x W x 12 box, meant to run overnight on 2 cores", 12.0, 12.0,
+        {{"time_limit", 20.0}, {"fall_time_limit", 40.0}, {"protocol", "quasi-static"}}, 12.0,
+        studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3, true));
   }
   if (scale == "quick") {
     // Shrunken box: L_x = 4 d_L, h = 7 d_L (the bulk region, 3 d_L away from the floor and from
@@ -85,14 +97,9 @@ json reproductionSweep(std::string_view scale) {
     // steps (docs/performance.md, "The quasi-static protocol"). Bullet has no finisher and stops
     // at time_limit, 8 t0 (at 30 t0 its runs were 60 % of the study's cost); the report flags
     // every run that is not at rest.
-    return {{"format", kSweepFormat},
-            {"version", kSweepVersion},
-            {"name", "quick"},
-            {"description", "the confinement study shrunk to run in minutes on 2 cores"},
-            {"base", {{"box", {{"length_x", 4.0}, {"height", 7.0}}},
-                      {"compaction", {{"time_limit", 8.0}, {"fall_time_limit", 30.0}, {"protocol", "quasi-static"}}}}},
-            {"biperiodic_width", 6.0},
-            {"groups", studyGroups({3.0, 4.5, 6.0, "biperiodic"}, {0.0, 10.0}, {0.0, 0.5}, 2, true)}};
+    return studySweep("quick", "the confinement study shrunk to run in minutes on 2 cores", 4.0, 7.0,
+                      {{"time_limit", 8.0}, {"fall_time_limit", 30.0}, {"protocol", "quasi-static"}}, 6.0,
+                      studyGroups({3.0, 4.5, 6.0, "biperiodic"}, {0.0, 10.0}, {0.0, 0.5}, 2, true));
   }
   if (scale == "tiny") {
     // Smoke test: monodisperse spheres, W = 3 and 5 and biperiodic 4, one seed, both backends:
@@ -104,8 +111,12 @@ json reproductionSweep(std::string_view scale) {
             {"base", {{"box", {{"length_x", 4.0}, {"height", 7.0}}}, {"compaction", {{"time_limit", 6.0}}}}},
             {"biperiodic_width", 4.0},
             {"vary",
-             {{"shape", {"sphere"}}, {"small_fraction", {0.0}}, {"width", {3.0, 5.0, "biperiodic"}},
-              {"wall_friction", {0.0}}, {"seed", {1}}, {"backend", {"nscd", "bullet"}}}}};
+             {{"shape", {"sphere"}},
+              {"small_fraction", {0.0}},
+              {"width", {3.0, 5.0, "biperiodic"}},
+              {"wall_friction", {0.0}},
+              {"seed", {1}},
+              {"backend", {"nscd", "bullet"}}}}};
   }
   throw std::invalid_argument(fmt::format("--scale: expected tiny, quick, medium or paper (got '{}')", scale));
 }
