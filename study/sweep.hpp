@@ -11,6 +11,7 @@
 //   SWEEPDIR/deposits/d0000.json   one deposit per (box, population, deposition, seed)
 //   SWEEPDIR/runs/r0000/           config.json, result.json, profiles, packing, frames, and
 //                                  done.json (written last, atomically) or failed.json
+//   SWEEPDIR/claims/r0000          while a process runs r0000: who (study/run_claim.hpp)
 // A run folder without done.json is not finished: it is wiped and redone from scratch.
 #include <cstdint>
 #include <filesystem>

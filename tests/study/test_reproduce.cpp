@@ -2,6 +2,7 @@
 // (study/reproduce.hpp), as the run tables they expand to. `confpack reproduce` itself, with the
 // real binary, is tested in tests/apps/test_cmd_reproduce.cpp.
 #include <catch2/catch.hpp>
+#include <fstream>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -46,4 +47,10 @@ TEST_CASE("reproduce: the paper scale is the full study") {
   for (const study::SweepRun& r : quick) CHECK(r.config.compaction.protocol == core::Protocol::QuasiStatic);
   CHECK(study::expandRuns(study::parseSweepSpec(study::reproductionSweep("tiny"))).size() == 6);
   CHECK_THROWS_AS(study::reproductionSweep("huge"), std::invalid_argument);
+}
+
+TEST_CASE("reproduce: docs/examples/paper-scale.json is the paper scale's sweep file, as docs/cluster.md uses it") {
+  std::ifstream in(std::string(CONFPACK_SOURCE_DIR) + "/docs/examples/paper-scale.json");
+  REQUIRE(in);
+  CHECK(nlohmann::json::parse(in) == study::reproductionSweep("paper"));
 }
