@@ -136,7 +136,7 @@ TEST_CASE("the pinacoid shape study of docs/examples expands to its 15 runs") {
   CHECK(s.empty());
 }
 
-TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs; bad values write nothing") {
+TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs, bad values write nothing") {
   const ConfpackSession s("cmd_sweep_slurm");
   std::ofstream(s.dir / "s.json") << R"({"name": "sl", "base": {"box": {"length_x": 3, "height": 3},
     "compaction": {"time_limit": 0.2}}, "vary": {"width": [3, 4, 5], "backend": ["nscd", "bullet"]}})";
@@ -203,7 +203,7 @@ TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs;
   CHECK_THAT(testing::slurp(script), Catch::Contains("runs=(\n  r0002,r0003\n  r0005\n)\n"));
 }
 
-TEST_CASE("confpack sweep --slurm --submit hands the script to sbatch and records the job; its failure exits 1") {
+TEST_CASE("confpack sweep --slurm --submit hands the script to sbatch and records the job, its failure exits 1") {
   const ConfpackSession s("cmd_sweep_submit");
   std::ofstream(s.dir / "s.json") << R"({"vary": {"width": [3, 4], "backend": "nscd"}})";
   // A stand-in sbatch first in PATH: it checks its arguments and answers as sbatch --parsable does.

@@ -168,7 +168,7 @@ TEST_CASE("slurm: sbatch's job id, and what squeue's answers mean") {
   CHECK_FALSE(study::slurmJobState("12_3"));
 }
 
-TEST_CASE("slurm: submitting runs sbatch without a shell and records the job; a refusal says sbatch's words") {
+TEST_CASE("slurm: submitting runs sbatch without a shell and records the job, a refusal says sbatch's words") {
   const fs::path dir = confpack::testing::freshDir("slurm_submit");
   fs::create_directories(dir / "slurm");
   std::ofstream(dir / "slurm" / "study.sbatch") << "#!/bin/bash\n";

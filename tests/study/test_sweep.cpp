@@ -510,7 +510,7 @@ TEST_CASE("the sweep.json seeds of the fuzz corpus are accepted tables") {
   CHECK(seeds >= 4);
 }
 
-TEST_CASE("a run claimed by another live process is left to it; a dead holder's claim is taken over") {
+TEST_CASE("a run claimed by another live process is left to it, a dead holder's claim is taken over") {
   const fs::path dir = confpack::testing::scratchPath("sweep_claims");
   const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
   const auto runs = study::expandRuns(spec);
