@@ -1,19 +1,26 @@
 // `confpack sweep FILE`: runs a study described by a sweep file (docs/sweeps.md), resumably, in
-// parallel (--jobs) or as one slice of a cluster job array (--task-index/--task-count).
+// parallel (--jobs) or as one slice of a cluster job array (--task-index/--task-count, or --runs);
+// writes and submits a Slurm job array over its unfinished runs (--slurm, --submit) and shows where
+// each run stands (--status; docs/cluster.md).
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
+#include <set>
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "backends/backend_factory.hpp"
+#include "core/packing_io.hpp"
+#include "study/slurm.hpp"
 #include "study/sweep.hpp"
 #include "study/run_pipeline.hpp"
 #include "study/sweep_runner.hpp"
+#include "study/sweep_status.hpp"
 
 namespace confpack::app {
 
@@ -29,14 +36,86 @@ struct SweepState {
   bool list = false;
   bool quiet = false;
   std::size_t maxRuns = study::kDefaultMaxRuns;
+  std::string runList;  ///< --runs: names, comma-separated
+  bool status = false;
+  bool slurm = false;
+  bool submit = false;
+  study::SlurmOptions slurmOptions;
 };
+
+namespace fs = std::filesystem;
+
+// --runs "r0001,r0004": the runs' indices in the table, each once.
+std::vector<std::size_t> namedRuns(const std::vector<study::SweepRun>& runs, const std::string& list) {
+  std::map<std::string, std::size_t> index;
+  for (const study::SweepRun& r : runs) index[r.name] = r.index;
+  std::set<std::size_t> picked;
+  for (std::size_t at = 0; at <= list.size();) {
+    const std::size_t end = std::min(list.find(',', at), list.size());
+    const std::string name = list.substr(at, end - at);
+    at = end + 1;
+    if (name.empty()) continue;
+    const auto it = index.find(name);
+    if (it == index.end())
+      throw std::invalid_argument(fmt::format("--runs: no run '{}' in the table ({} to {})", name, runs.front().name,
+                                              runs.back().name));
+    picked.insert(it->second);
+  }
+  if (picked.empty()) throw std::invalid_argument("--runs: no run named");
+  return {picked.begin(), picked.end()};
+}
+
+// Writes SWEEPDIR/slurm/study.sbatch over the runs that are neither done nor in a live job, and
+// with --submit hands it to sbatch.
+void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const std::vector<study::SweepRun>& runs,
+                     const fs::path& out) {
+  runWork("sweep", [&] {
+    const WorkStep step("writing the Slurm job array");
+    study::prepareSweepDir(out, spec, runs);
+    const std::vector<study::RunReport> reports = study::sweepStatus(out, runs);
+    const std::vector<std::size_t> todo = study::unfinishedRuns(reports);
+    std::size_t done = 0;
+    for (const study::RunReport& r : reports) done += r.state == study::RunState::Done;
+    const std::size_t live = runs.size() - done - todo.size();
+    if (todo.empty()) {
+      fmt::print("sweep {}: nothing to submit: {} of {} runs done, {} running or queued\n", spec.name, done,
+                 runs.size(), live);
+      return;
+    }
+    const std::vector<study::ArrayTask> tasks = study::planArrayTasks(runs, todo, st.slurmOptions.maxTasks);
+    const fs::path dir = fs::absolute(out).lexically_normal();
+    fs::create_directories(dir / "slurm" / "logs");  // sbatch does not create the logs' folder
+    const fs::path script = dir / "slurm" / "study.sbatch";
+    core::writeFileAtomically(script, study::sbatchScript(st.slurmOptions, tasks, fs::read_symlink("/proc/self/exe"),
+                                                          dir, spec.name));
+    fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
+    const std::string others = fmt::format("{} done, {} running or queued", done, live);
+    if (!st.submit) {
+      fmt::print("wrote {}: {} array tasks over {} unfinished runs ({}); submit with: sbatch {}\n", script.string(),
+                 tasks.size(), todo.size(), others, script.string());
+      return;
+    }
+    const std::string job = study::submitBatch(script);
+    study::recordSubmission(dir, {job, tasks, ""});
+    fmt::print("submitted job {}: {} array tasks over {} unfinished runs ({}); logs in {}; progress: confpack sweep {} "
+               "--status\n",
+               job, tasks.size(), todo.size(), others, (dir / "slurm" / "logs").string(), dir.string());
+  });
+}
 
 void runSweepCommand(const SweepState& st) {
   study::SweepSpec spec;
   std::vector<study::SweepRun> runs;
-  std::filesystem::path out = st.out.empty() ? std::filesystem::path(st.file.stem()) : st.out;
+  // FILE may be a sweep folder: its sweep.json holds the sweep file (the array tasks' form).
+  const bool folder = fs::is_directory(st.file);
+  const fs::path out = folder ? st.file : st.out.empty() ? fs::path(st.file.stem()) : st.out;
+  std::vector<std::size_t> only;
   checkInput("sweep", [&] {
-    spec = study::readSweepSpec(st.file, st.maxRuns);
+    if (folder && !st.out.empty() && fs::absolute(st.out).lexically_normal() != fs::absolute(out).lexically_normal())
+      throw std::invalid_argument(fmt::format("--out: {} is a sweep folder already; give no other --out",
+                                              st.file.string()));
+    if (folder) study::readRunTable(st.file, &spec);
+    else spec = study::readSweepSpec(st.file, st.maxRuns);
     runs = study::expandRuns(spec);
     study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
     // The sweep file leaves backend_options to the backend: checked here, so that a typo is bad
@@ -58,7 +137,23 @@ void runSweepCommand(const SweepState& st) {
     }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
     checkOutputTarget(out);
+    if (!st.runList.empty()) only = namedRuns(runs, st.runList);
+    if (st.slurm) {
+      study::checkSlurmOptions(st.slurmOptions);
+      study::checkSlurmPath(out);
+    }
+    if (st.status && !fs::exists(out / study::kSweepTable))
+      throw std::invalid_argument(fmt::format("{}: not a sweep folder (no {}): nothing has run", out.string(),
+                                              study::kSweepTable));
   });
+  if (st.status) {
+    runWork("sweep", [&] { std::fputs(study::formatStatus(runs, study::sweepStatus(out, runs)).c_str(), stdout); });
+    return;
+  }
+  if (st.slurm) {
+    writeSlurmArray(st, spec, runs, out);
+    return;
+  }
   if (st.list) {
     const bool sliced = st.taskCount > 1;
     std::fputs(
@@ -75,6 +170,7 @@ void runSweepCommand(const SweepState& st) {
     opt.jobs = st.jobs;
     opt.taskIndex = st.taskIndex;
     opt.taskCount = st.taskCount;
+    opt.runs = only;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
     summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads), study::pipelineDepositor());
@@ -84,8 +180,9 @@ void runSweepCommand(const SweepState& st) {
                summary.failed);
     throw CLI::RuntimeError(kExitRuntimeFailure);
   }
-  fmt::print("sweep {}: {} of {} runs in this task finished ({} now, {} earlier); report with: confpack report {}\n",
+  fmt::print("sweep {}: {} of {} runs in this task finished ({} now, {} earlier{}); report with: confpack report {}\n",
              spec.name, summary.ran + summary.alreadyDone, summary.inSlice, summary.ran, summary.alreadyDone,
+             summary.heldElsewhere > 0 ? fmt::format(", {} left to other live tasks", summary.heldElsewhere) : "",
              out.string());
 }
 
@@ -98,14 +195,64 @@ void registerSweep(CLI::App& app) {
       "Run a study: every combination of widths, shapes, fractions, frictions, seeds, backends and any other "
       "configuration key (by its path, e.g. population.pinacoid.alpha_deg) of a sweep file (docs/sweeps.md). "
       "Resumable: finished runs are never redone.");
-  sub->add_option("file", st->file, "Sweep file (JSON, format confpack-sweep)")->required()->check(CLI::ExistingFile);
+  sub->add_option("file", st->file,
+                  "Sweep file (JSON, format confpack-sweep), or a sweep folder (its sweep.json holds the file)")
+      ->required()
+      ->check(CLI::ExistingPath);
   sub->add_option("--out", st->out, "Sweep folder (default: the sweep file's name without extension)");
-  sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096));
+  auto* jobs = sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096));
   sub->add_option("--threads", st->threads, "Threads per run (0: from the sweep file)")->check(CLI::Range(0, 4096));
-  sub->add_option("--task-index", st->taskIndex, "This task's slice, 0-based (e.g. $SLURM_ARRAY_TASK_ID)");
-  sub->add_option("--task-count", st->taskCount, "Number of tasks sharing the sweep (e.g. $SLURM_ARRAY_TASK_COUNT)")
-      ->check(CLI::Range(1, 1000000));
-  sub->add_flag("--list", st->list, "Print the run table (with each run's status when the folder exists) and exit");
+  auto* taskIndex =
+      sub->add_option("--task-index", st->taskIndex, "This task's slice, 0-based (e.g. $SLURM_ARRAY_TASK_ID)");
+  auto* taskCount =
+      sub->add_option("--task-count", st->taskCount, "Number of tasks sharing the sweep (e.g. $SLURM_ARRAY_TASK_COUNT)")
+          ->check(CLI::Range(1, 1000000));
+  auto* runList = sub->add_option("--runs", st->runList,
+                                  "Run only these runs, by name, comma-separated (what a task of --slurm's array runs)")
+                      ->type_name("r0000,r0001")
+                      ->excludes(taskIndex)
+                      ->excludes(taskCount);
+  auto* list =
+      sub->add_flag("--list", st->list, "Print the run table (with each run's status when the folder exists) and exit");
+  auto* status = sub->add_flag("--status", st->status,
+                               "Print where each run stands (done, running with its job, queued, failed with the "
+                               "reason, missing) and exit")
+                     ->excludes(list)
+                     ->excludes(runList);
+  // Slurm (docs/cluster.md).
+  auto* slurm = sub->add_flag("--slurm", st->slurm,
+                              "Write OUT/slurm/study.sbatch, a Slurm job array over the runs not done, running or "
+                              "queued (one deposit's runs per task), and exit")
+                    ->excludes(list)
+                    ->excludes(status)
+                    ->excludes(runList)
+                    ->excludes(taskIndex)
+                    ->excludes(taskCount)
+                    ->excludes(jobs);
+  study::SlurmOptions& so = st->slurmOptions;
+  sub->add_flag("--submit", st->submit, "With --slurm: submit the script with sbatch and print the job id")
+      ->needs(slurm);
+  sub->add_option("--partition", so.partition, "With --slurm: the partition (#SBATCH --partition)")->needs(slurm);
+  sub->add_option("--time", so.time, "With --slurm: each task's time limit, e.g. 2:00:00 or 1-12 (#SBATCH --time)")
+      ->needs(slurm);
+  sub->add_option("--mem", so.mem, "With --slurm: memory per node, e.g. 4G (#SBATCH --mem)")->needs(slurm);
+  sub->add_option("--account", so.account, "With --slurm: the account charged (#SBATCH --account)")->needs(slurm);
+  sub->add_option("--cpus-per-task", so.cpusPerTask,
+                  "With --slurm: CPUs per task, and the runs each task runs at once (#SBATCH --cpus-per-task)")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str()
+      ->needs(slurm);
+  sub->add_option("--array-limit", so.arrayLimit, "With --slurm: tasks running at once (#SBATCH --array=0-N%LIMIT)")
+      ->check(CLI::Range(1, 1000000))
+      ->needs(slurm);
+  sub->add_option("--array-tasks", so.maxTasks,
+                  "With --slurm: at most this many array tasks, deposits dealt round-robin (default: one per deposit)")
+      ->check(CLI::Range(1, 1000000))
+      ->needs(slurm);
+  sub->add_option("--sbatch-line", so.extraLines,
+                  "With --slurm: one more #SBATCH option, e.g. --qos=long (repeatable)")
+      ->allow_extra_args(false)
+      ->needs(slurm);
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   sub->add_option("--max-runs", st->maxRuns,
                   "Refuse a sweep file that lists more runs than this (a guard against a mistyped list or replicas)")

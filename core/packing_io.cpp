@@ -451,7 +451,14 @@ Packing readPacking(const std::filesystem::path& path) {
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
   static std::atomic<unsigned> counter{0};
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}-{}", path.filename().string(), ::getpid(), counter++);
+  // Named after this host and process: tasks on several nodes write into one shared sweep folder,
+  // and pids repeat from node to node.
+  static const std::string host = [] {
+    char buf[256] = {};
+    return ::gethostname(buf, sizeof buf - 1) == 0 ? std::string(buf) : std::string("host");
+  }();
+  const std::filesystem::path tmp =
+      dir / fmt::format(".{}.tmp-{}-{}-{}", path.filename().string(), host, ::getpid(), counter++);
   // No fsync: rename() already guarantees that readers see the old file or the whole new one,
   // which is the property we need; durability across a power cut is not worth a disk flush per
   // VTK frame.

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <thread>
 
 #include "core/interrupt.hpp"
@@ -102,6 +103,15 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOpti
   if (WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
   if (WIFSIGNALED(status)) r.signal = WTERMSIG(status);
   return r;
+}
+
+std::string lastOutputLine(const std::filesystem::path& output) {
+  std::ifstream in(output);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  while (!last.empty() && (last.back() == '\r' || last.back() == ' ')) last.pop_back();
+  return last;
 }
 
 }  // namespace confpack::study

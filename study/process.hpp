@@ -32,4 +32,8 @@ struct ProcessResult {
 /// or a cluster's time limit.
 ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOptions& options = {});
 
+/// The last non-empty line of a program's output file (ProcessOptions::output), without its end of
+/// line: what a failing program said last. Empty when the file is missing or blank.
+std::string lastOutputLine(const std::filesystem::path& output);
+
 }  // namespace confpack::study

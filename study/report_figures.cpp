@@ -21,15 +21,6 @@ std::string slurp(const fs::path& path) {
   return s.str();
 }
 
-// The last non-empty line of gnuplot's output: its error message.
-std::string lastLine(const std::string& text) {
-  std::istringstream in(text);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  return last;
-}
-
 }  // namespace
 
 std::string gnuplotScript(const Plot& p) {
@@ -103,7 +94,7 @@ std::string FigureWriter::runGnuplot(const std::string& stem, std::string& text)
   fs::remove(svg);  // an SVG of an earlier report is not this run's drawing
   const ProcessResult r = runProcess({gnuplot_.string(), stem + ".gp"}, {dir_, log, timeout_});
   if (!r.ok()) {
-    const std::string said = lastLine(slurp(log));
+    const std::string said = lastOutputLine(log);  // gnuplot's error message
     return r.describe(timeout_) + (said.empty() ? "" : ": " + said);
   }
   if (!fs::exists(svg)) return fmt::format("no {}.svg written", stem);

@@ -377,15 +377,6 @@ void applySettings(SweepRun& r, const std::vector<SettingAxis>& axes, const std:
   core::from_json(cfg, r.config);
 }
 
-std::string utcNow() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 json runTableJson(const std::vector<SweepRun>& runs) {
   json table = json::array();
   const std::vector<std::string> varied = variedSettings(runs);
@@ -454,6 +445,15 @@ struct DepositSlot {
 };
 
 }  // namespace
+
+std::string utcTimestamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
 
 std::string SweepRun::depositName() const { return fmt::format("d{:04d}", depositIndex); }
 
@@ -825,7 +825,9 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
   if (opt.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", opt.jobs));
   const auto start = std::chrono::steady_clock::now();
   const std::vector<SweepRun> runs = expandRuns(spec);
-  const std::vector<std::size_t> slice = sliceRuns(runs, opt.taskIndex, opt.taskCount);
+  const std::vector<std::size_t> slice = opt.runs.empty() ? sliceRuns(runs, opt.taskIndex, opt.taskCount) : opt.runs;
+  for (std::size_t i : slice)
+    if (i >= runs.size()) throw std::invalid_argument(fmt::format("run index {} is not in the table", i));
   prepareSweepDir(dir, spec, runs);
   const std::vector<std::string> varied = variedSettings(runs);
 
@@ -854,6 +856,9 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
   std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> finishedCount{0};
   std::atomic<std::size_t> failedCount{0};
+  std::atomic<std::size_t> heldCount{0};          // claimed by another live process
+  std::atomic<std::size_t> doneMeanwhileCount{0};  // finished by another process before we claimed it
+  const LivenessFn alive = opt.alive ? opt.alive : LivenessFn(holderLiveness);
   const std::size_t total = todo.size();
 
   auto depositFor = [&](const SweepRun& r) -> std::shared_ptr<const core::Deposit> {
@@ -885,6 +890,34 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
       if (k >= total) return;
       const SweepRun& r = runs[todo[k]];
       const fs::path runDir = dir / "runs" / r.name;
+      // Another task may have been handed this run too (an array submitted again while one of its
+      // tasks ran): only the holder of the run's claim works in its folder, and the claim is given
+      // up when this iteration ends, marker written or interrupted.
+      ClaimHolder holder;
+      std::optional<RunClaim> claim;
+      std::string claimError;
+      try {
+        claim = RunClaim::acquire(claimsDir(dir), r.name, &holder, alive);
+      } catch (const std::exception& e) {
+        claimError = e.what();
+      }
+      if (!claim || runStatus(runDir) == RunStatus::Done) {
+        release(r);
+        if (!claimError.empty()) {
+          // No marker: the folder may be another process's.
+          const std::size_t n = finishedCount.fetch_add(1) + 1;
+          failedCount.fetch_add(1);
+          printer.finished(fmt::format("[{}/{}] {} {} FAILED: cannot claim it: {}", n, total, r.name,
+                                       r.config.backend, claimError));
+        } else if (!claim) {
+          heldCount.fetch_add(1);
+          printer.finished(fmt::format("{} {} skipped: {} runs it", r.name, r.config.backend, describe(holder)));
+        } else {
+          doneMeanwhileCount.fetch_add(1);
+          printer.finished(fmt::format("{} {} skipped: finished meanwhile by another task", r.name, r.config.backend));
+        }
+        continue;
+      }
       const auto t0 = std::chrono::steady_clock::now();
       json result;
       std::string error;
@@ -920,7 +953,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
         // The marker is the last thing written, atomically: its presence means result.json and
         // everything else of the run is complete.
         json done = {{"name", r.name},      {"status", "done"},       {"wall_s", seconds},
-                     {"finished", utcNow()}, {"label", r.label(varied)}};
+                     {"finished", utcTimestamp()}, {"label", r.label(varied)}};
         if (result.contains("solid_fraction")) done["solid_fraction"] = result.at("solid_fraction");
         if (result.contains("equilibrium") && result.at("equilibrium").contains("reached"))
           done["equilibrium_reached"] = result.at("equilibrium").at("reached");
@@ -943,7 +976,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
         try {
           core::writeFileAtomically(runDir / kFailedMarker,
                                     json{{"name", r.name}, {"status", "failed"}, {"error", error},
-                                         {"wall_s", seconds}, {"finished", utcNow()}}
+                                         {"wall_s", seconds}, {"finished", utcTimestamp()}}
                                         .dump(2));
         } catch (...) {
           // The folder lacks done.json either way, so the next invocation redoes the run.
@@ -961,15 +994,21 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
     worker();  // the calling thread is one of the workers
   }
 
-  if (core::stopSignal() != 0 && finishedCount.load() < total)
+  if (core::stopSignal() != 0 && finishedCount.load() + heldCount.load() + doneMeanwhileCount.load() < total)
     throw core::Interrupted(core::stopSignal(), fmt::format("after {} of {} runs; the others run when the sweep is started again",
                                                             finishedCount.load(), total));
   summary.failed = failedCount.load();
   summary.ran = finishedCount.load() - summary.failed;
+  summary.heldElsewhere = heldCount.load();
+  summary.alreadyDone += doneMeanwhileCount.load();
   summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!opt.quiet)
-    printer.finished(fmt::format("sweep {}: {} finished, {} failed, {} skipped (already done) in {:.0f} s", spec.name,
-                                 summary.ran, summary.failed, summary.alreadyDone, summary.wallSeconds));
+    printer.finished(fmt::format("sweep {}: {} finished, {} failed, {} skipped (already done){} in {:.0f} s", spec.name,
+                                 summary.ran, summary.failed, summary.alreadyDone,
+                                 summary.heldElsewhere > 0
+                                     ? fmt::format(", {} left to other live tasks", summary.heldElsewhere)
+                                     : std::string(),
+                                 summary.wallSeconds));
   return summary;
 }
 

@@ -11,6 +11,7 @@
 //   SWEEPDIR/deposits/d0000.json   one deposit per (box, population, deposition, seed)
 //   SWEEPDIR/runs/r0000/           config.json, result.json, profiles, packing, frames, and
 //                                  done.json (written last, atomically) or failed.json
+//   SWEEPDIR/claims/r0000          while a process runs r0000: who (study/run_claim.hpp)
 // A run folder without done.json is not finished: it is wiped and redone from scratch.
 #include <cstdint>
 #include <filesystem>
@@ -23,6 +24,7 @@
 
 #include "core/deposition.hpp"
 #include "core/run_config.hpp"
+#include "study/run_claim.hpp"
 #include "study/run_pipeline.hpp"
 
 namespace confpack::study {
@@ -134,6 +136,9 @@ inline constexpr const char* kDoneMarker = "done.json";
 inline constexpr const char* kFailedMarker = "failed.json";
 inline constexpr const char* kSweepTable = "sweep.json";
 
+/// The time now in UTC, ISO 8601 ("2024-05-01T12:00:00Z"), as the markers record it.
+std::string utcTimestamp();
+
 /// Compacts `deposit` with cfg in runDir (which exists and is empty) and returns result.json's
 /// content; it must have written result.json before returning. The real one is runAndWrite.
 using SweepRunFn = std::function<nlohmann::json(const core::RunConfig& cfg, const std::filesystem::path& runDir,
@@ -145,6 +150,8 @@ struct SweepOptions {
   int jobs = 1;                ///< runs at the same time in this process
   std::size_t taskIndex = 0;   ///< this task's slice, in [0, taskCount)
   std::size_t taskCount = 1;   ///< number of tasks sharing the sweep
+  std::vector<std::size_t> runs;  ///< when not empty: these runs (indices in the table) instead of the slice
+  LivenessFn alive;            ///< judges the holder of a run's claim; empty = holderLiveness
   bool quiet = false;          ///< no progress lines
   std::ostream* log = nullptr; ///< progress stream; nullptr = std::cerr
   bool live = false;           ///< redraw a live status line (only on a terminal)
@@ -156,6 +163,7 @@ struct SweepSummary {
   std::size_t alreadyDone = 0;  ///< found finished and skipped
   std::size_t ran = 0;          ///< finished now
   std::size_t failed = 0;       ///< threw; failed.json written, retried by the next invocation
+  std::size_t heldElsewhere = 0;  ///< claimed by another live process (study/run_claim.hpp): left to it
   double wallSeconds = 0.0;
 };
 
@@ -165,6 +173,8 @@ void prepareSweepDir(const std::filesystem::path& dir, const SweepSpec& spec, co
 
 /// Runs this task's unfinished runs with `opt.jobs` workers. A run that throws is recorded in
 /// failed.json and the sweep goes on. Deposits are made (or read back) once per deposit group.
+/// Each run is claimed first (SWEEPDIR/claims, study/run_claim.hpp): a run another live process
+/// holds is left to it, so that two tasks handed the same run never write its folder at once.
 SweepSummary runSweep(const SweepSpec& spec, const std::filesystem::path& dir, const SweepOptions& opt,
                       const SweepRunFn& run, const SweepDepositFn& makeDeposit);
 

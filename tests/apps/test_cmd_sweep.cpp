@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -16,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "study/slurm.hpp"
 #include "study/sweep.hpp"
 #include "tests/support/confpack_binary.hpp"
 #include "tests/support/read_file.hpp"
@@ -144,4 +146,108 @@ TEST_CASE("the pinacoid shape study of docs/examples expands to its 15 runs") {
   CHECK_THAT(list.out, Catch::StartsWith("run     deposit family   x_S        W  mu_w   seed backend E   alpha_deg\n"));
   CHECK(list.out.find("nscd    1   45") == std::string::npos);  // no ridge: not a pinacoid
   CHECK(s.empty());
+}
+
+TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs, bad values write nothing") {
+  const ConfpackSession s("cmd_sweep_slurm");
+  std::ofstream(s.dir / "s.json") << R"({"name": "sl", "base": {"box": {"length_x": 3, "height": 3},
+    "compaction": {"time_limit": 0.2}}, "vary": {"width": [3, 4, 5], "backend": ["nscd", "bullet"]}})";
+
+  // Refused before any work, one line each, nothing written.
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"--slurm --time 2h", "confpack sweep: error: --time: expected MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS "
+                            "(got '2h')\n"},
+      {"--slurm --mem 4GB", "confpack sweep: error: --mem: expected a positive integer with an optional unit K, M, G "
+                            "or T (got '4GB')\n"},
+      {"--slurm --sbatch-line=--array=1-3",
+       "confpack sweep: error: --sbatch-line: --array: not here (the array is the unfinished runs')\n"},
+      {"--submit", "confpack: error: --submit requires --slurm (see --help)\n"},
+      {"--partition short", "confpack: error: --partition requires --slurm (see --help)\n"},
+      {"--slurm --cpus-per-task 0", ""},
+      {"--slurm --status", ""},
+      {"--slurm --jobs 2", ""}};
+  for (const auto& [flags, message] : refused) {
+    INFO(flags);
+    const auto r = s.run("sweep s.json --out sw " + flags);
+    CHECK(r.code == 2);
+    CHECK(testing::lineCount(r.err) == 1);
+    if (!message.empty()) CHECK(r.err == message);
+    CHECK(s.entries() == std::vector<std::string>{"s.json"});
+  }
+
+  // Two runs done by hand first: the array takes the other four, both backends of a pile in one task.
+  REQUIRE(s.run("sweep s.json --out sw --runs r0000,r0001 -q").code == 0);
+  const auto r = s.run("sweep s.json --out sw --slurm --partition short --time 0:30:00 --mem 1G --account lab "
+                       "--cpus-per-task 2 --array-limit 4 --sbatch-line=--qos=low");
+  REQUIRE(r.code == 0);
+  const fs::path script = fs::canonical(s.dir / "sw") / "slurm" / "study.sbatch";
+  CHECK(r.out == "wrote " + script.string() + ": 2 array tasks over 4 unfinished runs (2 done, 0 running or queued); "
+                 "submit with: sbatch " + script.string() + "\n");
+  const std::string text = testing::slurp(script);
+  CHECK_THAT(text, Catch::Contains("#SBATCH --array=0-1%4\n"));
+  CHECK_THAT(text,
+             Catch::Contains("#SBATCH --output=" + fs::canonical(s.dir / "sw").string() + "/slurm/logs/%A_%a.out\n"));
+  for (const char* line : {"#SBATCH --partition=short\n", "#SBATCH --time=0:30:00\n", "#SBATCH --mem=1G\n",
+                           "#SBATCH --account=lab\n", "#SBATCH --cpus-per-task=2\n", "#SBATCH --qos=low\n",
+                           "runs=(\n  r0002,r0003\n  r0004,r0005\n)\n"})
+    CHECK_THAT(text, Catch::Contains(line));
+  CHECK_THAT(text, Catch::Contains("exec '" + fs::canonical(CONFPACK_BINARY).string() + "' sweep '" +
+                                   fs::canonical(s.dir / "sw").string() + "' --runs \"${runs[$SLURM_ARRAY_TASK_ID]}\" "
+                                   "--jobs 2\n"));
+  CHECK(fs::is_directory(s.dir / "sw" / "slurm" / "logs"));
+
+  // A task's own command line: the folder and its runs; a name not in the table is bad input.
+  const auto task = s.run("sweep sw --runs r0004 -q");
+  CHECK(task.code == 0);
+  CHECK(study::runStatus(s.dir / "sw" / "runs" / "r0004") == study::RunStatus::Done);
+  CHECK(study::runStatus(s.dir / "sw" / "runs" / "r0005") == study::RunStatus::Pending);
+  const auto unknown = s.run("sweep sw --runs r0004,r0099");
+  CHECK(unknown.code == 2);
+  CHECK(unknown.err == "confpack sweep: error: --runs: no run 'r0099' in the table (r0000 to r0005)\n");
+
+  // The status, and an array over what is left: r0002, r0003, r0005 (never submitted: missing).
+  const auto status = s.run("sweep sw --status");
+  REQUIRE(status.code == 0);
+  CHECK_THAT(status.out, Catch::Contains("r0004   done     -   MSP xS=0 W=5 mu=0 s1 nscd\n"));
+  CHECK_THAT(status.out, Catch::Contains("r0005   missing  -   MSP xS=0 W=5 mu=0 s1 bullet\n"));
+  CHECK_THAT(status.out, Catch::EndsWith("6 runs: 3 done, 0 running, 0 queued, 0 failed, 3 missing\n"));
+  REQUIRE(s.run("sweep sw --slurm -q").code == 0);
+  CHECK_THAT(testing::slurp(script), Catch::Contains("runs=(\n  r0002,r0003\n  r0005\n)\n"));
+}
+
+TEST_CASE("confpack sweep --slurm --submit hands the script to sbatch and records the job, its failure exits 1") {
+  const ConfpackSession s("cmd_sweep_submit");
+  std::ofstream(s.dir / "s.json") << R"({"vary": {"width": [3, 4], "backend": "nscd"}})";
+  // A stand-in sbatch first in PATH: it checks its arguments and answers as sbatch --parsable does.
+  const fs::path bin = s.dir.string() + ".bin";
+  fs::create_directories(bin);
+  std::ofstream(bin / "sbatch") << "#!/bin/sh\n"
+                                   "grep -q -- '--partition=nowhere' \"$2\" && "
+                                   "{ echo 'sbatch: error: invalid partition specified' >&2; exit 1; }\n"
+                                   "[ \"$1\" = --parsable ] && grep -q '^#SBATCH --array=0-1$' \"$2\" && echo 4242\n";
+  fs::permissions(bin / "sbatch", fs::perms::owner_all);
+  const std::string path = std::getenv("PATH");
+  ::setenv("PATH", (bin.string() + ":" + path).c_str(), 1);
+  const auto ok = s.run("sweep s.json --out sw --slurm --submit");
+  const auto again = s.run("sweep sw --slurm --submit --partition nowhere");
+  // Both runs queued in job 4242 (squeue is not there: the status says it could not ask).
+  const auto status = s.run("sweep sw --status");
+  ::setenv("PATH", path.c_str(), 1);
+  fs::remove_all(bin);
+  REQUIRE(ok.code == 0);
+  CHECK_THAT(ok.out, Catch::StartsWith("submitted job 4242: 2 array tasks over 2 unfinished runs (0 done, 0 running "
+                                       "or queued); logs in "));
+  const auto subs = study::readSubmissions(s.dir / "sw");
+  REQUIRE(subs.size() == 1);
+  CHECK(subs[0].job == "4242");
+  CHECK(subs[0].tasks.size() == 2);
+  // Submitted again (squeue is absent: the runs' state is unknown, so they are taken again) to a
+  // partition this sbatch refuses: its words, exit 1, no submission recorded.
+  CHECK(again.code == 1);
+  CHECK(again.err ==
+        "confpack sweep: error: sbatch exited with status 1: sbatch: error: invalid partition specified\n");
+  CHECK(study::readSubmissions(s.dir / "sw").size() == 1);
+  REQUIRE(status.code == 0);
+  CHECK_THAT(status.out, Catch::Contains("r0000   missing  4242_0 MSP xS=0 W=3 mu=0 s1 nscd: submitted, but squeue did "
+                                         "not answer\n"));
 }

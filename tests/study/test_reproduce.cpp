@@ -2,6 +2,7 @@
 // (study/reproduce.hpp), as the run tables they expand to. `confpack reproduce` itself, with the
 // real binary, is tested in tests/apps/test_cmd_reproduce.cpp.
 #include <catch2/catch.hpp>
+#include <fstream>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -68,4 +69,10 @@ TEST_CASE("reproduce: the medium scale is the paper's study in a box of 830 to 4
     }
   }
   CHECK(widths == std::set<double>{5.0, 10.0, 20.0});
+}
+
+TEST_CASE("reproduce: docs/examples/paper-scale.json is the paper scale's sweep file, as docs/cluster.md uses it") {
+  std::ifstream in(std::string(CONFPACK_SOURCE_DIR) + "/docs/examples/paper-scale.json");
+  REQUIRE(in);
+  CHECK(nlohmann::json::parse(in) == study::reproductionSweep("paper"));
 }

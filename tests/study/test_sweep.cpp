@@ -509,3 +509,33 @@ TEST_CASE("the sweep.json seeds of the fuzz corpus are accepted tables") {
   }
   CHECK(seeds >= 4);
 }
+
+TEST_CASE("a run claimed by another live process is left to it, a dead holder's claim is taken over") {
+  const fs::path dir = confpack::testing::scratchPath("sweep_claims");
+  const study::SweepSpec spec = study::parseSweepSpec(smallSweep());
+  const auto runs = study::expandRuns(spec);
+  fs::create_directories(study::claimsDir(dir));
+  // r0002 is held by a live holder elsewhere, r0005 by one that died; the test's judge says which.
+  study::ClaimHolder live{"node7", 100, 0, "41_2", "live-token", "2024-01-01T00:00:00Z"};
+  study::ClaimHolder dead{"node8", 200, 0, "40_5", "dead-token", "2024-01-01T00:00:00Z"};
+  std::ofstream(study::claimsDir(dir) / "r0002") << study::toJson(live).dump();
+  std::ofstream(study::claimsDir(dir) / "r0005") << study::toJson(dead).dump();
+  study::SweepOptions o = quietOptions(2);
+  o.runs = {0, 2, 4, 5};
+  o.alive = [](const study::ClaimHolder& h) {
+    return h.token == "dead-token" ? study::Liveness::Dead : study::Liveness::Alive;
+  };
+  Recorder rec;
+  const study::SweepSummary s = study::runSweep(spec, dir, o, rec.runner(), rec.depositor());
+  CHECK(s.inSlice == 4);
+  CHECK(s.ran == 3);
+  CHECK(s.heldElsewhere == 1);
+  CHECK(rec.calls == std::map<std::string, int>{{"r0000", 1}, {"r0004", 1}, {"r0005", 1}});
+  CHECK_FALSE(fs::exists(dir / "runs" / "r0002"));
+  CHECK(study::runStatus(dir / "runs" / "r0005") == study::RunStatus::Done);
+  // The live holder's claim is untouched; the runs done here gave up their claims.
+  REQUIRE(study::readClaim(study::claimsDir(dir), "r0002"));
+  CHECK(study::readClaim(study::claimsDir(dir), "r0002")->token == "live-token");
+  for (const char* r : {"r0000", "r0004", "r0005"}) CHECK_FALSE(study::readClaim(study::claimsDir(dir), r));
+  fs::remove_all(dir);
+}
