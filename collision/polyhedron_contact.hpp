@@ -2,50 +2,20 @@
 // Exact narrow phase for convex polyhedra (pinacoids) and the shared geometric contact-type
 // classifier (docs/model.md, "nscd: Moreau-Jean contact dynamics" and "Coordination number").
 //
-// Method, polyhedron-polyhedron (collidePolyhedra):
-// 1. Separating-axis test over the face normals of both bodies and the cross products of every
-//    edge pair (8 + 8 + 14 x 14 axes for two pinacoids; near-parallel edge pairs are skipped).
-//    For any unit axis u, sep(u) = min_B u.x - max_A u.x is a lower bound of the distance, and
-//    for overlapping polytopes the largest sep over these axes is exactly minus the penetration
-//    depth (minimum translation distance). Face axes win ties against edge axes.
-// 2. If the best sep is > 0 the bodies are disjoint and sep is only a lower bound (vertex-vertex,
-//    vertex-edge and non-crossing edge-edge closest pairs are not on a SAT axis). The exact
-//    distance is then computed by brute force over closest features (vertex-face projections and
-//    all edge-edge segment pairs, pruned with the SAT bound), and the normal is the closest-point
-//    direction. For face-face, edge-face and vertex-face configurations this direction is exactly
-//    the face normal (face candidates win ties). For crossing edges, or when the closest pair is
-//    nearly degenerate (an edge almost perpendicular to the normal, where the closest points are
-//    ill-conditioned), the axis of larger support separation among the closest-point direction,
-//    the edges' cross product and the SAT axis is kept: the true closest direction maximises it.
-//    So the gap is never overestimated: it is exact when separated, exact depth when overlapping.
-//    (Checked against FCL's libccd distance to 1e-9 in the tests. FCL 0.7's own GJK, GST_INDEP,
-//    returned distances up to 2x too large for some pinacoid pairs: do not use it.)
-// 3. The contact feature of each body along the normal is the set of its vertices within
-//    eps = max(sin(angleTol), 1e-9) * (2 * boundingRadius) of its support plane: 1 vertex -> Vertex,
-//    2 -> Edge, >= 3 -> Face. A face tilted by less than angleTol from the contact plane is thus
-//    seen as a face. The contact region is the intersection of the two features projected on the
-//    contact plane (a point, a segment, or a convex polygon from Sutherland-Hodgman clipping) and
-//    its dimension gives the type: polygon -> Triple, segment -> Double, point -> Simple.
-//    Vertex-anything and crossing edge-edge -> Simple; edge-face -> Double; face-face -> Triple.
-//    Two parallel edges lying on each other touch along a segment: that is a line contact and is
-//    reported as Double (2 points), the same as edge-face (it removes the same 2 freedoms).
-// 4. Points lie on the contact plane midway between the two surfaces, with the gap along the
-//    normal at each point (they differ for a tilted face-face contact). Single-point contacts
-//    whose features do not overlap in projection (vertex-vertex, vertex-edge, or a large angleTol)
-//    use the closest pair of points of the two features instead: point = their midpoint,
-//    pointGap = normal.(onB - onA). A face-face contact keeps every vertex of the clipped
-//    polygon as a point (up to kMaxPolyhedronContactPoints = 8, the most two quadrilateral
-//    pinacoid faces can give), each with its own gap, not 3 points: two earlier choices
-//    failed in nscd. 3 points of a rectangle-on-rectangle contact put the centre of mass on an
-//    edge of the support triangle (marginal static support). 4 points (the deepest vertex and
-//    the 3 of largest area with it) let the dropped vertices sink unseen into the other grain
-//    as it rocked, and each time one came back into the chosen 4 its overlap was corrected with
-//    a kick: on a 188-pinacoid pile one grain rocked with period 2 for 60 t0, with the force
-//    ratio stuck near 0.2. The minimum of the gap over the contact polygon is at a vertex, so
-//    with every vertex no part of the region can pass through. Triple contacts therefore carry
-//    3 to 8 points. A polygon with more than 8 vertices (faces of more than 4 vertices, only
-//    possible for other convex shapes) is reduced to 4: its deepest vertex and the 3 of largest
-//    area with it.
+// Method, polyhedron-polyhedron (collidePolyhedra), one file per step, each stating its equations:
+// 1. separating_axis: the largest support separation over face normals and Minkowski-face edge
+//    pairs; minus the penetration depth when the bodies overlap, a lower bound of the distance
+//    otherwise.
+// 2. polyhedron_distance: for disjoint bodies, the exact distance and closest direction over
+//    vertex-face and edge-edge feature pairs, pruned by the SAT bound (pairNormal: steps 1 and 2
+//    give the normal and the gap, never overestimated).
+// 3. contact_region: the support feature of each body along the normal (Vertex, Edge or Face
+//    within angleTol), their intersection projected on the contact plane (point, segment, or
+//    polygon by Sutherland-Hodgman clipping), whose dimension is the type (Simple, Double,
+//    Triple).
+// 4. contact_region: the points, midway between the surfaces with the gap at each; a face-face
+//    contact keeps every vertex of its polygon (up to kMaxPolyhedronContactPoints).
+// world_polyhedron holds the placed body in world coordinates that all steps share.
 //
 // The same routine computes the type for every caller, so a contact is classified identically
 // whichever backend produced it (classifyContact).
@@ -93,7 +63,7 @@ struct Feature {
 inline constexpr double kFeatureAngleTol = 1e-3;
 
 /// Most points a polyhedron contact carries: every vertex of the clip of two quadrilateral faces
-/// (pinacoid faces have 3 or 4 vertices). Larger polygons are reduced to 4 (see point 4 above).
+/// (pinacoid faces have 3 or 4 vertices). Larger polygons are reduced to 4 (contact_region.hpp).
 inline constexpr int kMaxPolyhedronContactPoints = 8;
 
 struct PolyhedronContact {

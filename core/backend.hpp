@@ -39,16 +39,18 @@ struct BodyState {
   Vec3 angularVelocity = Vec3::Zero(); ///< world frame [1/t0]
 };
 
-/// Named phases of one step (after Box2D's solver stages).
-/// A backend fills the phases it has and leaves the others at zero.
+/// Named phases of one step (after Box2D's solver stages), the same for both backends so that
+/// they compare phase by phase. Each backend's step() is the list of its phase functions, timed
+/// by one PhaseClock; a backend fills the phases it has and leaves the others at zero. What each
+/// backend does in each phase: docs/performance.md, "The phases of a step".
 enum class Phase : int {
-  UpdatePairs,     ///< broad phase
-  Collide,         ///< narrow phase
-  PrepareContacts, ///< Delassus blocks, frames, constraint rows
-  WarmStart,       ///< apply cached impulses
-  Solve,           ///< Gauss-Seidel / sequential impulses
-  Integrate,       ///< velocities and positions
-  StoreImpulses,   ///< contact cache for the next step, contact list
+  UpdatePairs,     ///< broad phase: candidate pairs, periodic images included
+  Collide,         ///< narrow phase: contact points, normals, gaps
+  PrepareContacts, ///< constraint rows (Delassus blocks, frames)
+  WarmStart,       ///< cached impulses applied (Bullet: inside PrepareContacts)
+  Solve,           ///< the contact solver's iterations
+  Integrate,       ///< free velocities, then positions
+  StoreImpulses,   ///< impulses kept for the next step, contact list, states
   Count
 };
 

@@ -20,7 +20,8 @@
 //   grain pair so that the Gauss-Seidel row order does not depend on where a contact came from.
 // - The material rule of the model: grain-grain friction 0, side walls mu_w, floor 0, restitution 0
 //   (Bullet would multiply the two bodies' coefficients), installed as gContactAddedCallback.
-// - The step as named phases (core::Phase), timed by one core::PhaseClock around Bullet's own pieces.
+// - The step as named phases (core::Phase), Bullet's own pieces called one by one by step() and
+//   timed there by one core::PhaseClock.
 #include "backends/bullet/bullet_backend.hpp"
 
 #include <btBulletCollisionCommon.h>
@@ -93,7 +94,7 @@ class Dispatcher final : public btCollisionDispatcher {
   double breakingThreshold_;
 };
 
-// The sequential-impulse solver with its three stages timed into the profile, and one saving:
+// The sequential-impulse solver with its three stages callable one by one, and one saving:
 // Bullet gives every contact point one or two friction rows whatever its friction coefficient.
 // With mu = 0 (grain-grain and floor contacts, i.e. nearly all of a pile) a friction row is
 // clamped to [-0, 0] in every sweep, so it never applies an impulse and contributes nothing to
@@ -101,14 +102,30 @@ class Dispatcher final : public btCollisionDispatcher {
 // When `skipZeroFriction` is set, manifolds whose points all have zero combined friction get
 // normal rows only, built by Bullet's own setupContactConstraint; the physics is bitwise the
 // same (tested), a step of a 163-sphere pile about 1.5 times faster (measured).
-class TimedSolver final : public btSequentialImpulseConstraintSolver {
+class PhasedSolver final : public btSequentialImpulseConstraintSolver {
  public:
-  core::PhaseClock* clock = nullptr;  ///< the running step's clock (BulletBackend::step)
   bool skipZeroFriction = true;
   /// Largest velocity correction of the last sweep [sqrt(g d_L)]: Bullet's residual is the max
   /// over rows of (delta impulse / jacDiagABInv)^2, a squared velocity.
   double residual() const { return std::sqrt(std::max(0.0, double(m_leastSquaresResidual))); }
   int iterationsUsed() const { return m_analyticsData.m_numIterationsUsed; }
+
+  // Bullet's solveGroup is these three calls in this order (no constraints, no debug drawer);
+  // step() makes them one by one, a phase each.
+  /// Solver bodies and rows, and the warm-start impulses (Bullet does both in one loop).
+  void prepare(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds, int numManifolds,
+               const btContactSolverInfo& info) {
+    solveGroupCacheFriendlySetup(bodies, numBodies, manifolds, numManifolds, nullptr, 0, info, nullptr);
+  }
+  /// Split-impulse (position) sweeps, then velocity sweeps.
+  void iterate(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds, int numManifolds,
+               const btContactSolverInfo& info) {
+    solveGroupCacheFriendlyIterations(bodies, numBodies, manifolds, numManifolds, nullptr, 0, info, nullptr);
+  }
+  /// Impulses into the manifold points, velocities into the bodies.
+  void finish(btCollisionObject** bodies, int numBodies, const btContactSolverInfo& info) {
+    solveGroupCacheFriendlyFinish(bodies, numBodies, info);
+  }
 
  protected:
   void convertContacts(btPersistentManifold** manifolds, int numManifolds, const btContactSolverInfo& info) override {
@@ -147,26 +164,14 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
     }
   }
 
-  btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
-                                        int numManifolds, btTypedConstraint** constraints, int numConstraints,
-                                        const btContactSolverInfo& info, btIDebugDraw* debugDrawer) override {
-    // Builds solver bodies and rows and applies the warm-start impulses (Bullet does both in
-    // one loop, so WarmStart stays inside PrepareContacts).
-    const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlySetup(
-        bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info, debugDrawer);
-    clock->charge(Phase::PrepareContacts);
-    return r;
-  }
   btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
                                              btPersistentManifold** manifolds, int numManifolds,
                                              btTypedConstraint** constraints, int numConstraints,
                                              const btContactSolverInfo& info, btIDebugDraw* debugDrawer) override {
-    // Split-impulse (position) sweeps, then velocity sweeps.
     m_leastSquaresResidual = 0.0;
     m_analyticsData.m_numIterationsUsed = 0;
     const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(
         bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info, debugDrawer);
-    clock->charge(Phase::Solve);
     return r;
   }
   btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
@@ -191,9 +196,7 @@ class TimedSolver final : public btSequentialImpulseConstraintSolver {
     }
     btContactSolverInfo rest = info;
     rest.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
-    const btScalar r = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, rest);
-    clock->charge(Phase::StoreImpulses);
-    return r;
+    return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, rest);
   }
 };
 
@@ -330,12 +333,22 @@ class BulletBackend final : public core::ContactBackend {
 
  private:
   void buildWorld();
-  void findPeriodicPairs();
-  void collidePeriodicPairs();
-  void solve();
+  // The phases of step(), in its order.
+  void beginStep(double dt);
+  void applyForces(double dt);
+  void updatePairs();
+  void collide();
+  void prepareContacts();
+  void solveContacts();
+  void storeImpulses();
+  void integrate(double dt);
+  void readContacts(double dt);
   void wrapIntoBox();
   void readStates();
-  void readContacts(double dt);
+  // Their parts.
+  void findPeriodicPairs();
+  void collidePeriodicPairs();
+  void gatherManifolds();
 
   core::SystemDef system_;
   BulletSettings settings_;
@@ -347,7 +360,7 @@ class BulletBackend final : public core::ContactBackend {
   SphereSphereAlgorithm::CreateFunc sphereSphere_;  ///< outlives the dispatcher that points to it
   std::unique_ptr<Dispatcher> dispatcher_;
   std::unique_ptr<btBroadphaseInterface> broadphase_;
-  std::unique_ptr<TimedSolver> solver_;
+  std::unique_ptr<PhasedSolver> solver_;
   std::vector<std::unique_ptr<btCollisionShape>> shapes_;
   std::vector<std::unique_ptr<btRigidBody>> grains_;  ///< index = grain index
   std::vector<std::unique_ptr<btRigidBody>> walls_;
@@ -414,7 +427,7 @@ void BulletBackend::buildWorld() {
   dispatcher_ = std::make_unique<Dispatcher>(config_.get(), settings_.contactBreakingThreshold);
   dispatcher_->registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &sphereSphere_);
   broadphase_ = std::make_unique<btDbvtBroadphase>();
-  solver_ = std::make_unique<TimedSolver>();
+  solver_ = std::make_unique<PhasedSolver>();
   solver_->skipZeroFriction = settings_.skipZeroFrictionRows;
   world_ = std::make_unique<World>(dispatcher_.get(), broadphase_.get(), solver_.get(), config_.get());
   world_->setGravity(toBt(system_.gravity));
@@ -568,7 +581,7 @@ void BulletBackend::collidePeriodicPairs() {
   }
 }
 
-void BulletBackend::solve() {
+void BulletBackend::gatherManifolds() {
   // All manifolds with points, broad-phase and periodic, in one group sorted by grain pair (the
   // solve order then does not depend on where a contact was found).
   solved_.clear();
@@ -587,8 +600,6 @@ void BulletBackend::solve() {
   };
   std::stable_sort(solved_.begin(), solved_.end(),
                    [&](const btPersistentManifold* x, const btPersistentManifold* y) { return pairOf(x) < pairOf(y); });
-  solver_->solveGroup(grainObjects_.data(), static_cast<int>(grainObjects_.size()), solved_.data(),
-                      static_cast<int>(solved_.size()), nullptr, 0, world_->getSolverInfo(), nullptr, d);
 }
 
 void BulletBackend::wrapIntoBox() {
@@ -628,7 +639,38 @@ void BulletBackend::wrapIntoBox() {
     broadphase_->getOverlappingPairCache()->cleanProxyFromPairs(body->getBroadphaseHandle(), dispatcher_.get());
 }
 
+// One fixed step in Bullet's order (btDiscreteDynamicsWorld::stepSimulation and
+// internalSingleStepSimulation): forces, collision at the current poses, the solve (gravity
+// enters as the solver bodies' external impulse m g dt), integration. Bullet applies the warm
+// start while it builds the rows, so WarmStart stays inside PrepareContacts.
 void BulletBackend::step(double dt) {
+  beginStep(dt);
+  core::PhaseClock clock(profile_);
+  applyForces(dt);
+  clock.charge(Phase::Integrate);
+  updatePairs();
+  clock.charge(Phase::UpdatePairs);
+  collide();
+  clock.charge(Phase::Collide);
+  prepareContacts();
+  clock.charge(Phase::PrepareContacts);
+  solveContacts();
+  clock.charge(Phase::Solve);
+  storeImpulses();
+  clock.charge(Phase::StoreImpulses);
+  integrate(dt);
+  clock.charge(Phase::Integrate);
+  readContacts(dt);  // before the wrap, which frees the broad-phase manifolds of grains that jump
+  clock.charge(Phase::StoreImpulses);
+  wrapIntoBox();
+  clock.charge(Phase::Integrate);
+  readStates();
+  clock.charge(Phase::StoreImpulses);
+}
+
+// The step's settings: time step, and the early exit relative to the velocity gravity adds in
+// one step (BulletSettings).
+void BulletBackend::beginStep(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt))
     throw std::invalid_argument(fmt::format("bullet: step dt must be a positive number (got {})", dt));
   dt_ = dt;
@@ -638,37 +680,51 @@ void BulletBackend::step(double dt) {
   dispatch.m_stepCount = 0;
   btContactSolverInfo& info = world_->getSolverInfo();
   info.m_timeStep = dt;
-  // The early exit is relative to the velocity gravity adds in one step (BulletSettings).
   const double exitVelocity = settings_.residualThreshold * system_.gravity.norm() * dt;
   info.m_leastSquaresResidualThreshold = exitVelocity * exitVelocity;
+}
 
-  // The pieces of btDiscreteDynamicsWorld::stepSimulation + internalSingleStepSimulation for
-  // one fixed step, in Bullet's order: forces, collision at the current poses, solve
-  // (gravity enters as the solver bodies' external impulse m g dt), integrate.
-  core::PhaseClock clock(profile_);
+// Gravity as a force, and the interpolation transform (damping is zero; velocities untouched).
+void BulletBackend::applyForces(double dt) {
   world_->applyGravity();
-  world_->predict(dt);  // damping (zero) and the interpolation transform; velocities untouched
+  world_->predict(dt);
+}
+
+// Broad-phase pairs at the current poses, then the pairs across periodic faces.
+void BulletBackend::updatePairs() {
   world_->updateGrainAabbs(settings_.contactBreakingThreshold);
   world_->computeOverlappingPairs();
   findPeriodicPairs();
-  clock.charge(Phase::UpdatePairs);
-  dispatcher_->dispatchAllCollisionPairs(broadphase_->getOverlappingPairCache(), dispatch, dispatcher_.get());
+}
+
+// Bullet's narrow phase over the broad-phase pairs, then over the periodic ones.
+void BulletBackend::collide() {
+  dispatcher_->dispatchAllCollisionPairs(broadphase_->getOverlappingPairCache(), world_->getDispatchInfo(),
+                                         dispatcher_.get());
   collidePeriodicPairs();
-  clock.charge(Phase::Collide);
-  solver_->clock = &clock;  // the solver's stages charge PrepareContacts, Solve and StoreImpulses
-  solve();
-  solver_->clock = nullptr;
+}
+
+void BulletBackend::prepareContacts() {
+  gatherManifolds();
+  solver_->prepare(grainObjects_.data(), static_cast<int>(grainObjects_.size()), solved_.data(),
+                   static_cast<int>(solved_.size()), world_->getSolverInfo());
+}
+
+void BulletBackend::solveContacts() {
+  solver_->iterate(grainObjects_.data(), static_cast<int>(grainObjects_.size()), solved_.data(),
+                   static_cast<int>(solved_.size()), world_->getSolverInfo());
   profile_.iterations = solver_->iterationsUsed();
   profile_.residual = solver_->residual();
+}
+
+void BulletBackend::storeImpulses() {
+  solver_->finish(grainObjects_.data(), static_cast<int>(grainObjects_.size()), world_->getSolverInfo());
+}
+
+// Positions and orientations from the new velocities; the forces are cleared for the next step.
+void BulletBackend::integrate(double dt) {
   world_->integrate(dt);
   world_->clearForces();
-  clock.charge(Phase::Integrate);
-  readContacts(dt);  // before the wrap, which frees the broad-phase manifolds of grains that jump
-  clock.charge(Phase::StoreImpulses);
-  wrapIntoBox();
-  clock.charge(Phase::Integrate);
-  readStates();
-  clock.charge(Phase::StoreImpulses);
 }
 
 void BulletBackend::readStates() {

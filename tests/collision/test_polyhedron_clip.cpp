@@ -8,9 +8,11 @@
 
 #include "core/pinacoid.hpp"
 #include "collision/polyhedron_clip.hpp"
+#include "tests/support/polyhedra.hpp"
 
 using namespace confpack::core;
 using namespace confpack::collision;
+using namespace confpack::testing;
 
 namespace {
 
@@ -21,12 +23,6 @@ ConvexPolyhedron makeCuboid(double sx, double sy, double sz) {
   std::vector<std::vector<int>> f = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
                                      {2, 3, 7, 6}, {1, 2, 6, 5}, {0, 4, 7, 3}};
   return ConvexPolyhedron(std::move(v), std::move(f));
-}
-
-Mat3 randomRotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  Quat q(g(rng), g(rng), g(rng), g(rng));
-  return q.normalized().toRotationMatrix();
 }
 
 }  // namespace
