@@ -25,9 +25,10 @@ void refuseOtherBackendsKey(std::string_view name, const nlohmann::json& options
     const bool own = nscd ? nscd::settingsTable().has(key) : bullet::settingsTable().has(key);
     const bool other = nscd ? bullet::settingsTable().has(key) : nscd::settingsTable().has(key);
     if (!own && other)
-      throw std::invalid_argument(fmt::format(
-          "{}.{}: a setting of {}, not of {} (when changing a config.json's backend, drop its backend_options)", name,
-          key, nscd ? "bullet" : "nscd", name));
+      throw std::invalid_argument(
+          fmt::format("{}.{}: a setting of {}, not of {} (backend_options holds the run's backend's settings only: "
+                      "drop it when changing a config.json's backend)",
+                      name, key, nscd ? "bullet" : "nscd", name));
   }
 }
 

@@ -23,8 +23,8 @@ TEST_CASE("makeBackend builds each listed backend by name, passes its options, r
     // An unknown option is refused by the backend it was meant for.
     CHECK_THROWS_WITH(backends::makeBackend(name, s, {{"no_such_option", 1}}), Catch::Contains("no_such_option"));
   }
-  CHECK_THROWS_WITH(backends::makeBackend("ode", s), Catch::Contains("unknown backend 'ode'") &&
-                                                         Catch::Contains("nscd") && Catch::Contains("bullet"));
+  CHECK_THROWS_WITH(backends::makeBackend("ode", s),
+                    Catch::Contains("unknown backend 'ode'") && Catch::Contains("nscd") && Catch::Contains("bullet"));
   CHECK_THROWS_AS(backends::makeBackend("NSCD", s), std::invalid_argument);
 }
 
@@ -46,9 +46,10 @@ TEST_CASE("checkBackendOptions names a key of the other backend as such, and an 
   CHECK_NOTHROW(checkBackendOptions("bullet", {{"iterations", 30}}));
   // A config.json of an nscd run whose "backend" was changed to bullet.
   CHECK_THROWS_WITH(checkBackendOptions("bullet", {{"iterations", 30}, {"alert_distance", 0.1}}),
-                    "bullet.alert_distance: a setting of nscd, not of bullet (when changing a config.json's backend, "
-                    "drop its backend_options)");
+                    "bullet.alert_distance: a setting of nscd, not of bullet (backend_options holds the run's "
+                    "backend's settings only: drop it when changing a config.json's backend)");
   CHECK_THROWS_WITH(checkBackendOptions("nscd", {{"erp", 0.2}}), Catch::Contains("nscd.erp: a setting of bullet"));
-  CHECK_THROWS_WITH(checkBackendOptions("nscd", {{"bogus", 1}}), Catch::StartsWith("nscd.bogus: unknown key (known: theta"));
+  CHECK_THROWS_WITH(checkBackendOptions("nscd", {{"bogus", 1}}),
+                    Catch::StartsWith("nscd.bogus: unknown key (known: theta"));
   CHECK_THROWS_WITH(checkBackendOptions("nscd", nlohmann::json::array()), Catch::Contains("must be a JSON object"));
 }

@@ -3,7 +3,6 @@
 // bookkeeping that makes a study survive kills and cluster slicing.
 #include <catch2/catch.hpp>
 #include <chrono>
-
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -442,7 +441,8 @@ TEST_CASE("setting axes: an unknown path or a value the configuration's readers 
         "options nscd, or bullet)");
   CHECK(message(R"({"backend_options.tolerance": [1e-8], "backend": ["nscd"]})") == "accepted");
   CHECK_THAT(message(R"({"backend_options.tolerance": [1e-8], "backend": ["nscd", "bullet"]})"),
-             Catch::StartsWith("sweep run r0001 (MSP xS=0 W=10 mu=0 s1 bullet): bullet.tolerance: unknown key"));
+             Catch::StartsWith(
+                 "sweep run r0001 (MSP xS=0 W=10 mu=0 s1 bullet): bullet.tolerance: a setting of nscd, not of bullet"));
   // A named axis and its path in one group would fight over the setting.
   CHECK(message(R"({"small_fraction": [0], "population.small_fraction": [10]})") ==
         "s.json: vary.population.small_fraction: small_fraction and population.small_fraction vary the same setting: "
