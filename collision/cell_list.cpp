@@ -38,7 +38,7 @@ void neighbourTable(int m, bool periodic, std::vector<int>& table, std::vector<i
 }
 
 // Cells of side >= cutoff along a length: as many as fit, at least one (counted in double: a
-// length of 1e16 cutoffs must not overflow an int before build() coarsens it).
+// length of 1e16 cutoffs must not overflow an int; setColumnsAndRows caps the count).
 double cellsAlong(double length, double cutoff) {
   return std::max(1.0, std::floor(length / cutoff));
 }
@@ -55,9 +55,9 @@ CellList::CellList(const BoxDef& box, double cutoff, double zMin) : box_(box), c
 
 void CellList::setColumnsAndRows(double nx, double ny) {
   // As many whole cells as fit along each length, so that every cell is at least `cutoff` and
-  // the cells tile a period exactly.
-  nx_ = static_cast<int>(nx);
-  ny_ = static_cast<int>(ny);
+  // the cells tile a period exactly; at most kMaxCellsPerAxis (a box of 1e58 cutoffs).
+  nx_ = static_cast<int>(std::min(nx, kMaxCellsPerAxis));
+  ny_ = static_cast<int>(std::min(ny, kMaxCellsPerAxis));
   hx_ = box_.lengthX / nx_;
   hy_ = box_.width / ny_;
 }

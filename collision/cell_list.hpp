@@ -65,6 +65,10 @@ class CellList {
   /// a few points per cell, a box of a few grains 1e16 wide would otherwise overflow the count.
   static constexpr double kMaxCellsPerPoint = 64.0;
   static constexpr double kSpareCells = 1024.0;
+  /// Most cells along x or y, whatever the box: before build() sizes the grid by the points, the
+  /// constructor's whole-cutoff counts of a huge box must fit an int (fewer, larger cells find
+  /// the same pairs). 2^20 covers any box a run can deposit (max_grains 1e6).
+  static constexpr double kMaxCellsPerAxis = 1048576.0;
 
   /// Cells of at least `cutoff` a side over `box` [d_L]; the layers of insert() start at zMin
   /// [d_L]. Throws std::invalid_argument if the cutoff or a box length is not a positive number.

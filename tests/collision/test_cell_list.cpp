@@ -216,6 +216,25 @@ TEST_CASE("cell list pair search gives exactly the brute-force pairs within the 
   }
 }
 
+TEST_CASE("a box of 1e58 cutoffs: at most kMaxCellsPerAxis cells before and after build, the same pairs",
+          "[collision][cells]") {
+  // fuzz_packing (UBSan, clang): a packing whose length_x was 2.7e58 made the constructor cast
+  // 2.7e58 cells to an int before build() could coarsen them.
+  BoxDef box;
+  box.lengthX = 2.6666666666666667e58;
+  box.width = 2.0;
+  box.periodicY = GENERATE(false, true);
+  CellList list(box, 1.0);
+  CHECK(list.cellsX() == static_cast<int>(CellList::kMaxCellsPerAxis));
+  CHECK(list.cellsY() == 2);
+  std::vector<Vec3> p;
+  for (int k = 0; k < 30; ++k) p.emplace_back(0.4 * k, 1.0 + 0.3 * std::sin(k), 0.5 + 0.2 * (k % 3));
+  list.build(p);
+  CHECK(list.cellsX() >= 1);
+  comparePairsWithBruteForce(box, p, 1.0);
+  CHECK(confpack::testing::pairsWithinCutoff(box, p, 1.0).size() > 20);
+}
+
 TEST_CASE("cell list pair search on a team gives the one-thread list bit for bit", "[collision][cells][threads]") {
   BoxDef box;
   box.lengthX = 14.0;
