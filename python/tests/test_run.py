@@ -52,7 +52,16 @@ def test_run_equals_the_cli(cli_run, tmp_path):
     assert calls and all(0.0 <= f <= 1.0 and isinstance(s, str) for f, s in calls)
 
 
-def test_ctrl_c_stops_a_run():
+@pytest.fixture
+def ctrl_c_raises():
+    """Python's own SIGINT handler, which it leaves out when started with SIGINT ignored (a suite
+    run in the background by a shell without job control, or under nohup)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_stops_a_run(ctrl_c_raises):
     def interrupt(fraction, status):
         os.kill(os.getpid(), signal.SIGINT)  # what Ctrl-C in a terminal or a notebook does
 
@@ -84,7 +93,9 @@ def test_ctrl_c_from_outside_stops_the_compaction(tmp_path):
     # A real SIGINT while the compaction runs in C++ without the GIL and without a callback: the
     # run stops at its next equilibrium check, long before its 400 t0.
     script = (
-        "import sys, confpack\n"
+        "import signal, sys, confpack\n"
+        # Python's handler even if this suite was started with SIGINT ignored (the child inherits it).
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         f"config = {{**{TINY_CONFIG!r}, 'compaction': {{'time_limit': 400}}}}\n"
         "print('started', flush=True)\n"
         "try:\n"
