@@ -9,6 +9,7 @@
 #include "backends/backend_factory.hpp"
 #include "backends/bullet/bullet_settings.hpp"
 #include "backends/nscd/nscd_settings.hpp"
+#include "core/json_input.hpp"
 
 namespace confpack::backends {
 
@@ -41,14 +42,14 @@ void checkBackendOptions(std::string_view name, const nlohmann::json& options) {
   } else if (name == "bullet") {
     bullet::bulletSettingsFromJson(options);
   } else {
-    throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
+    throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", core::textExcerpt(name, 40)));
   }
 }
 
 std::string optionsMarkdown(std::string_view name) {
   if (name == "nscd") return nscd::settingsTable().markdown(nscd::NscdSettings{});
   if (name == "bullet") return bullet::settingsTable().markdown(bullet::BulletSettings{});
-  throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", name));
+  throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", core::textExcerpt(name, 40)));
 }
 
 }  // namespace confpack::backends

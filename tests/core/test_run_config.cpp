@@ -137,3 +137,18 @@ TEST_CASE("the config.json seeds of the fuzz corpus are accepted configurations"
   }
   CHECK(seeds >= 5);
 }
+
+TEST_CASE("an unknown backend name is quoted cut short, not echoed in full") {
+  // fuzz_run_config: a 4 KB "backend" string made a refusal longer than 1,500 characters.
+  core::RunConfig c;
+  c.backend = std::string(4000, 'n');
+  try {
+    c.validate();
+    FAIL("accepted");
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    CHECK(message.size() < 200);
+    CHECK_THAT(message, Catch::StartsWith("backend: unknown backend 'nnnn"));
+    CHECK_THAT(message, Catch::EndsWith("(expected nscd or bullet)"));
+  }
+}
