@@ -156,7 +156,7 @@ Grain readGrain(const json& j, std::string_view source, std::size_t index) {
     fail(source, r.field("orientation"), fmt::format("must be [w, x, y, z] (got {})", jsonExcerpt(q)));
   const std::string qw = r.field("orientation");
   const Eigen::Vector4d c = unitOrFail(Eigen::Vector4d(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"),
-                                                        r.toNumber(q[2], qw + "[2]"), r.toNumber(q[3], qw + "[3]")),
+                                                       r.toNumber(q[2], qw + "[2]"), r.toNumber(q[3], qw + "[3]")),
                                        source, qw);
   g.orientation = Quat(c[0], c[1], c[2], c[3]);
   return g;
@@ -448,17 +448,22 @@ Packing readPacking(const std::filesystem::path& path) {
   return packingFromJson(readJsonFile(path, "packing file"), path.string());
 }
 
-void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
+std::string hostName() {
+  char buf[256] = {};
+  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown-host";
+  return buf;
+}
+
+std::filesystem::path privateFileName(const std::filesystem::path& dir, std::string_view stem) {
   static std::atomic<unsigned> counter{0};
+  static const std::string host = hostName();
+  return dir / fmt::format(".{}.{}.{}.{}", stem, host, ::getpid(), counter++);
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  // Named after this host and process: tasks on several nodes write into one shared sweep folder,
-  // and pids repeat from node to node.
-  static const std::string host = [] {
-    char buf[256] = {};
-    return ::gethostname(buf, sizeof buf - 1) == 0 ? std::string(buf) : std::string("host");
-  }();
-  const std::filesystem::path tmp =
-      dir / fmt::format(".{}.tmp-{}-{}-{}", path.filename().string(), host, ::getpid(), counter++);
+  // Named after this host and process: tasks on several nodes write into one shared sweep folder.
+  const std::filesystem::path tmp = privateFileName(dir, path.filename().string() + ".tmp");
   // No fsync: rename() already guarantees that readers see the old file or the whole new one,
   // which is the property we need; durability across a power cut is not worth a disk flush per
   // VTK frame.

@@ -46,6 +46,14 @@ void writePacking(const Packing& packing, const std::filesystem::path& path);
 /// Reads and validates a packing file (errors name the file, element and field).
 Packing readPacking(const std::filesystem::path& path);
 
+/// This host's name (gethostname), as private file names and run claims record it.
+std::string hostName();
+
+/// A name in `dir` that no other process on any node sharing the folder uses: ".STEM.HOST.PID.N",
+/// N counting this process's names (pids repeat from node to node). For a file only this process
+/// writes: a temporary before its rename, a program's output.
+std::filesystem::path privateFileName(const std::filesystem::path& dir, std::string_view stem);
+
 /// Writes `text` to `path` atomically: a uniquely named temporary file in the same directory is
 /// written, flushed and renamed over `path` (rename is atomic within one file system). On any
 /// failure the temporary is removed and std::runtime_error is thrown; `path` is then untouched.

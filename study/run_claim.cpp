@@ -77,17 +77,6 @@ bool olderThan(const fs::path& file, std::chrono::seconds age) {
 
 }  // namespace
 
-std::string hostName() {
-  char buf[256] = {};
-  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown-host";
-  return buf;
-}
-
-fs::path privateFileName(const fs::path& dir, std::string_view stem) {
-  static std::atomic<unsigned> counter{0};
-  return dir / fmt::format(".{}.{}.{}.{}", stem, hostName(), ::getpid(), counter++);
-}
-
 json toJson(const ClaimHolder& h) {
   return {{"host", h.host}, {"pid", h.pid},     {"start_ticks", h.startTicks},
           {"job", h.job},   {"token", h.token}, {"since", h.since}};

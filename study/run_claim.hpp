@@ -16,14 +16,12 @@
 #include <optional>
 #include <string>
 
+#include "core/packing_io.hpp"
+
 namespace confpack::study {
 
-/// This host's name (gethostname), as claims and private file names record it.
-std::string hostName();
-
-/// A name in `dir` that no other process on any node sharing the folder uses: ".STEM.HOST.PID.N",
-/// N counting this process's names. For a file only this process writes (staging, a program's output).
-std::filesystem::path privateFileName(const std::filesystem::path& dir, std::string_view stem);
+using core::hostName;
+using core::privateFileName;
 
 /// Who holds a claim: enough to tell from any node whether it is still alive.
 struct ClaimHolder {
