@@ -2,8 +2,6 @@
 
 #include <fmt/format.h>
 
-#include "core/json_input.hpp"
-
 #include <stdexcept>
 #include <string>
 
@@ -21,7 +19,7 @@ std::unique_ptr<core::ContactBackend> makeBackend(std::string_view name, const c
                                                   const nlohmann::json& options) {
   if (name == "nscd") return nscd::makeNscdBackend(system, options);
   if (name == "bullet") return bullet::makeBulletBackend(system, options);
-  throw std::invalid_argument(fmt::format("unknown backend '{}' (expected nscd or bullet)", core::textExcerpt(name, 40)));
+  throw std::invalid_argument(core::unknownBackendMessage(name));
 }
 
 }  // namespace confpack::backends

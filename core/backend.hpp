@@ -23,6 +23,10 @@ namespace confpack::core {
 /// name. Here so that what only checks a name (a run configuration, a sweep file) needs no backend.
 inline constexpr std::array<std::string_view, 2> kBackendNames = {"nscd", "bullet"};
 
+/// "unknown backend 'NAME' (expected nscd or bullet)", the name cut to 40 characters (it may be
+/// any text of a configuration file): the one refusal of a name not in kBackendNames.
+std::string unknownBackendMessage(std::string_view name);
+
 /// Everything a backend needs to build its world.
 struct SystemDef {
   BoxDef box;

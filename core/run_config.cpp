@@ -151,7 +151,7 @@ void RunConfig::validate() const {
   box.validate();
   population.validate();
   if (std::find(kBackendNames.begin(), kBackendNames.end(), backend) == kBackendNames.end())
-    throw std::invalid_argument(fmt::format("backend: unknown backend '{}' (expected nscd or bullet)", textExcerpt(backend, 40)));
+    throw std::invalid_argument("backend: " + unknownBackendMessage(backend));
   if (!backendOptions.is_object())
     throw std::invalid_argument(
         fmt::format("backend_options: must be a JSON object (got {})", jsonExcerpt(backendOptions)));
