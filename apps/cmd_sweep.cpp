@@ -122,17 +122,14 @@ void runSweepCommand(const SweepState& st) {
     // input (exit 2) rather than a failure of every run.
     const std::vector<std::string> varied = study::variedSettings(runs);
     for (const study::SweepRun& run : runs) {
+      std::string_view what = "backend_options: ";
       try {
         backends::checkBackendOptions(run.config.backend, run.config.backendOptions);
-      } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(fmt::format("{}: run {} ({}): backend_options: {}", st.file.string(), run.name,
-                                                run.label(varied), e.what()));
-      }
-      try {
+        what = "";
         study::checkRunCells(run.config, run.config.estimatedGrainCount());
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(
-            fmt::format("{}: run {} ({}): {}", st.file.string(), run.name, run.label(varied), e.what()));
+            fmt::format("{}: run {} ({}): {}{}", st.file.string(), run.name, run.label(varied), what, e.what()));
       }
     }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
