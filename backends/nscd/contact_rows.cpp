@@ -52,7 +52,7 @@ void ContactRows::build(const std::vector<ContactGeometry>& contacts, const std:
   frictionRows_.clear();
   rowRef_.clear();
   impulseOfRow_.clear();  // until a solve stores them
-  warmNormalsInSolve_ = settings.solver == SolverKind::Mprgp;
+  warmNormalsInSolve_ = settings.solver != SolverKind::Nlgs;
   int contactIndex = -1;
   double leverMax = 0.0;
   const int staticBody = static_cast<int>(bodies.size()) - 1;

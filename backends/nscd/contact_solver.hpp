@@ -8,11 +8,13 @@
 //   ContactRows  (contact_rows.hpp)  the step's rows: build, warmStart, exportImpulses, and the
 //                                    impulses, row count and sweep blocks they hold;
 //   NlgsSolver   (nlgs_solver.hpp)   nonlinear Gauss-Seidel over the rows: solve;
-//   MprgpSolver  (mprgp_solver.hpp)  MPRGP over the rows: solve.
-// ContactSolver holds the rows and both solvers, and its solve() dispatches on
+//   MprgpSolver  (mprgp_solver.hpp)  MPRGP over the rows: solve;
+//   IpmSolver    (ipm_solver.hpp)    a primal-dual interior-point method over the rows: solve.
+// ContactSolver holds the rows and the three solvers, and its solve() dispatches on
 // NscdSettings::solver.
 //
-// Two solvers of the same problem (NscdSettings::solver).
+// Three solvers of the same problem (NscdSettings::solver); the first two are the dynamic
+// steps' choice, the third the quasi-static finisher's (NscdSettings::finisherSolver):
 // - "nlgs" (nlgs_solver.hpp), nonlinear Gauss-Seidel (LMGC90's NLGS). Cheap per sweep
 //   and robust, but its error near jamming shrinks by a factor close to 1 per sweep (the Delassus
 //   matrix of a jammed, nearly isostatic pile is ill-conditioned): it stops on a small change per
@@ -23,11 +25,16 @@
 //   instead of linearly, and the stopping rule is the true residual of the law. On a 493-sphere
 //   pile it reaches equilibrium where nlgs stays at a force ratio of 2.5e-3 (docs/performance.md,
 //   "Why MPRGP and not Gauss-Seidel").
+// - "ipm" (ipm_solver.hpp): the same program in primal form by Mehrotra's predictor-corrector,
+//   each iteration a sparse Cholesky factorisation, then an exact solve on the closed contacts.
+//   Its 20 to 35 iterations do not depend on the conditioning, which is what the finisher's long
+//   steps from rest need; a warm-started dynamic step needs only a few cheap MPRGP iterations.
 #include <array>
 #include <vector>
 
 #include "backends/nscd/contact_cache.hpp"
 #include "backends/nscd/contact_rows.hpp"
+#include "backends/nscd/ipm_solver.hpp"
 #include "backends/nscd/mprgp_solver.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nlgs_solver.hpp"
@@ -35,8 +42,8 @@
 
 namespace confpack::nscd {
 
-/// The contact solve of one step: the rows (ContactRows) and the two solvers of them (NlgsSolver,
-/// MprgpSolver). Owns one of each and the residual of the last solve. Verbs, in step order:
+/// The contact solve of one step: the rows (ContactRows) and the three solvers of them (NlgsSolver,
+/// MprgpSolver, IpmSolver). Owns one of each and the residual of the last solve. Verbs, in step order:
 /// prepare, warmStart, solve, exportImpulses; the accessors read the rows or the last MPRGP solve.
 class ContactSolver {
  public:
@@ -45,6 +52,7 @@ class ContactSolver {
                const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
                const NscdSettings& settings) {
     rows_.build(contacts, positions, bodies, box, dt, settings);
+    bodies_ = &bodies;
   }
   /// Sets the impulses from the cache and applies them to the velocities (ContactRows::warmStart);
   /// with mprgp (the solver of the last prepare()), only the tangential ones: solve() applies the
@@ -55,7 +63,8 @@ class ContactSolver {
   }
   /// Solves the step's contact problem with settings.solver, updating `velocities` (v_free plus
   /// the warm start on entry, v_{i+1} on exit); returns the number of iterations: Gauss-Seidel
-  /// sweeps (nlgs) or operator applications W p (mprgp, each about two sweeps of work).
+  /// sweeps (nlgs), operator applications W p (mprgp, each about two sweeps of work) or
+  /// factorisations (ipm: interior-point iterations and polish rounds, plus tangential passes).
   int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
   double residual() const { return residual_; }
   /// The grains touched by the rows of each of the two sweep blocks of the last prepare()
@@ -80,6 +89,8 @@ class ContactSolver {
   ContactRows rows_;
   NlgsSolver nlgs_;
   MprgpSolver mprgp_;
+  IpmSolver ipm_;
+  const std::vector<BodyInverseMass>* bodies_ = nullptr;  // of the last prepare(), for ipm
   double residual_ = 0.0;
 };
 

@@ -74,6 +74,12 @@ class NscdBackend final : public core::ContactBackend {
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
     finisherSettings_ = settings_;
+    if (settings_.finisherSolver != settings_.solver) {  // its own cap; the tolerance if it means the same
+      const NscdSettings own = defaultsFor(settings_.finisherSolver);
+      finisherSettings_.solver = own.solver;
+      finisherSettings_.maxIterations = own.maxIterations;
+      if (settings_.solver == SolverKind::Nlgs) finisherSettings_.tolerance = own.tolerance;
+    }
     finisherSettings_.theta = 1.0;
     finisherSettings_.gapCorrection = 1.0;
     finisherSettings_.maxCorrectionVelocity = std::numeric_limits<double>::infinity();

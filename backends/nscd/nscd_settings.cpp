@@ -12,8 +12,10 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
   static const core::SettingsTable<S> table = [] {
     core::SettingsTable<S> t("nscd");
     t.number("theta", &S::theta, Range::closed(0.5, 1.0), "-", "Moreau-Jean theta: 0.5 integrates free flight exactly, 1 is implicit Euler")
-        .choice("solver", &S::solver, {{"mprgp", SolverKind::Mprgp}, {"nlgs", SolverKind::Nlgs}},
+        .choice("solver", &S::solver, {{"mprgp", SolverKind::Mprgp}, {"nlgs", SolverKind::Nlgs}, {"ipm", SolverKind::Ipm}},
                 "contact solver; its choice sets the defaults of tolerance and max_iterations")
+        .choice("finisher_solver", &S::finisherSolver, {{"ipm", SolverKind::Ipm}, {"mprgp", SolverKind::Mprgp}},
+                "solver of the quasi-static finisher's steps (tolerance as for the steps, max_iterations its own default)")
         .choice("expansion", &S::expansion,
                 {{"projected_cg", ExpansionKind::ProjectedCg}, {"gradient", ExpansionKind::Gradient}},
                 "mprgp: the step taken when a conjugate gradient step would make an impulse negative")
@@ -21,9 +23,9 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
                 {{"sgs", PreconditionerKind::SymmetricGaussSeidel}, {"none", PreconditionerKind::None}},
                 "mprgp: symmetric Gauss-Seidel sweeps over the free rows, or Jacobi scaling only")
         .number("tolerance", &S::tolerance, Range::positive(), "-",
-                "stopping threshold: mprgp relative projected gradient (1e-10), nlgs relative impulse change (1e-6)")
+                "stopping threshold: mprgp and ipm relative projected gradient (1e-10), nlgs relative impulse change (1e-6)")
         .integer("max_iterations", &S::maxIterations, Range::atLeast(1), "-",
-                 "iterations per step at most: mprgp 5000, nlgs 2000")
+                 "iterations per step at most: mprgp 5000, nlgs 2000, ipm 200")
         .integer("min_iterations", &S::minIterations, Range::atLeast(1), "-", "nlgs: sweeps done before testing convergence")
         .number("relaxation", &S::relaxation, Range::open(0.0, 2.0), "-", "nlgs: over-relaxation factor omega")
         .number("alert_distance", &S::alertDistance, Range::atLeast(0.0), "d",
@@ -56,6 +58,8 @@ NscdSettings defaultsFor(SolverKind kind) {
   if (kind == SolverKind::Nlgs) {
     s.tolerance = 1e-6;
     s.maxIterations = 2000;
+  } else if (kind == SolverKind::Ipm) {
+    s.maxIterations = 200;  // Newton iterations: 20 to 60 per solve, whatever the conditioning
   }
   return s;
 }

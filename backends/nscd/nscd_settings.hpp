@@ -14,6 +14,7 @@ namespace confpack::nscd {
 enum class SolverKind {
   Nlgs,   ///< "nlgs": nonlinear (projected) Gauss-Seidel over contact points (LMGC90's NLGS)
   Mprgp,  ///< "mprgp": projected conjugate gradient (Dostal's MPRGP) on the same problem
+  Ipm,    ///< "ipm": primal-dual interior point with a sparse Cholesky factorisation (ipm_solver.hpp)
 };
 
 /// How MPRGP expands the active set when a conjugate gradient step would leave y >= 0.
@@ -46,6 +47,11 @@ struct NscdSettings {
   /// at rest keeps a force ratio near 2e-4, above the equilibrium bound 1e-4; 1e-9 got there
   /// later overall).
   double tolerance = 1e-10;
+  /// ["finisher_solver"] the solver of the quasi-static finisher's steps (docs/model.md,
+  /// "Quasi-static compaction"): "ipm" (default) or "mprgp" ("nlgs" is refused: it cannot reach
+  /// the finisher's accuracy). Its iteration cap is that solver's default; its tolerance is
+  /// `tolerance` (the same relative projected gradient for mprgp and ipm), or 1e-10 under nlgs.
+  SolverKind finisherSolver = SolverKind::Ipm;
   /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
   /// conjugate gradient step would make an impulse negative (mprgp_solver.cpp).
   /// "gradient" is Dostal's original: to the first bound, then a projected gradient step of fixed

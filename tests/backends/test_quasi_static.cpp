@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "backends/bullet/bullet_backend.hpp"
 #include "backends/nscd/nscd_backend.hpp"
@@ -67,7 +68,11 @@ TEST_CASE("finisher: a column of N beads carries k m g at its k-th contact from 
   constexpr int kBeads = 6;
   core::SystemDef s = boxSystem(4.0, 4.0, false, 0.0);
   for (int k = 0; k < kBeads; ++k) s.grains.push_back(sphere(1.0, Vec3(2.0, 2.0, 0.51 + 1.01 * k)));
-  auto b = nscd::makeNscdBackend(s, kTight);
+  const std::string solver = GENERATE("ipm", "mprgp");  // the finisher's two solvers
+  INFO("finisher_solver " << solver);
+  nlohmann::json options = kTight;
+  options["finisher_solver"] = solver;
+  auto b = nscd::makeNscdBackend(s, options);
   REQUIRE(settle(*b).settled());
   const double weight = s.grains[0].volume();
   for (int k = 0; k < kBeads; ++k) {

@@ -17,8 +17,9 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
   for (const char* key : {"theta", "expansion", "preconditioner", "tolerance", "max_iterations", "min_iterations",
-                          "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed"})
+                          "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed", "finisher_solver"})
     CHECK(resolved.contains(key));
+  CHECK(resolved["finisher_solver"] == "ipm");
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
   // The resolved settings round-trip: feeding them back gives the same settings.
@@ -32,6 +33,8 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"tolerance", "small"}}), Catch::Contains("tolerance"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"expansion", "cg"}}), Catch::Contains("expansion"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"preconditioner", "ic"}}), Catch::Contains("preconditioner"));
+  // Gauss-Seidel cannot reach the finisher's accuracy: not offered for it.
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"finisher_solver", "nlgs"}}), Catch::Contains("finisher_solver"));
   CHECK_THROWS_AS(nscd::makeNscdBackend(s, nlohmann::json::array()), std::invalid_argument);
   // Threads come from the run configuration (SystemDef), once, not from the options.
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"threads", 2}}), Catch::Contains("nscd.threads: unknown key"));

@@ -1,0 +1,80 @@
+// The interior-point solver (backends/nscd/ipm_solver.hpp) on one cold step's contact problem: a
+// resting column is stopped exactly with the weight above each contact, and on piles of spheres
+// and of pinacoids between rough walls it reaches the velocities of MPRGP, the other solver of
+// the same problem.
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+
+#include "tests/backends/nscd/nscd_problems.hpp"
+
+using namespace confpack;
+using core::Vec3;
+using testing::ColdStep;
+
+namespace {
+
+nscd::NscdSettings ipm(double tolerance = 1e-12) {
+  nscd::NscdSettings s = nscd::defaultsFor(nscd::SolverKind::Ipm);
+  s.tolerance = tolerance;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("nscd ipm: a column of touching beads is stopped dead, its k-th contact from the top carrying k m g dt",
+          "[nscd]") {
+  core::SystemDef s = testing::boxSystem(5.0, 5.0, false, 0.0);
+  constexpr int kBeads = 6;
+  for (int k = 0; k < kBeads; ++k) s.grains.push_back(testing::sphere(1.0, Vec3(2.5, 2.5, 0.5 + k)));
+  const ColdStep step(s, ipm());
+  REQUIRE(step.contacts.size() == kBeads);  // floor + 5 pairs
+  CHECK(step.solver.residual() < 1e-12);
+  double largest = 0.0;
+  for (std::size_t i = 0; i + 1 < step.velocities.size(); ++i)
+    largest = std::max({largest, step.velocities[i].v.norm(), step.velocities[i].w.norm()});
+  CHECK(largest < 1e-12 * ColdStep::kDt);
+  // The contact under bead j (0 the lowest) carries the beads j..top: (kBeads - j) m g dt.
+  const double weight = s.grains[0].volume() * ColdStep::kDt;
+  for (std::size_t c = 0; c < step.contacts.size(); ++c) {
+    const nscd::ContactGeometry& g = step.contacts[c];
+    // The floor (a wall: b < 0) carries every bead; the pair (j, j + 1) the beads above j.
+    const int carried = g.b < 0 ? kBeads : kBeads - 1 - std::min(g.a, g.b);
+    INFO("contact " << c << " between " << g.a << " and " << g.b);
+    CHECK(step.solver.normalImpulse(static_cast<int>(c), 0) == Approx(carried * weight).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("nscd ipm: on a touching sphere pile it reaches the velocities MPRGP reaches, in a few dozen iterations",
+          "[nscd]") {
+  // The velocities after the step are unique (see the MPRGP expansions test): two algorithms
+  // must meet there. The interior-point iterations do not grow with the conditioning.
+  const core::SystemDef s = testing::touchingSpheres(6.0, 6.0, false, 250, 7);
+  nscd::NscdSettings mprgp;
+  mprgp.tolerance = 1e-12;
+  const ColdStep a(s, ipm()), b(s, mprgp);
+  INFO("rows " << a.solver.rowCount() << ", ipm iterations " << a.iterations << ", mprgp iterations " << b.iterations);
+  REQUIRE(a.solver.rowCount() > 250);
+  CHECK(a.solver.residual() < 1e-12);
+  CHECK(a.iterations < 60);
+  const auto [largest, difference] = testing::compareVelocities(a, b);
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(largest > 0.5 * ColdStep::kDt);  // not a trivial solution
+  CHECK(difference < 1e-7 * largest);
+}
+
+TEST_CASE("nscd ipm: on a pressed pinacoid pile between walls with friction it reaches MPRGP's velocities", "[nscd]") {
+  // Rotations (6 unknowns per grain) and side-wall friction (the block Gauss-Seidel with the
+  // tangential passes) both in play: grown pinacoids press on each other and on the rough walls.
+  const core::SystemDef s = testing::pile(core::ShapeKind::Pinacoid, 6.0, 3.0, 80, 1.4);
+  nscd::NscdSettings mprgp;
+  mprgp.tolerance = 1e-10;
+  const ColdStep a(s, ipm(1e-10)), b(s, mprgp);
+  INFO("rows " << a.solver.rowCount() << ", ipm iterations " << a.iterations << ", mprgp iterations " << b.iterations);
+  REQUIRE(a.solver.rowCount() > 40);
+  CHECK(a.solver.residual() < 1e-10);
+  const auto [largest, difference] = testing::compareVelocities(a, b);
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(largest > 0.1 * ColdStep::kDt);
+  CHECK(difference < 1e-5 * largest);
+}
