@@ -14,7 +14,7 @@
 // NscdSettings::solver.
 //
 // Three solvers of the same problem (NscdSettings::solver); the first two are the dynamic
-// steps' choice, the third the quasi-static finisher's (NscdSettings::finisherSolver):
+// steps' choice, the third the quasi-static finisher's for sphere piles (NscdSettings::finisherSolver):
 // - "nlgs" (nlgs_solver.hpp), nonlinear Gauss-Seidel (LMGC90's NLGS). Cheap per sweep
 //   and robust, but its error near jamming shrinks by a factor close to 1 per sweep (the Delassus
 //   matrix of a jammed, nearly isostatic pile is ill-conditioned): it stops on a small change per

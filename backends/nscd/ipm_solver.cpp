@@ -77,6 +77,14 @@ double stepToBoundary(const Eigen::VectorXd& v, const Eigen::VectorXd& dv) {
 }  // namespace
 
 struct IpmSolver::Impl {
+  // A factorisation that fails (not positive definite to round-off) is reported through info(),
+  // which the solve handles; CHOLMOD would also print it on stderr, in the middle of a run's
+  // progress.
+  Impl() {
+    cholesky.cholmod().print = 0;
+    delassusCholesky.cholmod().print = 0;
+  }
+
   std::vector<IpmRow> rows;
   std::vector<int> local;   // body -> local body index, -1 without rows
   std::vector<int> global;  // local body index -> body

@@ -74,8 +74,12 @@ class NscdBackend final : public core::ContactBackend {
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
     finisherSettings_ = settings_;
-    if (settings_.finisherSolver != settings_.solver) {  // its own cap; the tolerance if it means the same
-      const NscdSettings own = defaultsFor(settings_.finisherSolver);
+    SolverKind finisher = settings_.finisherSolver == FinisherSolverKind::Mprgp ? SolverKind::Mprgp : SolverKind::Ipm;
+    if (settings_.finisherSolver == FinisherSolverKind::Auto)
+      for (const core::Grain& g : system.grains)
+        if (g.shape != core::ShapeKind::Sphere) finisher = SolverKind::Mprgp;
+    if (finisher != settings_.solver) {  // its own cap; the tolerance if it means the same
+      const NscdSettings own = defaultsFor(finisher);
       finisherSettings_.solver = own.solver;
       finisherSettings_.maxIterations = own.maxIterations;
       if (settings_.solver == SolverKind::Nlgs) finisherSettings_.tolerance = own.tolerance;

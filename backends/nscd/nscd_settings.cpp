@@ -14,8 +14,9 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
     t.number("theta", &S::theta, Range::closed(0.5, 1.0), "-", "Moreau-Jean theta: 0.5 integrates free flight exactly, 1 is implicit Euler")
         .choice("solver", &S::solver, {{"mprgp", SolverKind::Mprgp}, {"nlgs", SolverKind::Nlgs}, {"ipm", SolverKind::Ipm}},
                 "contact solver; its choice sets the defaults of tolerance and max_iterations")
-        .choice("finisher_solver", &S::finisherSolver, {{"ipm", SolverKind::Ipm}, {"mprgp", SolverKind::Mprgp}},
-                "solver of the quasi-static finisher's steps (tolerance as for the steps, max_iterations its own default)")
+        .choice("finisher_solver", &S::finisherSolver,
+                {{"auto", FinisherSolverKind::Auto}, {"ipm", FinisherSolverKind::Ipm}, {"mprgp", FinisherSolverKind::Mprgp}},
+                "solver of the finisher's steps: auto = ipm for spheres, mprgp for pinacoids (tolerance as for the steps)")
         .choice("expansion", &S::expansion,
                 {{"projected_cg", ExpansionKind::ProjectedCg}, {"gradient", ExpansionKind::Gradient}},
                 "mprgp: the step taken when a conjugate gradient step would make an impulse negative")

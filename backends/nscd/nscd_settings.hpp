@@ -17,6 +17,13 @@ enum class SolverKind {
   Ipm,    ///< "ipm": primal-dual interior point with a sparse Cholesky factorisation (ipm_solver.hpp)
 };
 
+/// The solver of the quasi-static finisher's steps.
+enum class FinisherSolverKind {
+  Auto,   ///< "auto": ipm when every grain is a sphere, mprgp otherwise (the measurements: below)
+  Ipm,    ///< "ipm": the interior-point method (ipm_solver.hpp)
+  Mprgp,  ///< "mprgp": MPRGP, as the dynamic steps
+};
+
 /// How MPRGP expands the active set when a conjugate gradient step would leave y >= 0.
 enum class ExpansionKind {
   ProjectedCg,  ///< "projected_cg": the whole CG step projected on y >= 0, if it lowers the energy
@@ -48,10 +55,14 @@ struct NscdSettings {
   /// later overall).
   double tolerance = 1e-10;
   /// ["finisher_solver"] the solver of the quasi-static finisher's steps (docs/model.md,
-  /// "Quasi-static compaction"): "ipm" (default) or "mprgp" ("nlgs" is refused: it cannot reach
-  /// the finisher's accuracy). Its iteration cap is that solver's default; its tolerance is
+  /// "Quasi-static compaction"): "auto" (default), "ipm" or "mprgp" ("nlgs" is refused: it cannot
+  /// reach the finisher's accuracy). Its iteration cap is that solver's default; its tolerance is
   /// `tolerance` (the same relative projected gradient for mprgp and ipm), or 1e-10 under nlgs.
-  SolverKind finisherSolver = SolverKind::Ipm;
+  /// "auto" takes ipm for sphere piles, where its finisher was 0.85 to 0.52 times MPRGP's time,
+  /// and mprgp for pinacoid piles, where two of the quick study's ten walled piles did not
+  /// settle in 3,000 interior-point finisher steps but do with MPRGP (docs/performance.md,
+  /// "The interior-point finisher").
+  FinisherSolverKind finisherSolver = FinisherSolverKind::Auto;
   /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
   /// conjugate gradient step would make an impulse negative (mprgp_solver.cpp).
   /// "gradient" is Dostal's original: to the first bound, then a projected gradient step of fixed

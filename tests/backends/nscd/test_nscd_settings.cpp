@@ -19,7 +19,7 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   for (const char* key : {"theta", "expansion", "preconditioner", "tolerance", "max_iterations", "min_iterations",
                           "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed", "finisher_solver"})
     CHECK(resolved.contains(key));
-  CHECK(resolved["finisher_solver"] == "ipm");
+  CHECK(resolved["finisher_solver"] == "auto");
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
   // The resolved settings round-trip: feeding them back gives the same settings.
