@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
@@ -87,9 +88,14 @@ json readJsonFile(const std::filesystem::path& path, std::string_view what) {
     throw std::invalid_argument(fmt::format("{}: is a folder, not a {}", source, what));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the {}", source, what));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseJsonText(text.view(), source);
+  std::string text;
+  // Not `text << in.rdbuf()`: that insertion catches an exception (std::bad_alloc while the text
+  // grows) and only sets failbit, so a file read under memory pressure came out cut short and
+  // was refused as invalid JSON instead of failing as out of memory.
+  if (const std::uintmax_t size = std::filesystem::file_size(path, ec); !ec) text.reserve(size);
+  text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (in.bad()) throw std::invalid_argument(fmt::format("{}: cannot read the {}", source, what));
+  return parseJsonText(text, source);
 }
 
 namespace {
