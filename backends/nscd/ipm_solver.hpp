@@ -15,8 +15,8 @@
 // that conditioning; each solves the Newton system
 //     (M + J^T D J) dx = rhs,   D = diag(r / s),
 // whose sparsity is the contact graph, by a sparse Cholesky factorisation (CHOLMOD's supernodal
-// LLT through Eigen's CholmodSupport: its dense blocks run at BLAS speed, where Eigen's own
-// simplicial factorisation of the same matrix took several times longer; docs/performance.md).
+// LLT through Eigen's CholmodSupport: its dense blocks run at BLAS speed, and a finisher step
+// took half the time of CHOLMOD's simplicial factorisation; docs/performance.md).
 // Side-wall friction is handled as MPRGP does it: block Gauss-Seidel between the normal problem
 // (here by the interior-point method, tangential impulses fixed) and one projected pass over the
 // tangential impulses.

@@ -59,7 +59,7 @@ struct NscdSettings {
   /// reach the finisher's accuracy). Its iteration cap is that solver's default; its tolerance is
   /// `tolerance` (the same relative projected gradient for mprgp and ipm), or 1e-10 under nlgs.
   /// "auto" takes ipm for sphere piles, where its finisher was 0.85 to 0.52 times MPRGP's time,
-  /// and mprgp for pinacoid piles, where two of the quick study's ten walled piles did not
+  /// and mprgp for pinacoid piles, where two of the quick study's walled piles (W = 3) did not
   /// settle in 3,000 interior-point finisher steps but do with MPRGP (docs/performance.md,
   /// "The interior-point finisher").
   FinisherSolverKind finisherSolver = FinisherSolverKind::Auto;
