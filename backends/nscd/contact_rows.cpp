@@ -220,6 +220,16 @@ void ContactRows::warmStart(const ContactCache& cache, const std::vector<Contact
   }
 }
 
+bool ContactRows::turnsNoBody() const {
+  constexpr double kNoLever = 1e-9;
+  const auto small = [](const core::Vec3& v) { return v.squaredNorm() <= kNoLever * kNoLever; };
+  for (const NormalRow& row : normalRows_)
+    if (!small(row.axn) || !small(row.bxn)) return false;
+  for (const FrictionRow& row : frictionRows_)
+    if (!small(row.axn)) return false;
+  return true;
+}
+
 double ContactRows::normalImpulse(int c, int p) const {
   const RowRef ref = rowRef_[c];
   return ref.friction ? frictionRows_[ref.first + p].rn : impulseOfRow_[static_cast<std::size_t>(ref.first + p)];

@@ -35,7 +35,6 @@ using core::Vec3;
 
 namespace {
 
-constexpr double kNoLever = 1e-9;   // |l x n| of a sphere row is ~1e-16; a pinacoid's ~0.1
 constexpr double kStepFraction = 0.995;  // of the step to the boundary of s, r >= 0
 // The polish starts below this residual of the contact law and tries at most kPolishRounds
 // active sets.
@@ -62,7 +61,6 @@ class DynamicOpenMpTeams {
 struct IpmRow {
   Vec3 n, axn, bxn;
   double bias = 0.0;   // c of the contact law
-  double scale = 0.0;  // W_nn^-1/2, the unit MPRGP measures the residual in
   int a = 0, b = -1;   // local body indices
 };
 
@@ -275,21 +273,21 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
     return s.local[body];
   };
   s.rows.resize(m);
-  bool linearOnly = true;
   Eigen::VectorXd warm(static_cast<Eigen::Index>(m));
+  Eigen::VectorXd scale(static_cast<Eigen::Index>(m));  // W_nn^-1/2, the unit MPRGP measures the residual in
   for (std::size_t k = 0; k < nN; ++k) {
     const NormalRow& row = normalRows[k];
-    s.rows[k] = {row.n, row.axn, row.bxn, row.bias, std::sqrt(row.invW), localOf(row.a), localOf(row.b)};
+    s.rows[k] = {row.n, row.axn, row.bxn, row.bias, localOf(row.a), localOf(row.b)};
+    scale[static_cast<Eigen::Index>(k)] = std::sqrt(row.invW);
     warm[static_cast<Eigen::Index>(k)] = row.r;
   }
   for (std::size_t f = 0; f < frictionRows.size(); ++f) {
     const FrictionRow& row = frictionRows[f];
-    s.rows[nN + f] = {row.n, row.axn, Vec3::Zero(), row.bias, std::sqrt(row.invWnn), localOf(row.a), -1};
+    s.rows[nN + f] = {row.n, row.axn, Vec3::Zero(), row.bias, localOf(row.a), -1};
+    scale[static_cast<Eigen::Index>(nN + f)] = std::sqrt(row.invWnn);
     warm[static_cast<Eigen::Index>(nN + f)] = row.rn;
   }
-  for (const IpmRow& row : s.rows)
-    linearOnly = linearOnly && row.axn.squaredNorm() <= kNoLever * kNoLever && row.bxn.squaredNorm() <= kNoLever * kNoLever;
-  s.dof = linearOnly ? 3 : 6;
+  s.dof = rows.turnsNoBody() ? 3 : 6;
   const std::size_t nb = s.global.size();
   s.mass.resize(nb);
   s.inertia.resize(nb);
@@ -306,8 +304,6 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
 
   // v_base: the velocities without normal impulses (v_free plus the tangential impulses).
   std::vector<BodyVelocity> base(vel.begin(), vel.end());
-  Eigen::VectorXd scale(M);
-  for (Eigen::Index k = 0; k < M; ++k) scale[k] = s.rows[static_cast<std::size_t>(k)].scale;
   // b = J v_base + c, from the bodies' velocities.
   auto contactVelocities = [&](const std::vector<BodyVelocity>& v, Eigen::VectorXd& out) {
     out.resize(M);

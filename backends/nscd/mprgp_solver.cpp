@@ -85,11 +85,7 @@ void MprgpSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount)
   // Spheres: the lever arm is along the normal, so l x n vanishes (to round-off) and a row moves
   // no angular velocity. When that holds for every row, the passes use copies without the angular
   // parts: half the bytes per iteration, which is what a pass over a large pile is bound by.
-  constexpr double kNoLever = 1e-9;  // |l x n| of a sphere row is ~1e-16; a pinacoid's ~0.1
-  linearOnly_ = true;
-  for (const GatherRow& row : gatherRows_)
-    linearOnly_ = linearOnly_ && row.axn.squaredNorm() <= kNoLever * kNoLever &&
-                  row.bxn.squaredNorm() <= kNoLever * kNoLever;
+  linearOnly_ = rows.turnsNoBody();
   if (linearOnly_) {
     linearRows_.resize(m);
     for (std::size_t k = 0; k < m; ++k)
