@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -299,6 +300,75 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
 
 }  // namespace
 
+namespace {
+
+/// One target: its statement, what the run reached, and whether that meets it (null: not shown).
+nlohmann::json target(std::string statement, std::string figure, std::optional<bool> met) {
+  return {{"target", std::move(statement)},
+          {"figure", std::move(figure)},
+          {"met", met ? nlohmann::json(*met) : nlohmann::json(nullptr)}};
+}
+
+/// "882.0 s at rest" or "not at rest after 1800.0 s".
+std::string restFigure(bool reached, double wall) {
+  return reached ? fmt::format("{:.1f} s at rest", wall) : fmt::format("not at rest after {:.1f} s", wall);
+}
+
+constexpr double kHalfHour = 1800.0;  // [s]
+
+}  // namespace
+
+nlohmann::json benchTargets(const BenchDef& def, const nlohmann::json& cases) {
+  nlohmann::json out = nlohmann::json::array();
+  const bool fullSize = def.scale == 1.0;
+  if (cases.contains("msp-w10")) {
+    const nlohmann::json& nscd = cases["msp-w10"]["nscd"];
+    const bool reached = nscd["equilibrium_reached"].get<bool>();
+    const double wall = nscd["wall_s"].get<double>();
+    std::optional<bool> met;
+    if (fullSize && def.threads == 1) met = reached && wall <= 60.0;
+    out.push_back(target("msp-w10: nscd at equilibrium in at most 60 s on one thread", restFigure(reached, wall), met));
+  }
+  if (cases.contains("mpp-w10")) {
+    const nlohmann::json& nscd = cases["mpp-w10"]["nscd"];
+    const bool reached = nscd["equilibrium_reached"].get<bool>();
+    const double wall = nscd["wall_s"].get<double>();
+    const double damping = nscd["settings"].value("damping", 0.0);
+    std::string figure = restFigure(reached, wall);
+    if (damping > 0.0) figure += fmt::format(", with damping {}", damping);
+    std::optional<bool> met;
+    if (fullSize) met = reached && damping == 0.0 && wall <= kHalfHour;
+    out.push_back(target("mpp-w10: nscd at equilibrium without damping in at most 30 minutes", figure, met));
+  }
+  if (cases.contains("rest")) {
+    // The largest point of the series stands for the 30,400-sphere target if it is that size.
+    const nlohmann::json* largest = nullptr;
+    for (const nlohmann::json& p : cases["rest"])
+      if (!largest || p["n_grains"].get<double>() > (*largest)["n_grains"].get<double>()) largest = &p;
+    if (largest) {
+      const double n = (*largest)["n_grains"].get<double>();
+      const bool reached = (*largest)["equilibrium_reached"].get<bool>();
+      const double wall = (*largest)["wall_s"].get<double>();
+      std::optional<bool> met;
+      if (n >= 30000.0) met = reached && wall <= kHalfHour;
+      out.push_back(target("rest: 30,400 spheres at equilibrium in at most 30 minutes",
+                           fmt::format("{:.0f} spheres: {}", n, restFigure(reached, wall)), met));
+    }
+    const nlohmann::json& k = cases["rest_exponent"]["wall"];
+    out.push_back(target("rest: time to equilibrium against n, t ~ n^k",
+                         k.is_null() ? std::string("fewer than two points at rest") : fmt::format("k = {:.2f}", k.get<double>()),
+                         std::nullopt));
+  }
+  if (cases.contains("scaling_exponent")) {
+    const nlohmann::json& k = cases["scaling_exponent"]["nscd"];
+    std::optional<bool> met;
+    if (!k.is_null()) met = k.get<double>() <= 1.1;
+    out.push_back(target("scaling: nscd's cost per step linear in n, exponent at most 1.1",
+                         k.is_null() ? std::string("fewer than two points") : fmt::format("k = {:.2f}", k.get<double>()), met));
+  }
+  return out;
+}
+
 const std::vector<std::string>& benchCaseNames() {
   static const std::vector<std::string> names = {"msp-w10", "mpp-w10", "scaling", "rest"};
   return names;
@@ -325,7 +395,12 @@ nlohmann::json runBench(const BenchDef& def, const std::function<void(const std:
     else
       throw std::invalid_argument(fmt::format("unknown bench case '{}' (expected msp-w10, mpp-w10, scaling or rest)", name));
   }
-  return {{"machine", machineInfo()}, {"cases", cases}};
+  const nlohmann::json targets = benchTargets(def, cases);
+  if (log)
+    for (const nlohmann::json& t : targets)
+      log(fmt::format("target {}: {} ({})", t["target"].get<std::string>(), t["figure"].get<std::string>(),
+                      t["met"].is_null() ? "not shown at this size" : t["met"].get<bool>() ? "met" : "not met"));
+  return {{"machine", machineInfo()}, {"cases", cases}, {"targets", targets}};
 }
 
 }  // namespace confpack::bench

@@ -95,4 +95,11 @@ TEST_CASE("bench --case rest compacts each size to equilibrium and fits t_rest ~
   // Through two points the least-squares slope is the slope of the line between them.
   CHECK(e["wall"].get<double>() == Approx((logT[1] - logT[0]) / (logN[1] - logN[0])).epsilon(1e-12));
   CHECK(std::isfinite(e["cpu"].get<double>()));
+  // The targets this run measured, printed with their figures: at 400 grains the 30,400-sphere
+  // one is not shown.
+  const json targets = json::parse(confpack::testing::slurp(s.dir / "r.json"))["targets"];
+  REQUIRE(targets.size() == 2);
+  CHECK(targets[0]["met"].is_null());
+  CHECK(r.err.find("target rest: 30,400 spheres at equilibrium in at most 30 minutes: ") != std::string::npos);
+  CHECK(r.err.find("(not shown at this size)") != std::string::npos);
 }
