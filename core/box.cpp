@@ -1,5 +1,7 @@
 #include "core/box.hpp"
 
+#include "core/settings_table.hpp"
+
 #include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
@@ -20,33 +22,27 @@ Vec3 BoxDef::wallPoint(WallId w) const {
   return w == WallId::SideHigh ? Vec3(0.0, width, 0.0) : Vec3::Zero();
 }
 
-void BoxDef::validate() const {
-  auto positive = [](double v, const char* name) {
-    if (!(v > 0.0) || !std::isfinite(v))
-      throw std::invalid_argument(fmt::format("box: {} must be a positive number (got {})", name, v));
-  };
-  positive(lengthX, "length_x");
-  positive(width, "width");
-  positive(height, "height");
-  if (!(wallFriction >= 0.0) || !std::isfinite(wallFriction))
-    throw std::invalid_argument(fmt::format("box: wall_friction must be >= 0 (got {})", wallFriction));
+const SettingsTable<BoxDef>& boxTable() {
+  static const SettingsTable<BoxDef> table = [] {
+    SettingsTable<BoxDef> t("box");
+    t.number("length_x", &BoxDef::lengthX, Range::positive(), "d_L", "period along x")
+        .number("width", &BoxDef::width, Range::positive(), "d_L", "gap W between the side walls, or period along y")
+        .flag("periodic_y", &BoxDef::periodicY, "y periodic with period width (no side walls)")
+        .number("wall_friction", &BoxDef::wallFriction, Range::atLeast(0.0), "-",
+                "Coulomb friction mu_w of the side walls; the floor is frictionless")
+        .number("height", &BoxDef::height, Range::positive(), "d_L", "target final packing height (deposition aims for it)");
+    return t;
+  }();
+  return table;
 }
 
-void to_json(nlohmann::json& j, const BoxDef& b) {
-  j = {{"length_x", b.lengthX},
-       {"width", b.width},
-       {"periodic_y", b.periodicY},
-       {"wall_friction", b.wallFriction},
-       {"height", b.height}};
-}
+void BoxDef::validate() const { boxTable().validate(*this); }
+
+void to_json(nlohmann::json& j, const BoxDef& b) { j = boxTable().write(b); }
 
 void from_json(const nlohmann::json& j, BoxDef& b) {
-  BoxDef d;
-  b.lengthX = j.value("length_x", d.lengthX);
-  b.width = j.value("width", d.width);
-  b.periodicY = j.value("periodic_y", d.periodicY);
-  b.wallFriction = j.value("wall_friction", d.wallFriction);
-  b.height = j.value("height", d.height);
+  b = BoxDef{};
+  boxTable().read(j, b);
 }
 
 }  // namespace confpack::core

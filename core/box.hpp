@@ -54,6 +54,11 @@ struct BoxDef {
   void validate() const;
 };
 
+template <class T>
+class SettingsTable;
+/// The keys of BoxDef with units, ranges and meaning (core/settings_table.hpp): its JSON reader
+/// and writer and its validation.
+const SettingsTable<BoxDef>& boxTable();
 void to_json(nlohmann::json& j, const BoxDef& b);
 void from_json(const nlohmann::json& j, BoxDef& b);
 

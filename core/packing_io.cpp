@@ -1,5 +1,7 @@
 #include "core/packing_io.hpp"
 
+#include "core/settings_table.hpp"
+
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -412,19 +414,18 @@ Packing packingFromJson(const json& j, std::string_view source) {
   top.onlyKeys({"format", "version", "box", "grains", "contacts", "metadata"});
 
   Packing p;
-  ObjectReader b(top.at("box"), source, "box");
-  b.onlyKeys({"length_x", "width", "periodic_y", "wall_friction", "height"});
-  p.box.lengthX = b.number("length_x");
-  p.box.width = b.number("width");
-  p.box.periodicY = b.has("periodic_y") ? b.boolean("periodic_y") : false;
-  p.box.wallFriction = b.has("wall_friction") ? b.number("wall_friction") : 0.0;
+  const json& box = top.at("box");
+  try {  // the box's own keys and ranges (boxTable); a packing must state its size
+    boxTable().require(box, {"length_x", "width"});
+    boxTable().read(box, p.box);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
+  }
 
   const json& grains = top.array("grains");
   for (std::size_t i = 0; i < grains.size(); ++i) p.grains.push_back(readGrain(grains[i], source, i));
 
-  if (b.has("height")) {
-    p.box.height = b.number("height");
-  } else {
+  if (!box.contains("height")) {
     // A foreign writer may not know the target height: use the top of the pile.
     double pileTop = 0.0;
     for (const Grain& g : p.grains) pileTop = std::max(pileTop, g.position.z() + g.boundingRadius());

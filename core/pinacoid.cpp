@@ -1,5 +1,7 @@
 #include "core/pinacoid.hpp"
 
+#include "core/settings_table.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -9,27 +11,32 @@
 
 namespace confpack::core {
 
-void PinacoidParams::validate() const {
-  if (!(widthRatio > 0.0) || !(heightRatio > 0.0))
-    throw std::invalid_argument(fmt::format("pinacoid: G and E must be positive (got G={}, E={})", widthRatio, heightRatio));
-  if (!(alphaDeg > 0.0 && alphaDeg < 90.0))
-    throw std::invalid_argument(fmt::format("pinacoid: alpha_deg must be in (0, 90) (got {})", alphaDeg));
-  const double l = pinacoidRidgeHalfLength(1.0, *this);
-  if (!(l > 0.0))
-    throw std::invalid_argument(fmt::format(
-        "pinacoid: with E={} and alpha={} deg the ridge half-length l = L/2 - (E/2)/tan(alpha) is {} <= 0",
-        heightRatio, alphaDeg, l));
+const SettingsTable<PinacoidParams>& pinacoidTable() {
+  using P = PinacoidParams;
+  static const SettingsTable<P> table = [] {
+    SettingsTable<P> t("pinacoid");
+    t.number("G", &P::widthRatio, Range::positive(), "L", "width G (body y) relative to the length L")
+        .number("E", &P::heightRatio, Range::positive(), "L", "height E (body z) relative to the length L")
+        .number("alpha_deg", &P::alphaDeg, Range::open(0.0, 90.0), "degrees", "inclination of the triangular end faces")
+        .rule([](const P& p) {
+          const double l = pinacoidRidgeHalfLength(1.0, p);
+          if (!(l > 0.0))
+            throw std::invalid_argument(fmt::format(
+                "pinacoid: with E={} and alpha={} deg the ridge half-length l = L/2 - (E/2)/tan(alpha) is {} <= 0",
+                p.heightRatio, p.alphaDeg, l));
+        });
+    return t;
+  }();
+  return table;
 }
 
-void to_json(nlohmann::json& j, const PinacoidParams& p) {
-  j = {{"G", p.widthRatio}, {"E", p.heightRatio}, {"alpha_deg", p.alphaDeg}};
-}
+void PinacoidParams::validate() const { pinacoidTable().validate(*this); }
+
+void to_json(nlohmann::json& j, const PinacoidParams& p) { j = pinacoidTable().write(p); }
 
 void from_json(const nlohmann::json& j, PinacoidParams& p) {
-  PinacoidParams d;
-  p.widthRatio = j.value("G", d.widthRatio);
-  p.heightRatio = j.value("E", d.heightRatio);
-  p.alphaDeg = j.value("alpha_deg", d.alphaDeg);
+  p = PinacoidParams{};
+  pinacoidTable().read(j, p);
 }
 
 double pinacoidRidgeHalfLength(double length, const PinacoidParams& p) {

@@ -25,6 +25,10 @@ struct PinacoidParams {
   bool operator==(const PinacoidParams&) const = default;
 };
 
+template <class T>
+class SettingsTable;
+/// The keys of PinacoidParams (core/settings_table.hpp): JSON reader, writer and validation.
+const SettingsTable<PinacoidParams>& pinacoidTable();
 void to_json(nlohmann::json& j, const PinacoidParams& p);   // {"G":..,"E":..,"alpha_deg":..}
 void from_json(const nlohmann::json& j, PinacoidParams& p);
 

@@ -1,5 +1,8 @@
 #include "core/population.hpp"
 
+#include "core/pinacoid.hpp"
+#include "core/settings_table.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -9,15 +12,36 @@
 
 namespace confpack::core {
 
-void PopulationDef::validate() const {
-  if (!(largeSize > 0.0) || !(smallSize > 0.0))
-    throw std::invalid_argument(fmt::format("population: sizes must be positive (large {}, small {})", largeSize, smallSize));
-  if (!(smallFraction >= 0.0 && smallFraction <= 100.0))
-    throw std::invalid_argument(fmt::format("population: small fraction must be in [0, 100] % (got {})", smallFraction));
-  if (!(relativeStd >= 0.0 && relativeStd * truncationSigmas < 1.0))
-    throw std::invalid_argument(fmt::format("population: size spread {} x {} sigma must stay below 1", relativeStd, truncationSigmas));
-  if (shape == ShapeKind::Pinacoid) pinacoid.validate();
+const SettingsTable<PopulationDef>& populationTable() {
+  using P = PopulationDef;
+  static const SettingsTable<P> table = [] {
+    SettingsTable<P> t("population");
+    t.choice("shape", &P::shape, {{"sphere", ShapeKind::Sphere}, {"pinacoid", ShapeKind::Pinacoid}},
+             "grain shape (one per sample)")
+        .number("large_size", &P::largeSize, Range::positive(), "d_L", "mean size d_L of the large grains")
+        .number("small_size", &P::smallSize, Range::positive(), "d_L", "mean size d_S of the small grains")
+        .number("small_fraction", &P::smallFraction, Range::closed(0.0, 100.0), "%",
+                "x_S, the small grains' share of the grain volume")
+        .number("relative_std", &P::relativeStd, Range::atLeast(0.0), "-",
+                "sigma / d of each size distribution (1/30: variance d^2/900)")
+        // > 0: the sizes are drawn by rejection inside +-truncation_sigmas, which 0 never accepts.
+        .number("truncation_sigmas", &P::truncationSigmas, Range::positive(), "-",
+                "the Gaussian of sizes truncated at this many sigma")
+        .section("pinacoid", &P::pinacoid, &pinacoidTable, "the pinacoid's shape (shape pinacoid)",
+                 [](const P& p) { return p.shape == ShapeKind::Pinacoid; })
+        .rule([](const P& p) {
+          if (!(p.relativeStd * p.truncationSigmas < 1.0))
+            throw std::invalid_argument(fmt::format(
+                "population: size spread relative_std x truncation_sigmas = {} x {} must stay below 1 (a grain of "
+                "size <= 0 otherwise)",
+                p.relativeStd, p.truncationSigmas));
+        });
+    return t;
+  }();
+  return table;
 }
+
+void PopulationDef::validate() const { populationTable().validate(*this); }
 
 double PopulationDef::maxCircumscribedDiameter() const {
   Grain g;
@@ -35,25 +59,11 @@ double PopulationDef::meanGrainVolume(double size) const {
   return g.volume();
 }
 
-void to_json(nlohmann::json& j, const PopulationDef& p) {
-  j = {{"shape", std::string(toString(p.shape))},
-       {"large_size", p.largeSize},
-       {"small_size", p.smallSize},
-       {"small_fraction", p.smallFraction},
-       {"relative_std", p.relativeStd},
-       {"truncation_sigmas", p.truncationSigmas},
-       {"pinacoid", p.pinacoid}};
-}
+void to_json(nlohmann::json& j, const PopulationDef& p) { j = populationTable().write(p); }
 
 void from_json(const nlohmann::json& j, PopulationDef& p) {
-  PopulationDef d;
-  p.shape = shapeFromString(j.value("shape", std::string("sphere")));
-  p.largeSize = j.value("large_size", d.largeSize);
-  p.smallSize = j.value("small_size", d.smallSize);
-  p.smallFraction = j.value("small_fraction", d.smallFraction);
-  p.relativeStd = j.value("relative_std", d.relativeStd);
-  p.truncationSigmas = j.value("truncation_sigmas", d.truncationSigmas);
-  p.pinacoid = j.value("pinacoid", d.pinacoid);
+  p = PopulationDef{};
+  populationTable().read(j, p);
 }
 
 double drawSize(Rng& rng, double mean, double relativeStd, double truncationSigmas) {

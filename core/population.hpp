@@ -28,6 +28,10 @@ struct PopulationDef {
   double meanGrainVolume(double size) const;
 };
 
+template <class T>
+class SettingsTable;
+/// The keys of PopulationDef (core/settings_table.hpp): JSON reader, writer and validation.
+const SettingsTable<PopulationDef>& populationTable();
 void to_json(nlohmann::json& j, const PopulationDef& p);
 void from_json(const nlohmann::json& j, PopulationDef& p);
 

@@ -14,51 +14,7 @@
 
 namespace confpack::core {
 
-namespace {
-
 using nlohmann::json;
-
-/// A configuration file is written by us or edited by a user: refuse a misspelt key rather than
-/// silently run with its default.
-void onlyKeys(const json& j, std::string_view where, std::initializer_list<std::string_view> allowed) {
-  if (!j.is_object())
-    throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where, j.type_name()));
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-      std::string list;
-      for (auto a : allowed) list += fmt::format("{}{}", list.empty() ? "" : ", ", a);
-      throw std::invalid_argument(fmt::format("{}.{}: unknown key (allowed: {})", where, textExcerpt(key), list));
-    }
-  }
-}
-
-/// The keys of a section read with j.value() (box, population and its pinacoid) against those of
-/// its defaults (`known`, as JSON): those readers take a misspelt key's default without a word.
-void knownKeysOnly(const json& j, const json& known, const std::string& where) {
-  if (!j.is_object()) return;  // the section's own reader refuses it
-  for (const auto& [key, value] : j.items()) {
-    if (!known.contains(key)) {
-      std::string list;
-      for (const auto& [k, v] : known.items()) list += fmt::format("{}{}", list.empty() ? "" : ", ", k);
-      throw std::invalid_argument(fmt::format("{}.{}: unknown key (allowed: {})", where, textExcerpt(key), list));
-    }
-    if (value.is_object() && known.at(key).is_object()) knownKeysOnly(value, known.at(key), where + "." + key);
-  }
-}
-
-/// j.value(key, fallback) with the key named in the error when the type is wrong (nlohmann's own
-/// message does not say which key).
-template <class T>
-T valueOr(const json& j, std::string_view where, const char* key, const T& fallback) {
-  if (!j.contains(key)) return fallback;
-  try {
-    return j.at(key).get<T>();
-  } catch (const json::exception&) {
-    throw std::invalid_argument(fmt::format("{}.{}: wrong type ({})", where, key, jsonExcerpt(j.at(key))));
-  }
-}
-
-}  // namespace
 
 std::string toString(Protocol p) { return p == Protocol::QuasiStatic ? "quasi-static" : "dynamic"; }
 
@@ -101,63 +57,51 @@ void from_json(const json& j, CompactionDef& c) {
   compactionTable().read(j, c);
 }
 
-void to_json(json& j, const RunConfig& c) {
-  j = {{"box", c.box},
-       {"population", c.population},
-       {"deposition", c.deposition},
-       {"compaction", c.compaction},
-       {"backend", c.backend},
-       {"backend_options", c.backendOptions},
-       {"seed", c.seed},
-       {"threads", c.threads}};
+const SettingsTable<RunConfig>& runConfigTable() {
+  using R = RunConfig;
+  static const SettingsTable<R> table = [] {
+    SettingsTable<R> t("config");
+    t.section("box", &R::box, &boxTable, "the box")
+        .section("population", &R::population, &populationTable, "the grains' shape and sizes")
+        .section("deposition", &R::deposition, &depositionTable, "the geometric deposition")
+        .section("compaction", &R::compaction, &compactionTable, "time steps, protocol and equilibrium test")
+        .field(
+            "backend", "-", "\"nscd\" or \"bullet\"", "contact backend",
+            [](const json& j, R& c) {
+              if (!j.is_string())
+                throw std::invalid_argument(fmt::format("config.backend: must be a string (got {})", jsonExcerpt(j, 40)));
+              c.backend = j.get<std::string>();
+            },
+            [](const R& c) { return json(c.backend); },
+            [](const R& c) {
+              if (std::find(kBackendNames.begin(), kBackendNames.end(), c.backend) == kBackendNames.end())
+                throw std::invalid_argument("backend: " + unknownBackendMessage(c.backend));
+            })
+        .field(
+            "backend_options", "-", "an object (`confpack options nscd`, `confpack options bullet`)",
+            "the backend's settings, checked by the backend",
+            [](const json& j, R& c) { c.backendOptions = j; }, [](const R& c) { return c.backendOptions; },
+            [](const R& c) {
+              if (!c.backendOptions.is_object())
+                throw std::invalid_argument(
+                    fmt::format("backend_options: must be a JSON object (got {})", jsonExcerpt(c.backendOptions)));
+            })
+        .integer("seed", &R::seed, Range::atLeast(0.0), "-", "every random stream derives from it")
+        .integer("threads", &R::threads, Range::atLeast(1.0), "-", "worker threads (OpenMP) of the run");
+    return t;
+  }();
+  return table;
 }
 
+void to_json(json& j, const RunConfig& c) { j = runConfigTable().write(c); }
+
 void from_json(const json& j, RunConfig& c) {
-  constexpr std::string_view w = "config";
-  onlyKeys(j, w, {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed", "threads"});
-  const RunConfig d;
-  // The nested definitions own their keys; wrap their nlohmann type errors so the message says
-  // which section was wrong.
-  auto section = [&](const char* key, auto& out) {
-    if (!j.contains(key)) return;
-    try {
-      j.at(key).get_to(out);
-    } catch (const json::exception& e) {
-      throw std::invalid_argument(fmt::format("{}.{}: {}", w, key, e.what()));
-    }
-  };
-  if (j.contains("box")) knownKeysOnly(j.at("box"), json(d.box), fmt::format("{}.box", w));
-  if (j.contains("population")) knownKeysOnly(j.at("population"), json(d.population), fmt::format("{}.population", w));
-  c.box = d.box;
-  c.population = d.population;
-  c.deposition = d.deposition;
-  c.compaction = d.compaction;
-  section("box", c.box);
-  section("population", c.population);
-  section("deposition", c.deposition);
-  section("compaction", c.compaction);
-  c.backend = valueOr(j, w, "backend", d.backend);
-  c.backendOptions = j.contains("backend_options") ? j.at("backend_options") : d.backendOptions;
-  if (j.contains("seed") && !j.at("seed").is_number_unsigned())
-    throw std::invalid_argument(fmt::format("{}.seed: must be an integer >= 0 (got {})", w, jsonExcerpt(j.at("seed"))));
-  c.seed = valueOr(j, w, "seed", d.seed);
-  if (j.contains("threads") && !j.at("threads").is_number_integer())
-    throw std::invalid_argument(
-        fmt::format("{}.threads: must be an integer (got {})", w, jsonExcerpt(j.at("threads"))));
-  c.threads = valueOr(j, w, "threads", d.threads);
+  c = RunConfig{};
+  runConfigTable().readKeys(j, c);  // the rules across fields are RunConfig::validate()'s
 }
 
 void RunConfig::validate() const {
-  box.validate();
-  population.validate();
-  if (std::find(kBackendNames.begin(), kBackendNames.end(), backend) == kBackendNames.end())
-    throw std::invalid_argument("backend: " + unknownBackendMessage(backend));
-  if (!backendOptions.is_object())
-    throw std::invalid_argument(
-        fmt::format("backend_options: must be a JSON object (got {})", jsonExcerpt(backendOptions)));
-  if (threads < 1) throw std::invalid_argument(fmt::format("threads: must be >= 1 (got {})", threads));
-  deposition.validate();
-  compactionTable().validate(compaction);
+  runConfigTable().validate(*this);
   const double grains = estimatedGrainCount();
   if (grains > static_cast<double>(deposition.maxGrains))
     throw std::invalid_argument(fmt::format(

@@ -92,6 +92,8 @@ struct RunConfig {
   double estimatedGrainCount() const;
 };
 
+/// The keys of RunConfig (config.json), its sections with their own tables (core/settings_table.hpp).
+const SettingsTable<RunConfig>& runConfigTable();
 void to_json(nlohmann::json& j, const RunConfig& c);
 void from_json(const nlohmann::json& j, RunConfig& c);
 

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <functional>
+#include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -55,6 +56,7 @@ class SettingsTable {
     std::function<void(const nlohmann::json&, T&)> read;  ///< type-checked; the range is checked after
     std::function<nlohmann::json(const T&)> write;
     std::function<void(const T&)> validate;               ///< throws with the key named
+    bool nested = false;  ///< a section: its keys are checked as it reads them, its rules by validate()
   };
 
   explicit SettingsTable(std::string where) : where_(std::move(where)) {}
@@ -137,6 +139,29 @@ class SettingsTable {
                },
                [](const T&) {});
   }
+  /// A nested settings object with its own table (e.g. the run configuration's "box"): its keys
+  /// read over the member's current values (readKeys), written and validated by `table`, whose
+  /// `where` names it in messages. `appliesTo`, if given, says when the section is validated
+  /// (a pinacoid's shape only in a population of pinacoids).
+  template <class S>
+  SettingsTable& section(const char* key, S T::*member, const SettingsTable<S>& (*table)(), const char* help,
+                         std::function<bool(const T&)> appliesTo = {}) {
+    add(key, "-", fmt::format("an object (`confpack options {}`)", table().where()), help,
+               [member, table](const nlohmann::json& j, T& t) { table().readKeys(j, t.*member); },
+               [member, table](const T& t) { return table().write(t.*member); },
+               [member, table, appliesTo](const T& t) {
+                 if (!appliesTo || appliesTo(t)) table().validate(t.*member);
+               });
+    fields_.back().nested = true;
+    return *this;
+  }
+  /// A field read, written and checked by the caller's own functions (a value no other kind
+  /// describes, e.g. a free JSON object); `read` and `validate` throw naming the key.
+  SettingsTable& field(const char* key, const char* unit, std::string accepted, const char* help,
+                       std::function<void(const nlohmann::json&, T&)> read,
+                       std::function<nlohmann::json(const T&)> write, std::function<void(const T&)> validate) {
+    return add(key, unit, std::move(accepted), help, std::move(read), std::move(write), std::move(validate));
+  }
   /// A rule across fields, checked after the fields' own ranges (e.g. min <= max).
   SettingsTable& rule(std::function<void(const T&)> check) {
     rules_.push_back(std::move(check));
@@ -147,6 +172,13 @@ class SettingsTable {
   /// Throws std::invalid_argument naming the key: not an object, an unknown key (with the list of
   /// known ones), a value of the wrong type or out of range.
   void read(const nlohmann::json& j, T& t) const {
+    readKeys(j, t);
+    validate(t);
+  }
+  /// Sets the fields whose keys `j` has, each checked for its type and range, and leaves the
+  /// rest, the rules across fields included, to validate(): a document read in parts (a sweep
+  /// setting one key at a time) may pass through states its rules refuse.
+  void readKeys(const nlohmann::json& j, T& t) const {
     if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
     for (const auto& [key, value] : j.items()) {
       const Field* f = find(key);
@@ -156,8 +188,15 @@ class SettingsTable {
         throw std::invalid_argument(fmt::format("{}.{}: unknown key (known: {})", where_, textExcerpt(key, 40), known));
       }
       f->read(value, t);
+      if (!f->nested) f->validate(t);
     }
-    validate(t);
+  }
+  /// Throws "<where>.<key>: missing" for the first of `keys` that `j` (an object) lacks: for
+  /// documents that must state a value rather than take its default.
+  void require(const nlohmann::json& j, std::initializer_list<const char*> keys) const {
+    if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
+    for (const char* key : keys)
+      if (!j.contains(key)) fail(where_, key, "missing");
   }
   nlohmann::json write(const T& t) const {
     nlohmann::json j = nlohmann::json::object();

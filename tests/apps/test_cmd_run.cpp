@@ -170,7 +170,7 @@ TEST_CASE("run --config DIR/config.json reruns the run: the same configuration r
   const auto typo = s.run("run --config typo.json --out x");
   CHECK(typo.code == 2);
   CHECK(testing::lineCount(typo.err) == 1);
-  CHECK(typo.err.find("confpack run: error: typo.json: config.box.widht: unknown key") == 0);
+  CHECK(typo.err.find("confpack run: error: typo.json: box.widht: unknown key") == 0);
   CHECK(!fs::exists(s.dir / "x"));
 }
 

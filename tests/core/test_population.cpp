@@ -48,5 +48,24 @@ TEST_CASE("bidisperse mixture: small grains make x_S of the volume") {
 TEST_CASE("population validation names the bad field") {
   PopulationDef def;
   def.smallFraction = 120;
-  CHECK_THROWS_WITH(def.validate(), Catch::Contains("small fraction"));
+  CHECK_THROWS_WITH(def.validate(), Catch::Contains("population.small_fraction: must be in [0, 100] (got 120)"));
+}
+
+// Sizes are drawn by rejection inside +-truncation_sigmas: with 0 or less no draw is ever
+// accepted, so such a population would hang the deposit instead of being refused.
+TEST_CASE("population validation refuses a truncation that no size draw can meet") {
+  PopulationDef def;
+  def.truncationSigmas = GENERATE(0.0, -1.0);
+  CHECK_THROWS_WITH(def.validate(), Catch::StartsWith("population.truncation_sigmas: must be > 0"));
+}
+
+// A population of spheres carries pinacoid parameters it never uses: they are checked only when
+// the shape is pinacoid (a sweep over alpha may share a spec with sphere families).
+TEST_CASE("population validation checks the pinacoid's shape only for pinacoids") {
+  PopulationDef def;
+  def.pinacoid.alphaDeg = 45.0;  // with E = L the ridge vanishes: not a pinacoid
+  def.pinacoid.heightRatio = 1.0;
+  CHECK_NOTHROW(def.validate());
+  def.shape = ShapeKind::Pinacoid;
+  CHECK_THROWS_WITH(def.validate(), Catch::Contains("ridge half-length"));
 }

@@ -73,7 +73,7 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   refused([](core::RunConfig& c) { c.backend = "foo"; }, "backend");
   refused([](core::RunConfig& c) { c.threads = 0; }, "threads");
   refused([](core::RunConfig& c) { c.box.width = -1; }, "width");
-  refused([](core::RunConfig& c) { c.population.smallFraction = 101; }, "small fraction");
+  refused([](core::RunConfig& c) { c.population.smallFraction = 101; }, "population.small_fraction");
   refused([](core::RunConfig& c) { c.compaction.timeLimit = 0; }, "compaction.time_limit");
   // 1e20 t0 once overflowed the step count and ran 0 steps with exit 0.
   refused([](core::RunConfig& c) { c.compaction.timeLimit = 1e20; }, "compaction.time_limit: must be in (0, 1e+09] (got 1e+20)");
@@ -102,11 +102,11 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
                     Catch::Contains("compaction.time_limt: unknown key"));
   // The box and the population are read key by key: a typo there once ran with the default.
   CHECK_THROWS_WITH(json::parse(R"({"box": {"widht": 3}})").get<core::RunConfig>(),
-                    "config.box.widht: unknown key (allowed: height, length_x, periodic_y, wall_friction, width)");
+                    "box.widht: unknown key (known: length_x, width, periodic_y, wall_friction, height)");
   CHECK_THROWS_WITH(json::parse(R"({"population": {"small_fractoin": 30}})").get<core::RunConfig>(),
-                    Catch::StartsWith("config.population.small_fractoin: unknown key"));
+                    Catch::StartsWith("population.small_fractoin: unknown key"));
   CHECK_THROWS_WITH(json::parse(R"({"population": {"pinacoid": {"alpha": 50}}})").get<core::RunConfig>(),
-                    Catch::StartsWith("config.population.pinacoid.alpha: unknown key"));
+                    Catch::StartsWith("pinacoid.alpha: unknown key"));
 }
 
 TEST_CASE("the run configuration refuses a deposit larger than max_grains, from the box's volume") {

@@ -483,7 +483,7 @@ TEST_CASE("sweep table: what prepareSweepDir writes reads back, and a hand-edite
       {[](json& d) { d["runs"][2] = "hello"; }, "t/sweep.json: runs[2]: expected an object"},
       {[](json& d) { d["runs"][2]["colour"] = 1; }, "t/sweep.json: runs[2].colour: unknown key"},
       {[](json& d) { d["runs"][2]["config"]["box"]["widht"] = 3; },
-       "t/sweep.json: runs[2].config: config.box.widht: unknown key"},
+       "t/sweep.json: runs[2].config: box.widht: unknown key"},
       {[](json& d) { d["runs"][2]["config"]["box"]["width"] = -3; }, "t/sweep.json: runs[2].config: "},
       {[](json& d) { d.erase("sweep"); }, "t/sweep.json: sweep: missing"},
       {[](json& d) { d["sweep"] = 5; }, "t/sweep.json: sweep: (document): expected a JSON object"},
