@@ -49,6 +49,7 @@ void runDeposit(const DepositState& st) {
     step.next("writing packing.json");
     core::Packing packing;
     packing.box = cfg.box;
+    packing.walls = cfg.walls;
     packing.grains = pile.grains;
     core::writePacking(packing, output.dir() / "packing.json");
     step.next("writing config.json");

@@ -1,4 +1,4 @@
-// `confpack options [config|box|population|pinacoid|deposition|compaction|nscd|bullet]`: the settings each part reads, as Markdown tables
+// `confpack options [config|box|walls|population|pinacoid|deposition|compaction|nscd|bullet]`: the settings each part reads, as Markdown tables
 // (key, default, unit, accepted values, meaning), printed from the descriptions that read them
 // (core/settings_table.hpp), so the listing cannot drift from the code. docs/backend-options.md
 // holds the same tables.
@@ -15,6 +15,7 @@
 #include "core/pinacoid.hpp"
 #include "core/population.hpp"
 #include "core/run_config.hpp"
+#include "core/walls.hpp"
 #include "core/settings_table.hpp"
 
 namespace confpack::app {
@@ -22,6 +23,7 @@ namespace confpack::app {
 std::string optionsListing(const std::string& part) {
   if (part == "config") return core::runConfigTable().markdown(core::RunConfig{});
   if (part == "box") return core::boxTable().markdown(core::BoxDef{});
+  if (part == "walls") return core::wallMaterialTable().markdown(core::WallMaterial{});
   if (part == "population") return core::populationTable().markdown(core::PopulationDef{});
   if (part == "pinacoid") return core::pinacoidTable().markdown(core::PinacoidParams{});
   if (part == "compaction") return core::compactionTable().markdown(core::CompactionDef{});
@@ -31,13 +33,13 @@ std::string optionsListing(const std::string& part) {
 
 void registerOptions(CLI::App& app) {
   auto part = std::make_shared<std::string>();
-  static constexpr const char* kParts[] = {"config", "box", "population", "pinacoid", "deposition",
+  static constexpr const char* kParts[] = {"config", "box", "walls", "population", "pinacoid", "deposition",
                                            "compaction", "nscd", "bullet"};
   CLI::App* sub = app.add_subcommand(
       "options", "Print the settings of the run configuration (config.json and its objects) or of a backend "
                  "(--backend-options) as a Markdown table: key, default, unit, accepted values, meaning");
   sub->add_option("part", *part,
-                  "config, box, population, pinacoid, deposition, compaction, nscd or bullet; all of them when omitted")
+                  "config, box, walls, population, pinacoid, deposition, compaction, nscd or bullet; all of them when omitted")
       ->check(CLI::IsMember(std::vector<std::string>(std::begin(kParts), std::end(kParts))));
   sub->callback([part] {
     runWork("options", [&] {

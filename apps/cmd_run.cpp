@@ -95,9 +95,8 @@ core::Deposit startFromPacking(RunState& st) {
   analysis::checkPlausible(packing, st.from, st.allowImplausible);
   core::RunConfig& cfg = st.cfg;
   const bool frictionGiven = st.sub->count("--wall-friction") > 0 || !st.configFile.empty();
-  const double wallFriction = frictionGiven ? cfg.box.wallFriction : packing.box.wallFriction;
   cfg.box = packing.box;
-  cfg.box.wallFriction = wallFriction;
+  if (!frictionGiven) cfg.walls = packing.walls;
   core::Deposit start = study::depositFromPacking(packing, st.from);
   cfg.population.shape = packing.grains.front().shape;
   if (cfg.population.shape == core::ShapeKind::Pinacoid) cfg.population.pinacoid = packing.grains.front().params;

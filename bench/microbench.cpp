@@ -281,7 +281,7 @@ struct SolverFixture {
   /// Rows prepared from the contacts with zero impulses, velocities back to v_free (a cold start).
   void reset(const nscd::NscdSettings& settings) {
     velocities = freeVelocities;
-    solver.prepare(contacts, positionMid, bodies, box, kDt, settings);
+    solver.prepare(contacts, positionMid, bodies, box, core::WallMaterial{}, kDt, settings);  // frictionless walls
   }
 };
 

@@ -16,6 +16,7 @@
 #include "core/box.hpp"
 #include "core/contact.hpp"
 #include "core/grain.hpp"
+#include "core/walls.hpp"
 
 namespace confpack::core {
 
@@ -30,6 +31,7 @@ std::string unknownBackendMessage(std::string_view name);
 /// Everything a backend needs to build its world.
 struct SystemDef {
   BoxDef box;
+  WallMaterial walls;                 ///< the walls' friction (RunConfig::walls)
   std::vector<Grain> grains;          ///< initial poses; velocities start at zero
   Vec3 gravity = Vec3(0.0, 0.0, -1.0);///< [g]
   double density = 1.0;               ///< grain density rho

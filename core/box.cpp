@@ -28,8 +28,6 @@ const SettingsTable<BoxDef>& boxTable() {
     t.number("length_x", &BoxDef::lengthX, Range::positive(), "d_L", "period along x")
         .number("width", &BoxDef::width, Range::positive(), "d_L", "gap W between the side walls, or period along y")
         .flag("periodic_y", &BoxDef::periodicY, "y periodic with period width (no side walls)")
-        .number("wall_friction", &BoxDef::wallFriction, Range::atLeast(0.0), "-",
-                "Coulomb friction mu_w of the side walls; the floor is frictionless")
         .number("height", &BoxDef::height, Range::positive(), "d_L", "target final packing height (deposition aims for it)");
     return t;
   }();

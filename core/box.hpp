@@ -1,6 +1,7 @@
 #pragma once
 // The simulation box (docs/model.md, "Box"): periodic along x, side walls (or periodic) along y,
-// a frictionless floor at z = 0 and a free top. Every module that needs a distance between two
+// a floor at z = 0 and a free top. Its geometry only: the walls' friction is WallMaterial's
+// (core/walls.hpp). Every module that needs a distance between two
 // grains goes through minimumImage() so that periodic images are handled in one place.
 #include <cmath>
 #include <nlohmann/json_fwd.hpp>
@@ -19,7 +20,6 @@ struct BoxDef {
   double lengthX = 20.0;     ///< period along x [d_L], > 0
   double width = 10.0;       ///< gap W between the side walls, or period along y [d_L], > 0
   bool periodicY = false;    ///< true: y is periodic with period `width` (no side walls)
-  double wallFriction = 0.0; ///< Coulomb friction mu_w of the side walls [-]; the floor is frictionless
   double height = 16.0;      ///< target final packing height h [d_L] (deposition aims for it)
 
   /// Wraps a position into [0, lengthX) (and [0, width) when periodic in y).
@@ -46,8 +46,6 @@ struct BoxDef {
   static Vec3 wallNormal(WallId w);
   /// A point on the wall plane.
   Vec3 wallPoint(WallId w) const;
-  /// Friction coefficient of a wall (floor 0, side walls mu_w).
-  double wallFrictionOf(WallId w) const { return w == WallId::Floor ? 0.0 : wallFriction; }
   /// Walls present in this box (floor always, side walls unless periodic in y).
   int wallCount() const { return periodicY ? 1 : 3; }
   /// Throws std::invalid_argument with a clear message if a field is not usable.

@@ -9,11 +9,13 @@
 #include "core/box.hpp"
 #include "core/contact.hpp"
 #include "core/grain.hpp"
+#include "core/walls.hpp"
 
 namespace confpack::core {
 
 struct Packing {
   BoxDef box;
+  WallMaterial walls;  ///< the material of the walls it was made between (the file's box.wall_friction)
   std::vector<Grain> grains;
   /// Contacts with forces, as written by a run; empty optional = file had none (analysis then
   /// uses geometric contacts).

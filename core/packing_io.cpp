@@ -279,6 +279,7 @@ std::string layout(const json& j) {
 void validatePacking(const Packing& p, std::string_view source) {
   try {
     p.box.validate();
+    p.walls.validate();
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
   }
@@ -354,7 +355,9 @@ json toJson(const Packing& p) {
   json j;
   j["format"] = std::string(kPackingFormat);
   j["version"] = kPackingVersion;
+  // The file keeps the walls' friction in its box object (docs/packing-format.md).
   j["box"] = p.box;
+  j["box"]["wall_friction"] = p.walls.friction;
   json grains = json::array();
   for (const Grain& g : p.grains) {
     json e = {
@@ -417,7 +420,18 @@ Packing packingFromJson(const json& j, std::string_view source) {
   const json& box = top.at("box");
   try {  // the box's own keys and ranges (boxTable); a packing must state its size
     boxTable().require(box, {"length_x", "width"});
-    boxTable().read(box, p.box);
+    json geometry = box;
+    if (box.contains("wall_friction")) {  // the walls' material, kept in the file's box object
+      geometry.erase("wall_friction");
+      try {
+        wallMaterialTable().read(json{{"friction", box.at("wall_friction")}}, p.walls);
+      } catch (const std::invalid_argument& e) {  // "walls.friction: ..." named as the file has it
+        const std::string what = e.what(), table = "walls.friction";
+        throw std::invalid_argument("box.wall_friction" +
+                                    (what.rfind(table, 0) == 0 ? what.substr(table.size()) : ": " + what));
+      }
+    }
+    boxTable().read(geometry, p.box);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
   }

@@ -61,7 +61,8 @@ const SettingsTable<RunConfig>& runConfigTable() {
   using R = RunConfig;
   static const SettingsTable<R> table = [] {
     SettingsTable<R> t("config");
-    t.section("box", &R::box, &boxTable, "the box")
+    t.section("box", &R::box, &boxTable, "the box's geometry")
+        .section("walls", &R::walls, &wallMaterialTable, "the walls' material")
         .section("population", &R::population, &populationTable, "the grains' shape and sizes")
         .section("deposition", &R::deposition, &depositionTable, "the geometric deposition")
         .section("compaction", &R::compaction, &compactionTable, "time steps, protocol and equilibrium test")
@@ -97,6 +98,18 @@ void to_json(json& j, const RunConfig& c) { j = runConfigTable().write(c); }
 
 void from_json(const json& j, RunConfig& c) {
   c = RunConfig{};
+  // config.json files written before the walls had their own object kept mu_w in the box.
+  if (j.is_object() && j.contains("box") && j.at("box").is_object() && j.at("box").contains("wall_friction")) {
+    json moved = j;
+    json& walls = moved["walls"];
+    if (walls.is_null()) walls = json::object();
+    if (walls.is_object() && walls.contains("friction"))
+      throw std::invalid_argument("box.wall_friction: given twice, as walls.friction too (keep walls.friction)");
+    if (walls.is_object()) walls["friction"] = moved["box"]["wall_friction"];
+    moved["box"].erase("wall_friction");
+    runConfigTable().readKeys(moved, c);
+    return;
+  }
   runConfigTable().readKeys(j, c);  // the rules across fields are RunConfig::validate()'s
 }
 

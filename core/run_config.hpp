@@ -8,6 +8,7 @@
 #include "core/box.hpp"
 #include "core/deposition.hpp"
 #include "core/population.hpp"
+#include "core/walls.hpp"
 
 namespace confpack::core {
 
@@ -77,6 +78,7 @@ void from_json(const nlohmann::json& j, CompactionDef& c);
 
 struct RunConfig {
   BoxDef box;
+  WallMaterial walls;
   PopulationDef population;
   DepositionDef deposition;
   CompactionDef compaction;

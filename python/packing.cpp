@@ -173,7 +173,8 @@ PyContacts makeContacts(const Ints& a, const Ints& b, const Doubles& normals, co
 
 PyPacking makePacking(const core::BoxDef& box, const Doubles& positions, const Doubles& sizes,
                       const std::optional<Doubles>& orientations, const py::object& shapes,
-                      const std::optional<Doubles>& pinacoidParams, const std::optional<PyContacts>& contacts) {
+                      const std::optional<Doubles>& pinacoidParams, const std::optional<PyContacts>& contacts,
+                      double wallFriction) {
   const py::ssize_t n = positions.ndim() == 2 ? positions.shape(0) : -1;
   requireShape(positions, "positions", n, 3);
   requireShape(sizes, "sizes", n, 0);
@@ -183,6 +184,7 @@ PyPacking makePacking(const core::BoxDef& box, const Doubles& positions, const D
       shapes.is_none() ? std::vector<std::string>(static_cast<std::size_t>(n), "sphere") : strings(shapes, n, "shapes");
   PyPacking out;
   out.packing.box = box;
+  out.packing.walls.friction = wallFriction;
   out.packing.grains.resize(static_cast<std::size_t>(n));
   for (py::ssize_t i = 0; i < n; ++i) {
     core::Grain& g = out.packing.grains[i];
@@ -206,21 +208,20 @@ PyPacking makePacking(const core::BoxDef& box, const Doubles& positions, const D
 
 void bindPacking(py::module_& m) {
   py::class_<core::BoxDef>(m, "Box", "The simulation box (docs/model.md, \"Box\"); lengths in d_L.")
-      .def(py::init([](double lengthX, double width, bool periodicY, double wallFriction, double height) {
-             core::BoxDef b{lengthX, width, periodicY, wallFriction, height};
+      .def(py::init([](double lengthX, double width, bool periodicY, double height) {
+             core::BoxDef b{lengthX, width, periodicY, height};
              b.validate();
              return b;
            }),
            "length_x"_a = core::BoxDef{}.lengthX, "width"_a = core::BoxDef{}.width, "periodic_y"_a = false,
-           "wall_friction"_a = 0.0, "height"_a = core::BoxDef{}.height)
+           "height"_a = core::BoxDef{}.height)
       .def_readonly("length_x", &core::BoxDef::lengthX)
       .def_readonly("width", &core::BoxDef::width)
       .def_readonly("periodic_y", &core::BoxDef::periodicY)
-      .def_readonly("wall_friction", &core::BoxDef::wallFriction)
       .def_readonly("height", &core::BoxDef::height)
       .def("__repr__", [](const core::BoxDef& b) {
-        return fmt::format("Box(length_x={}, width={}, periodic_y={}, wall_friction={}, height={})", b.lengthX, b.width,
-                           b.periodicY ? "True" : "False", b.wallFriction, b.height);
+        return fmt::format("Box(length_x={}, width={}, periodic_y={}, height={})", b.lengthX, b.width,
+                           b.periodicY ? "True" : "False", b.height);
       });
 
   py::class_<PyContacts>(m, "Contacts",
@@ -276,9 +277,12 @@ void bindPacking(py::module_& m) {
                         "A packing (docs/packing-format.md): the box, the grains as arrays and, optionally, "
                         "the contacts with forces. Immutable; positions and sizes are read-only views.")
       .def(py::init(&makePacking), "box"_a, "positions"_a, "sizes"_a, "orientations"_a = py::none(),
-           "shapes"_a = py::none(), "pinacoid_params"_a = py::none(), "contacts"_a = py::none())
+           "shapes"_a = py::none(), "pinacoid_params"_a = py::none(), "contacts"_a = py::none(),
+           "wall_friction"_a = 0.0)
       .def("__len__", [](const PyPacking& p) { return p.packing.grains.size(); })
       .def_property_readonly("box", [](const PyPacking& p) { return p.packing.box; })
+      .def_property_readonly("wall_friction", [](const PyPacking& p) { return p.packing.walls.friction; },
+                             "Coulomb friction mu_w of the side walls the packing was made between")
       .def_property_readonly("source",
                              [](const PyPacking& p) -> py::object {
                                return p.source.empty() ? py::none() : py::object(py::str(p.source));

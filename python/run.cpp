@@ -131,6 +131,7 @@ void bindRun(py::module_& m) {
                        fmt::format("{}/{} placeholders", done, total));
               });
           out.packing.box = cfg.box;
+          out.packing.walls = cfg.walls;
           out.packing.grains = pile.grains;
         }
         return out;

@@ -144,7 +144,7 @@ struct ConfKey {
 
 ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
                 const std::vector<std::string>& names) {
-  ConfKey k{static_cast<int>(c.population.shape), c.population.smallFraction, c.box.wallFriction, {}, c.box.periodicY,
+  ConfKey k{static_cast<int>(c.population.shape), c.population.smallFraction, c.walls.friction, {}, c.box.periodicY,
             c.box.width};
   for (std::size_t i = 0; i < paths.size(); ++i) {
     SettingValue v{names[i], settingText(c, paths[i]), std::nullopt};

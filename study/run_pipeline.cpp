@@ -34,10 +34,11 @@ double processCpuSeconds() {
 }
 
 /// The packing as the backend has it now: poses from the states, contacts of the last step.
-core::Packing snapshot(const core::BoxDef& box, const std::vector<core::Grain>& grains,
+core::Packing snapshot(const core::RunConfig& cfg, const std::vector<core::Grain>& grains,
                        const core::ContactBackend& backend) {
   core::Packing p;
-  p.box = box;
+  p.box = cfg.box;
+  p.walls = cfg.walls;
   p.grains = grains;
   const auto& states = backend.states();
   for (std::size_t i = 0; i < grains.size(); ++i) {
@@ -107,6 +108,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   const auto start = Clock::now();
   core::SystemDef system;
   system.box = cfg.box;
+  system.walls = cfg.walls;
   system.grains = deposit.grains;
   system.threads = cfg.threads;
   auto backend = backends::makeBackend(cfg.backend, system,
@@ -138,7 +140,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   std::optional<core::VtkSeries> frames;
   if (!vtkDir.empty()) {
     frames.emplace(vtkDir, "frame");
-    core::Packing initial{cfg.box, deposit.grains, std::nullopt};
+    core::Packing initial{cfg.box, cfg.walls, deposit.grains, std::nullopt};
     frames->addFrame(0.0, initial);
   }
 
@@ -199,7 +201,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     const bool checkDue = steps % def.checkInterval == 0 || lastStep ||
                           (adaptive && simTime - lastCheckTime >= kAdaptiveCheckSpacing);
     if (!frameDue && !checkDue) continue;
-    const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
+    const core::Packing now = snapshot(cfg, deposit.grains, *backend);
     if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
     if (checkDue) {
       lastCheckTime = simTime;
@@ -239,7 +241,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       const bool last = k == def.finisherMaxSteps;
       const bool frameDue = frames && def.frameInterval > 0 && steps % def.frameInterval == 0;
       if (!frameDue && !last && !finish.settled() && k % 20 != 0) continue;
-      const core::Packing now = snapshot(cfg.box, deposit.grains, *backend);
+      const core::Packing now = snapshot(cfg, deposit.grains, *backend);
       if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
       check(now, static_cast<double>(k) / def.finisherMaxSteps,
             fmt::format("finisher {} h {:.1e} moved {:.1e}", k, finish.lastStepLength(),
@@ -248,7 +250,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     }
   }
 
-  out.packing = snapshot(cfg.box, deposit.grains, *backend);
+  out.packing = snapshot(cfg, deposit.grains, *backend);
   out.states = backend->states();
   if (!haveEq)
     eq = analysis::equilibrium(out.packing, out.states, system.gravity, system.density, def.forceRatio,

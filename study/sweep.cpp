@@ -98,7 +98,7 @@ const std::vector<std::pair<std::string, std::string>>& namedAxisPaths() {
       {"width", "box.periodic_y"},
       {"shape", "population.shape"},
       {"small_fraction", "population.small_fraction"},
-      {"wall_friction", "box.wall_friction"}};
+      {"wall_friction", "walls.friction"}};
   return m;
 }
 
@@ -270,13 +270,12 @@ SweepGroup parseGroup(const json& g, const std::string& where, std::string_view 
   return out;
 }
 
-// What the deposition sees: the box without its wall friction (placement is purely geometric),
-// the population, the deposition settings and the seed. Runs with equal keys share a deposit.
+// What the deposition sees: the box's geometry (placement is purely geometric, whatever the
+// walls' friction), the population, the deposition settings and the seed. Runs with equal keys
+// share a deposit.
 std::string depositKey(const core::RunConfig& cfg) {
   json box, pop, dep;
-  core::BoxDef b = cfg.box;
-  b.wallFriction = 0.0;
-  core::to_json(box, b);
+  core::to_json(box, cfg.box);
   core::to_json(pop, cfg.population);
   core::to_json(dep, cfg.deposition);
   return json{{"box", box}, {"population", pop}, {"deposition", dep}, {"seed", cfg.seed}}.dump();
@@ -311,7 +310,7 @@ class VariedSettings {
   // x_S, mu_w, seed, backend).
   std::vector<std::string> paths() const {
     static const std::set<std::string> named = {"box.width",         "box.periodic_y", "population.shape",
-                                                "population.small_fraction", "box.wall_friction", "seed",
+                                                "population.small_fraction", "walls.friction", "seed",
                                                 "backend"};
     std::vector<std::string> out;
     for (const std::string& p : varied_)
@@ -490,7 +489,7 @@ std::string SweepRun::label(const std::vector<std::string>& settings) const {
   const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
                                              : trimNumber(config.box.width);
   std::string text = fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config),
-                                 trimNumber(config.population.smallFraction), w, trimNumber(config.box.wallFriction),
+                                 trimNumber(config.population.smallFraction), w, trimNumber(config.walls.friction),
                                  config.seed, config.backend);
   if (settings.empty()) return text;
   const std::vector<std::string> names = settingNames(settings);
@@ -624,7 +623,7 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
     const auto fractions = g.smallFractions.empty() ? std::vector{base.population.smallFraction} : g.smallFractions;
     const auto widths =
         g.widths.empty() ? std::vector{WidthChoice{base.box.width, base.box.periodicY}} : g.widths;
-    const auto frictions = g.wallFrictions.empty() ? std::vector{base.box.wallFriction} : g.wallFrictions;
+    const auto frictions = g.wallFrictions.empty() ? std::vector{base.walls.friction} : g.wallFrictions;
     const auto seeds = g.seeds.empty() ? std::vector{base.seed} : g.seeds;
     const auto backendList = g.backends.empty() ? std::vector{base.backend} : g.backends;
     const std::vector<std::vector<const json*>> settings = settingCombinations(g.settings);
@@ -641,13 +640,13 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
                   r.config.population.smallFraction = xs;
                   r.config.box.width = w.width;
                   r.config.box.periodicY = w.periodicY;
-                  r.config.box.wallFriction = mu;
+                  r.config.walls.friction = mu;
                   r.config.seed = seed;
                   r.config.backend = backend;
                   if (!values.empty()) applySettings(r, g.settings, values);
                   // A biperiodic box has no side walls: mu_w is meaningless there, and keeping it
                   // would make mu_w variants of the reference distinct runs of the same physics.
-                  if (r.config.box.periodicY) r.config.box.wallFriction = 0.0;
+                  if (r.config.box.periodicY) r.config.walls.friction = 0.0;
                   json key;
                   core::to_json(key, r.config);
                   if (!seen.insert(key.dump()).second) continue;
@@ -812,7 +811,7 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
                                                  : trimNumber(r.config.box.width);
     out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(),
                        familyName(r.config), trimNumber(r.config.population.smallFraction), w,
-                       trimNumber(r.config.box.wallFriction), r.config.seed, r.config.backend);
+                       trimNumber(r.config.walls.friction), r.config.seed, r.config.backend);
     for (std::size_t i = 0; i < varied.size(); ++i) out << fmt::format(" {:<{}}", cells[k][i], widths[i]);
     if (!dir.empty()) out << ' ' << toString(runStatus(dir / "runs" / r.name));
     out << '\n';

@@ -508,7 +508,7 @@ void BulletBackend::buildWorld() {
     const double c = nrm.dot(system_.box.wallPoint(id));
     auto shape = std::make_unique<btStaticPlaneShape>(toBt(nrm), c);
     btRigidBody::btRigidBodyConstructionInfo rbci(0.0, nullptr, shape.get());
-    rbci.m_friction = system_.box.wallFrictionOf(id);
+    rbci.m_friction = system_.walls.frictionOf(id);
     rbci.m_restitution = 0.0;
     auto body = std::make_unique<btRigidBody>(rbci);
     body->setUserIndex(static_cast<int>(id));

@@ -46,7 +46,8 @@ std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va) {
 }
 
 void ContactRows::build(const std::vector<ContactGeometry>& contacts, const std::vector<Vec3>& positions,
-                        const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
+                        const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box,
+                        const core::WallMaterial& walls, double dt,
                         const NscdSettings& settings) {
   normalRows_.clear();
   frictionRows_.clear();
@@ -59,7 +60,7 @@ void ContactRows::build(const std::vector<ContactGeometry>& contacts, const std:
   for (const ContactGeometry& c : contacts) {
     ++contactIndex;
     const bool wall = c.b < 0;
-    const double mu = wall ? box.wallFrictionOf(static_cast<core::WallId>(c.b)) : 0.0;
+    const double mu = wall ? walls.frictionOf(static_cast<core::WallId>(c.b)) : 0.0;
     const BodyInverseMass& ma = bodies[c.a];
     if (wall && mu > 0.0) {
       rowRef_.push_back({true, static_cast<int>(frictionRows_.size())});

@@ -60,6 +60,7 @@
 #include "backends/nscd/contact_cache.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
+#include "core/walls.hpp"
 
 namespace confpack::nscd {
 
@@ -112,12 +113,12 @@ class ContactRows {
  public:
   /// Builds the rows of every contact point: lever arms from `positions` (q_m), Delassus diagonal,
   /// gap-correction bias. `bodies` has one entry per grain plus a last, static one (zero inverse
-  /// mass) standing for the walls. `wallFriction` is mu_w (applies to side walls only).
+  /// mass) standing for the walls; `walls` gives a wall contact its friction (mu_w on side walls).
   /// The rows are built for settings.solver: with mprgp, in sweep blocks, and with the warm
   /// start's normal impulses left to the solve (warmNormalsInSolve()).
   void build(const std::vector<ContactGeometry>& contacts, const std::vector<core::Vec3>& positions,
-             const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
-             const NscdSettings& settings);
+             const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, const core::WallMaterial& walls,
+             double dt, const NscdSettings& settings);
   /// Sets the impulses from the cache (scaled to this dt) and applies them to the velocities;
   /// with mprgp (the solver of the last build()), only the tangential ones: its solve applies the
   /// normal impulses in its own pass over the bodies.

@@ -49,9 +49,10 @@ class ContactSolver {
  public:
   /// Builds the rows of every contact point for settings.solver (ContactRows::build).
   void prepare(const std::vector<ContactGeometry>& contacts, const std::vector<core::Vec3>& positions,
-               const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, double dt,
+               const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, const core::WallMaterial& walls,
+               double dt,
                const NscdSettings& settings) {
-    rows_.build(contacts, positions, bodies, box, dt, settings);
+    rows_.build(contacts, positions, bodies, box, walls, dt, settings);
     bodies_ = &bodies;
   }
   /// Sets the impulses from the cache and applies them to the velocities (ContactRows::warmStart);

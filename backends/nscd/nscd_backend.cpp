@@ -46,12 +46,14 @@ class NscdBackend final : public core::ContactBackend {
  public:
   NscdBackend(const core::SystemDef& system, const NscdSettings& settings)
       : box_(system.box),
+        walls_(system.walls),
         gravity_(system.gravity),
         settings_(settings),
         n_(static_cast<int>(system.grains.size())),
         narrow_(system.box, system.grains, settings.alertDistance),
         broad_(system.box, n_ > 0 ? narrow_.maxReach() : 1.0, settings.threads) {
     box_.validate();
+    walls_.validate();
     if (!gravity_.allFinite()) throw std::invalid_argument("nscd: gravity must be finite");
     if (!(system.density > 0.0) || !std::isfinite(system.density))
       throw std::invalid_argument("nscd: density must be a positive number");
@@ -176,7 +178,7 @@ class NscdBackend final : public core::ContactBackend {
     clock.charge(Phase::UpdatePairs);
     collide();
     clock.charge(Phase::Collide);
-    solver_.prepare(geometry_, positionMid_, inverse_, box_, dt, law);
+    solver_.prepare(geometry_, positionMid_, inverse_, box_, walls_, dt, law);
     clock.charge(Phase::PrepareContacts);
     solver_.warmStart(cache_, geometry_, dt, velocity_);
     clock.charge(Phase::WarmStart);
@@ -315,6 +317,7 @@ class NscdBackend final : public core::ContactBackend {
   }
 
   core::BoxDef box_;
+  core::WallMaterial walls_;
   Vec3 gravity_;
   NscdSettings settings_;
   int n_ = 0;

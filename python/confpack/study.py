@@ -31,7 +31,8 @@ def _row(record):
         "x_S": config["population"]["small_fraction"],
         "W": config["box"]["width"],
         "biperiodic": config["box"]["periodic_y"],
-        "mu_w": config["box"]["wall_friction"],
+        # Studies written before the walls had their own object kept mu_w in the box.
+        "mu_w": config["walls"]["friction"] if "walls" in config else config["box"]["wall_friction"],
         "seed": config["seed"],
         "backend": config["backend"],
     }

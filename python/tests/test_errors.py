@@ -95,7 +95,7 @@ def test_bad_configuration_fields(cli, config, tmp_path):
 
 
 def test_unknown_configuration_key():
-    with pytest.raises(ValueError, match=r"^config\.boxx: unknown key \(allowed: box, population, "):
+    with pytest.raises(ValueError, match=r"^config\.boxx: unknown key \(known: box, walls, population, "):
         confpack.deposit({"boxx": {}})
 
 

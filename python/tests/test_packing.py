@@ -73,10 +73,9 @@ def test_packing_from_arrays_writes_the_same_file(cli_run, tmp_path):
                                  point_forces=c.point_forces, point_gaps=c.point_gaps,
                                  point_tangent_forces=c.point_tangent_forces)
     b = p.box
-    box = confpack.Box(length_x=b.length_x, width=b.width, periodic_y=b.periodic_y, wall_friction=b.wall_friction,
-                       height=b.height)
+    box = confpack.Box(length_x=b.length_x, width=b.width, periodic_y=b.periodic_y, height=b.height)
     rebuilt = confpack.Packing(box, p.positions, p.sizes, orientations=p.orientations, shapes=p.shapes,
-                               contacts=contacts)
+                               contacts=contacts, wall_friction=p.wall_friction)
     rebuilt.write(tmp_path / "rebuilt.json")
     assert (tmp_path / "rebuilt.json").read_bytes() == (out / "packing.json").read_bytes()
 

@@ -29,7 +29,7 @@ def test_deposit_equals_the_cli(cli_deposit, tmp_path):
 def test_default_config_is_resolved():
     config = confpack.default_config()
     assert config == confpack.resolve_config({}) == confpack.resolve_config(None)
-    assert set(config) == {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed",
+    assert set(config) == {"box", "walls", "population", "deposition", "compaction", "backend", "backend_options", "seed",
                            "threads"}
 
 

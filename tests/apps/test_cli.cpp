@@ -150,7 +150,7 @@ TEST_CASE("a small deposit writes a readable packing inside the box, its config 
   CHECK_FALSE(p.contacts.has_value());  // a deposit has no forces yet
   CHECK(p.box.lengthX == 6.0);
   CHECK(p.box.width == 4.0);
-  CHECK(p.box.wallFriction == 0.3);
+  CHECK(p.walls.friction == 0.3);
   REQUIRE(p.grains.size() > 10);
   // Inside the box: x in [0, L_x), and the whole sphere between the walls and above the floor
   // (a deposit overlaps nothing, walls included; 1e-9 allows for rounding).
@@ -168,7 +168,7 @@ TEST_CASE("a small deposit writes a readable packing inside the box, its config 
   CHECK(cfg.box.lengthX == 6.0);
   CHECK(cfg.box.width == 4.0);
   CHECK(cfg.box.height == 4.0);
-  CHECK(cfg.box.wallFriction == 0.3);
+  CHECK(cfg.walls.friction == 0.3);
   CHECK(cfg.seed == 3);
   CHECK(cfg.backend == "nscd");
   CHECK(cfg.population.smallFraction == core::PopulationDef{}.smallFraction);

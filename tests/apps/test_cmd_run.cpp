@@ -144,7 +144,7 @@ TEST_CASE("run --config DIR/config.json reruns the run: the same configuration r
     CHECK(nlohmann::json(cfg) == written);
     CHECK(cfg.backend == backend);
     CHECK(cfg.seed == 5);
-    CHECK(cfg.box.wallFriction == 0.3);
+    CHECK(cfg.walls.friction == 0.3);
     CHECK(cfg.compaction.timeLimit == 2.0);
     CHECK(cfg.compaction.dt == result["config"]["compaction"]["dt"].get<double>());
     CHECK(cfg.compaction.dt > 0.0);

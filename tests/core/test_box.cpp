@@ -72,7 +72,6 @@ TEST_CASE("wrapping shifts by whole periods into the box and keeps y between wal
 TEST_CASE("the walls: floor at z = 0 and side walls at y = 0 and y = W, normals into the box") {
   BoxDef box;
   box.width = 3.5;
-  box.wallFriction = 0.4;
   // A point of the box lies on the inner side of every wall: (x - wallPoint) . normal > 0.
   const Vec3 inside(1.0, 1.2, 0.7);
   for (const WallId w : {WallId::Floor, WallId::SideLow, WallId::SideHigh}) {
@@ -84,10 +83,7 @@ TEST_CASE("the walls: floor at z = 0 and side walls at y = 0 and y = W, normals 
   CHECK((inside - box.wallPoint(WallId::SideLow)).dot(BoxDef::wallNormal(WallId::SideLow)) == 1.2);
   CHECK((inside - box.wallPoint(WallId::SideHigh)).dot(BoxDef::wallNormal(WallId::SideHigh)) ==
         Approx(3.5 - 1.2).epsilon(1e-15));
-  // The floor is frictionless, the side walls have mu_w; a y-periodic box has the floor only.
-  CHECK(box.wallFrictionOf(WallId::Floor) == 0.0);
-  CHECK(box.wallFrictionOf(WallId::SideLow) == 0.4);
-  CHECK(box.wallFrictionOf(WallId::SideHigh) == 0.4);
+  // A y-periodic box has the floor only.
   CHECK(box.wallCount() == 3);
   box.periodicY = true;
   CHECK(box.wallCount() == 1);
@@ -99,14 +95,12 @@ TEST_CASE("a box round-trips through JSON and refuses unusable fields by name") 
   b.lengthX = 1.0 / 3.0;
   b.width = 7.1;
   b.periodicY = true;
-  b.wallFriction = 0.123456789;
   b.height = 12.5;
   const nlohmann::json j = b;
   const BoxDef c = j.get<BoxDef>();
   CHECK(c.lengthX == b.lengthX);
   CHECK(c.width == b.width);
   CHECK(c.periodicY == b.periodicY);
-  CHECK(c.wallFriction == b.wallFriction);
   CHECK(c.height == b.height);
   CHECK_NOTHROW(c.validate());
   BoxDef bad;
@@ -115,7 +109,7 @@ TEST_CASE("a box round-trips through JSON and refuses unusable fields by name") 
   bad = BoxDef{};
   bad.lengthX = std::nan("");
   CHECK_THROWS_WITH(bad.validate(), Catch::Contains("length_x"));
-  bad = BoxDef{};
-  bad.wallFriction = -0.1;
-  CHECK_THROWS_WITH(bad.validate(), Catch::Contains("wall_friction"));
+  // The box is geometry only: the walls' friction is refused here, named with where it belongs.
+  CHECK_THROWS_WITH(nlohmann::json::parse(R"({"wall_friction": 0.3})").get<BoxDef>(),
+                    Catch::StartsWith("box.wall_friction: unknown key"));
 }

@@ -40,7 +40,7 @@ Packing samplePacking() {
   Packing p;
   p.box.lengthX = 6.0;
   p.box.width = 4.0 / 3.0 + 3.0;  // not representable in decimal: exercises shortest round trip
-  p.box.wallFriction = 0.3;
+  p.walls.friction = 0.3;
   p.box.height = 4.1;
   Rng rng(11, StreamId::Test);
   for (int i = 0; i < 12; ++i) {
@@ -86,7 +86,7 @@ void requireSame(const Packing& a, const Packing& b) {
   REQUIRE(a.box.lengthX == b.box.lengthX);
   REQUIRE(a.box.width == b.box.width);
   REQUIRE(a.box.periodicY == b.box.periodicY);
-  REQUIRE(a.box.wallFriction == b.box.wallFriction);
+  REQUIRE(a.walls.friction == b.walls.friction);
   REQUIRE(a.box.height == b.box.height);
   REQUIRE(a.grains.size() == b.grains.size());
   for (std::size_t i = 0; i < a.grains.size(); ++i) {
@@ -206,7 +206,7 @@ TEST_CASE("a minimal hand-written packing is accepted and completed") {
   })");
   const Packing p = packingFromJson(j);
   CHECK_FALSE(p.box.periodicY);
-  CHECK(p.box.wallFriction == 0.0);
+  CHECK(p.walls.friction == 0.0);
   CHECK(p.box.height == Approx(1.0));  // top of the pile when the file does not say
   CHECK(p.grains[0].orientation.w() == Approx(1.0));
   CHECK(p.grains[0].orientation.norm() == Approx(1.0));

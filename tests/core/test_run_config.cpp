@@ -16,7 +16,7 @@ TEST_CASE("the run configuration round-trips through JSON") {
   c.box.lengthX = 7.25;
   c.box.width = 1.0 / 3.0;
   c.box.periodicY = true;
-  c.box.wallFriction = 0.5;
+  c.walls.friction = 0.5;
   c.population.shape = core::ShapeKind::Pinacoid;
   c.population.smallFraction = 40.0;
   c.population.pinacoid.alphaDeg = 55.5;
@@ -102,7 +102,7 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
                     Catch::Contains("compaction.time_limt: unknown key"));
   // The box and the population are read key by key: a typo there once ran with the default.
   CHECK_THROWS_WITH(json::parse(R"({"box": {"widht": 3}})").get<core::RunConfig>(),
-                    "box.widht: unknown key (known: length_x, width, periodic_y, wall_friction, height)");
+                    "box.widht: unknown key (known: length_x, width, periodic_y, height)");
   CHECK_THROWS_WITH(json::parse(R"({"population": {"small_fractoin": 30}})").get<core::RunConfig>(),
                     Catch::StartsWith("population.small_fractoin: unknown key"));
   CHECK_THROWS_WITH(json::parse(R"({"population": {"pinacoid": {"alpha": 50}}})").get<core::RunConfig>(),
@@ -151,4 +151,18 @@ TEST_CASE("an unknown backend name is quoted cut short, not echoed in full") {
     CHECK_THAT(message, Catch::StartsWith("backend: unknown backend 'nnnn"));
     CHECK_THAT(message, Catch::EndsWith("(expected nscd or bullet)"));
   }
+}
+
+// mu_w lived in the box before the walls had their own object: such a config.json (a run folder or
+// a sweep table of that time) still reads, with the friction where it now belongs.
+TEST_CASE("a config.json with box.wall_friction reads it as walls.friction, and refuses it given twice") {
+  const auto c = json::parse(R"({"box": {"width": 5, "wall_friction": 0.4}})").get<core::RunConfig>();
+  CHECK(c.walls.friction == 0.4);
+  CHECK(c.box.width == 5.0);
+  CHECK(json(c)["box"].contains("wall_friction") == false);
+  CHECK(json(c)["walls"]["friction"] == 0.4);
+  CHECK_THROWS_WITH(json::parse(R"({"box": {"wall_friction": 0.4}, "walls": {"friction": 0.4}})").get<core::RunConfig>(),
+                    Catch::StartsWith("box.wall_friction: given twice"));
+  CHECK_THROWS_WITH(json::parse(R"({"box": {"wall_friction": -1}})").get<core::RunConfig>(),
+                    "walls.friction: must be >= 0 (got -1)");
 }

@@ -16,7 +16,6 @@ TEST_CASE("a deposit written to disk reads back bit for bit") {
   core::BoxDef box;
   box.lengthX = 5.0;
   box.width = 1.0 / 3.0 + 3.0;  // not a short decimal
-  box.wallFriction = 0.3;
   box.height = 3.0;
   core::PopulationDef population;
   population.smallFraction = 30.0;  // two sizes, both with awkward doubles

@@ -28,8 +28,8 @@ TEST_CASE("reproduce: the paper scale is the full study") {
     else
       CHECK(r.config.box.width == 20.0);
     fractions.insert(r.config.population.smallFraction);
-    frictions.insert(r.config.box.wallFriction);
-    if (r.config.box.wallFriction > 0.0) {
+    frictions.insert(r.config.walls.friction);
+    if (r.config.walls.friction > 0.0) {
       CHECK(r.config.population.shape == core::ShapeKind::Sphere);
       CHECK(r.config.population.smallFraction == 0.0);
     }

@@ -113,7 +113,7 @@ core::RunConfig smallBox(const std::string& backend, double wallFriction) {
   cfg.box.lengthX = 4.0;
   cfg.box.width = 3.0;
   cfg.box.height = 4.0;
-  cfg.box.wallFriction = wallFriction;
+  cfg.walls.friction = wallFriction;
   cfg.backend = backend;
   cfg.seed = 2;
   cfg.compaction.protocol = core::Protocol::QuasiStatic;

@@ -55,7 +55,7 @@ inline core::SystemDef boxSystem(double lengthX, double width, bool periodicY, d
   s.box.lengthX = lengthX;
   s.box.width = width;
   s.box.periodicY = periodicY;
-  s.box.wallFriction = mu;
+  s.walls.friction = mu;
   return s;
 }
 

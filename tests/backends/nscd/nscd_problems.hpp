@@ -38,7 +38,7 @@ inline core::SystemDef pile(core::ShapeKind shape, double lengthX, double width,
   s.box.lengthX = lengthX;
   s.box.width = width;
   s.box.periodicY = false;
-  s.box.wallFriction = 0.3;
+  s.walls.friction = 0.3;
   core::PopulationDef population;
   population.shape = shape;
   core::DepositionDef def;
@@ -92,7 +92,7 @@ struct ColdStep {
     std::vector<nscd::CandidatePair> pairs;
     broad.findPairs(positions, reach, pairs);
     narrow.collideAll(pairs, positions, orientations, contacts, 1);
-    solver.prepare(contacts, positions, bodies, s.box, kDt, settings);
+    solver.prepare(contacts, positions, bodies, s.box, s.walls, kDt, settings);
     solver.warmStart(nscd::ContactCache{}, contacts, kDt, velocities);
     iterations = solver.solve(velocities, settings);
   }

@@ -26,7 +26,7 @@ TEST_CASE("nscd mprgp: the preconditioner's two sweep blocks share no grain, and
   core::SystemDef s;
   if (pinacoids) {
     s = boxSystem(28.0, 5.0, false, 0.0);
-    s.box.wallFriction = 0.3;
+    s.walls.friction = 0.3;
     core::PopulationDef population;
     population.shape = core::ShapeKind::Pinacoid;
     core::DepositionDef def;

@@ -251,7 +251,7 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
   // 24 polydisperse spheres dropped from a jittered lattice between frictional walls, 400 steps.
   // EXPECTED_HASH changes only in a commit that says why (a deliberate change of the numerics).
   core::SystemDef s = boxSystem(5.0, 3.0, false, 0.0);
-  s.box.wallFriction = 0.3;
+  s.walls.friction = 0.3;
   core::Rng rng(99, core::StreamId::Test);
   for (int k = 0; k < 24; ++k)
     s.grains.push_back(sphere(rng.uniform(0.8, 1.0), Vec3(0.6 + 1.25 * (k % 4) + rng.uniform(-0.05, 0.05),
