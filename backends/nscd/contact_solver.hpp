@@ -66,7 +66,8 @@ class ContactSolver {
   /// the warm start on entry, v_{i+1} on exit); returns the number of iterations: Gauss-Seidel
   /// sweeps (nlgs), operator applications W p (mprgp, each about two sweeps of work) or
   /// factorisations (ipm: interior-point iterations and polish rounds, plus tangential passes).
-  int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
+  /// `maxThreads` bounds MPRGP's team (MprgpSolver::solve); the other solvers run on one thread.
+  int solve(std::vector<BodyVelocity>& velocities, const NscdSettings& settings, int maxThreads = 1);
   double residual() const { return residual_; }
   /// The grains touched by the rows of each of the two sweep blocks of the last prepare()
   /// (ContactRows::sweepBlockBodies).

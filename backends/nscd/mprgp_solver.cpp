@@ -431,7 +431,7 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
 // changes. Near jamming the free block's softest modes extend over the whole pile; a coarse
 // correction or a deflation of them was tried offline and not built (docs/performance.md, "The
 // preconditioner", has those measurements).
-int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
+int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings, int maxThreads) {
   residual_ = 0.0;
   if (rows.rowCount() == 0) return 0;
   const std::span<const NormalRow> normalRows = rows.normalRows();
@@ -440,7 +440,7 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   // The team is timed against one thread and kept only while it is faster (ThreadChoice): on this
   // shared 2-core machine at load ~6, two threads made an 8,000-sphere solve 25-40x slower (every
   // pass ends at a barrier, and a descheduled thread stalls it); results are the same bits either way.
-  if (threadChoice_.maxThreads() != settings.threads) threadChoice_ = ThreadChoice(settings.threads);
+  if (threadChoice_.maxThreads() != maxThreads) threadChoice_ = ThreadChoice(maxThreads);
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
   for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_, &z_}) v->resize(m);

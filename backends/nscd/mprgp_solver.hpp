@@ -45,7 +45,9 @@ class MprgpSolver {
   /// impulses, and stores the normal impulses in the rows in contact order; returns the number of
   /// iterations: operator applications W p (each about two sweeps of work), plus the tangential
   /// passes with wall friction (0 without rows).
-  int solve(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings);
+  /// `maxThreads` (the run's threads, SystemDef::threads): the most its passes run on; each solve
+  /// times the team against one thread and keeps the faster (thread_choice.hpp), to the same bits.
+  int solve(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings, int maxThreads = 1);
   /// The residual of the last solve: the projected gradient relative to ||b|| (or the last
   /// tangential change, if larger); 0 without rows.
   double residual() const { return residual_; }

@@ -51,7 +51,8 @@ class NscdBackend final : public core::ContactBackend {
         settings_(settings),
         n_(static_cast<int>(system.grains.size())),
         narrow_(system.box, system.grains, settings.alertDistance),
-        broad_(system.box, n_ > 0 ? narrow_.maxReach() : 1.0, settings.threads) {
+        threads_(system.threads),
+        broad_(system.box, n_ > 0 ? narrow_.maxReach() : 1.0, system.threads) {
     box_.validate();
     walls_.validate();
     if (!gravity_.allFinite()) throw std::invalid_argument("nscd: gravity must be finite");
@@ -182,7 +183,7 @@ class NscdBackend final : public core::ContactBackend {
     clock.charge(Phase::PrepareContacts);
     solver_.warmStart(cache_, geometry_, dt, velocity_);
     clock.charge(Phase::WarmStart);
-    profile_.iterations = solver_.solve(velocity_, solve);
+    profile_.iterations = solver_.solve(velocity_, solve, threads_);
     profile_.residual = solver_.residual();
     profile_.contactPoints = solver_.rowCount();
     clock.charge(Phase::Solve);
@@ -251,7 +252,7 @@ class NscdBackend final : public core::ContactBackend {
   }
 
   // Pair contacts in pair order, then wall contacts in grain order, whatever the thread count.
-  void collide() { narrow_.collideAll(pairs_, positionMid_, orientationMid_, geometry_, settings_.threads); }
+  void collide() { narrow_.collideAll(pairs_, positionMid_, orientationMid_, geometry_, threads_); }
 
   // q_{i+1} = q_m + dt theta v_{i+1}, wrapped into the box.
   void correct(double dt, double theta) {
@@ -341,6 +342,10 @@ class NscdBackend final : public core::ContactBackend {
   // filled by storeImpulses()).
   std::vector<char> loaded_;
   NarrowPhase narrow_;
+  // Most OpenMP threads of a phase (the run's `threads`, SystemDef::threads): the broad and narrow
+  // phases and MPRGP's passes each time their team against one thread and keep the faster
+  // (thread_choice.hpp); results are the same bits for any value; NLGS stays sequential.
+  int threads_ = 1;
   BroadPhase broad_;
   std::vector<CandidatePair> pairs_;
   std::vector<ContactGeometry> geometry_;
@@ -357,7 +362,6 @@ class NscdBackend final : public core::ContactBackend {
 std::unique_ptr<core::ContactBackend> makeNscdBackend(const core::SystemDef& system, const nlohmann::json& options) {
   NscdSettings settings = settingsFromJson(options);
   if (system.threads < 1) throw std::invalid_argument("nscd: threads must be >= 1");
-  settings.threads = system.threads;
   return std::make_unique<NscdBackend>(system, settings);
 }
 

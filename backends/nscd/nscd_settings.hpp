@@ -118,12 +118,6 @@ struct NscdSettings {
   /// limit. Default 0.01: it keeps the damping off the flow that forms the packing, which
   /// damping every loaded grain loosens (phi 0.627 against 0.641 undamped on a sphere pile).
   double dampingSpeed = 0.01;
-  /// Most OpenMP threads of a phase [-], >= 1: not an option, the run configuration's `threads`
-  /// (`--threads`), which reaches the backend through SystemDef. The broad and narrow phases and the MPRGP passes use up to this
-  /// many; each phase times its team against one thread and keeps the faster (thread_choice.hpp).
-  /// Results are the same bits for any value. Gauss-Seidel (nlgs) stays sequential.
-  int threads = 1;
-
   /// Throws std::invalid_argument naming the field if a value is out of range.
   void validate() const;
 };

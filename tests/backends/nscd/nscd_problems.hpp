@@ -73,7 +73,7 @@ struct ColdStep {
   nscd::ContactSolver solver;
   int iterations = 0;
 
-  ColdStep(const core::SystemDef& s, const nscd::NscdSettings& settings)
+  ColdStep(const core::SystemDef& s, const nscd::NscdSettings& settings, int threads = 1)
       : bodies(s.grains.size() + 1), velocities(s.grains.size() + 1) {
     nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
     nscd::BroadPhase broad(s.box, narrow.maxReach());
@@ -94,7 +94,7 @@ struct ColdStep {
     narrow.collideAll(pairs, positions, orientations, contacts, 1);
     solver.prepare(contacts, positions, bodies, s.box, s.walls, kDt, settings);
     solver.warmStart(nscd::ContactCache{}, contacts, kDt, velocities);
-    iterations = solver.solve(velocities, settings);
+    iterations = solver.solve(velocities, settings, threads);
   }
 };
 

@@ -40,9 +40,7 @@ TEST_CASE("nscd mprgp: the preconditioner's two sweep blocks share no grain, and
   }
   nscd::NscdSettings one;  // the defaults: MPRGP preconditioned by Gauss-Seidel
   one.maxIterations = 30;
-  nscd::NscdSettings two = one;
-  two.threads = 2;
-  const ColdStep a(s, one), b(s, two);
+  const ColdStep a(s, one, 1), b(s, one, 2);
   INFO("pinacoids " << pinacoids << ", rows " << a.solver.rowCount() << ", iterations " << a.iterations);
   // Enough rows for the solver to run on the team (its passes need 4,096 unknowns), and each
   // block a good part of the pile.
