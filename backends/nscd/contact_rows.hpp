@@ -132,7 +132,8 @@ class ContactRows {
   core::Vec3 tangentImpulse(int c, int p) const;
   int rowCount() const { return static_cast<int>(normalRows_.size() + frictionRows_.size()); }
   /// No row has a lever arm across its normal (|l x n| of a sphere row is ~1e-16, a pinacoid's
-  /// ~0.1): no impulse turns a body, and the solvers leave the angular velocities out.
+  /// ~0.1): no normal impulse turns a body, and the normal solves leave the angular velocities
+  /// out. Side-wall friction does turn spheres; its tangential pass (updateTangent) keeps them.
   bool turnsNoBody() const;
   /// The grains touched by the rows of each of the two sweep blocks of the last build(), sorted,
   /// without `world` (the static body); both empty when the rows are not split. The blocks are
