@@ -717,6 +717,44 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
       lambda.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
     }
   if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
+  // Measured on one sample of each family, the biperiodic one (or, without it, the widest confined
+  // one), mean ± standard error over its replicas: phi and Z where the study fits no phi_bulk (a
+  // study of the grains' shape in the biperiodic box), the pinacoids' contact types and order.
+  struct Measured {
+    const char* key;
+    const char* name;
+    const char* definition;
+    bool pinacoidsOnly;
+  };
+  std::vector<Measured> measured;
+  if (fits.phi.empty() || std::none_of(fits.phi.begin(), fits.phi.end(), [](const FitRow& f) { return f.fit.has_value(); })) {
+    measured.push_back({"solid_fraction", "phi", "solid fraction of the bulk region", false});
+    measured.push_back({"coordination/Z", "Z", "coordination number of the bulk region (grain contacts per grain)", false});
+  }
+  measured.push_back({"coordination/simple", "Z_s", "pinacoids: simple contacts per grain (vertex-face, edge-edge)", true});
+  measured.push_back({"coordination/double", "Z_d", "pinacoids: double contacts per grain (edge-face)", true});
+  measured.push_back({"coordination/triple", "Z_t", "pinacoids: triple contacts per grain (face-face)", true});
+  measured.push_back({"nematic/bulk", "S", "pinacoids: nematic order Q00^2 of the bulk region (1: aligned)", true});
+  for (const Measured& m : measured) {
+    SummaryQuantity q{m.name,
+                      std::string(m.definition) + ", on the biperiodic sample (or the widest confined one)", {}};
+    for (const SeriesKey& sk : study.seriesKeys())
+      for (const std::string& b : study.backends) {
+        if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;
+        const ConfKey* sample = nullptr;
+        for (const auto& [k, _] : study.groups) {
+          if (seriesOf(k) != sk || study.statOf(k, b, m.key).n == 0) continue;
+          const bool better = !sample || (k.periodic && !sample->periodic) ||
+                              (k.periodic == sample->periodic && k.width > sample->width);
+          if (better) sample = &k;
+        }
+        if (!sample) continue;
+        const ReplicaStat st = study.statOf(*sample, b, m.key);
+        const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+        q.values[{sk, b}] = {st.mean, se, fmt::format("{:.4g} ± {:.2g}", st.mean, se)};
+      }
+    if (!q.values.empty()) out.quantities.push_back(std::move(q));
+  }
   const std::string overlap = "interpenetration_percent/exact";
   SummaryQuantity interpenetration{"interpenetration",
                                    "volume shared by overlapping grains, % of the grains' volume, mean over every "
