@@ -696,7 +696,18 @@ void prepareSweepDir(const fs::path& dir, const SweepSpec& spec, const std::vect
   const fs::path tablePath = dir / kSweepTable;
   if (fs::exists(tablePath)) {
     const json existing = core::readJsonFile(tablePath, "sweep table");
-    if (!existing.contains("runs") || existing.at("runs") != table)
+    // Each stored configuration as the reader sees it, so that a table written by an earlier
+    // version in another spelling (mu_w as box.wall_friction) still resumes.
+    const auto asRead = [](json runs) {
+      if (!runs.is_array()) return runs;
+      for (json& r : runs)
+        if (r.is_object() && r.contains("config")) try {
+            r["config"] = json(r["config"].get<core::RunConfig>());
+          } catch (const std::exception&) {  // left as written: it differs, and is refused below
+          }
+      return runs;
+    };
+    if (!existing.contains("runs") || asRead(existing.at("runs")) != table)
       throw std::invalid_argument(fmt::format(
           "{}: holds a different sweep (its run table differs from this sweep file's); resume it with the "
           "sweep file that made it, or choose a new output folder",

@@ -18,6 +18,7 @@
 #include "study/reproduce.hpp"
 #include "study/sweep.hpp"
 #include "tests/support/hash.hpp"
+#include "tests/support/read_file.hpp"
 #include "tests/support/scratch.hpp"
 
 namespace fs = std::filesystem;
@@ -456,6 +457,29 @@ TEST_CASE("setting axes: an unknown path or a value the configuration's readers 
   CHECK_THAT(message(R"({"shape": "pinacoid", "population.pinacoid.alpha_deg": [45, 60]})"),
              Catch::StartsWith("sweep run r0000 (MPP xS=0 W=10 mu=0 s1 nscd alpha_deg=45): pinacoid: with E=1 and "
                                "alpha=45 deg the ridge half-length"));
+}
+
+// A study folder started before the walls had their own object holds mu_w as box.wall_friction
+// in its sweep.json: the same sweep file still resumes it, another one is still refused.
+TEST_CASE("sweep table: a folder whose table spells mu_w the earlier way resumes, a different sweep does not") {
+  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({"name": "mu", "base": {"box": {"length_x": 3}},
+    "vary": {"width": [3], "wall_friction": [0, 0.5], "backend": "nscd"}})"));
+  const std::vector<study::SweepRun> runs = study::expandRuns(spec);
+  const fs::path dir = confpack::testing::scratchPath("sweep_legacy_table");
+  fs::remove_all(dir);
+  study::prepareSweepDir(dir, spec, runs);
+  json table = json::parse(confpack::testing::slurp(dir / study::kSweepTable));
+  for (json& r : table["runs"]) {
+    r["config"]["box"]["wall_friction"] = r["config"]["walls"]["friction"];
+    r["config"].erase("walls");
+  }
+  CHECK(table["runs"][1]["config"]["box"]["wall_friction"] == 0.5);
+  std::ofstream(dir / study::kSweepTable) << table.dump(1);
+  CHECK_NOTHROW(study::prepareSweepDir(dir, spec, runs));
+  table["runs"][1]["config"]["box"]["wall_friction"] = 0.3;  // not the sweep this file makes
+  std::ofstream(dir / study::kSweepTable) << table.dump(1);
+  CHECK_THROWS_WITH(study::prepareSweepDir(dir, spec, runs), Catch::Contains("holds a different sweep"));
+  fs::remove_all(dir);
 }
 
 TEST_CASE("sweep table: what prepareSweepDir writes reads back, and a hand-edited table is refused by field") {
