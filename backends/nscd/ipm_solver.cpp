@@ -161,6 +161,56 @@ struct IpmSolver::Impl {
 
   int size() const { return dof * static_cast<int>(global.size()); }
 
+  // The problem of `rows`: one IpmRow per normal unknown (the frictionless rows, then the normal
+  // part of the side-wall friction rows), the bodies that carry a row in order of first appearance
+  // with their masses, and per row its warm-start impulse and W_nn^-1/2.
+  void load(const ContactRows& rows, const std::vector<BodyInverseMass>& bodies, Eigen::VectorXd& warm,
+            Eigen::VectorXd& scale) {
+    const std::span<const NormalRow> normalRows = rows.normalRows();
+    const std::span<const FrictionRow> frictionRows = rows.frictionRows();
+    const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
+    const int world = static_cast<int>(bodies.size()) - 1;
+    factorised.clear();  // new rows: nothing factorised yet
+    local.assign(bodies.size(), -1);
+    global.clear();
+    auto localOf = [&](int body) {
+      if (body == world) return -1;
+      if (local[body] < 0) {
+        local[body] = static_cast<int>(global.size());
+        global.push_back(body);
+      }
+      return local[body];
+    };
+    this->rows.resize(m);
+    warm.resize(static_cast<Eigen::Index>(m));
+    scale.resize(static_cast<Eigen::Index>(m));
+    for (std::size_t k = 0; k < nN; ++k) {
+      const NormalRow& row = normalRows[k];
+      this->rows[k] = {row.n, row.axn, row.bxn, row.bias, localOf(row.a), localOf(row.b)};
+      scale[static_cast<Eigen::Index>(k)] = std::sqrt(row.invW);
+      warm[static_cast<Eigen::Index>(k)] = row.r;
+    }
+    for (std::size_t f = 0; f < frictionRows.size(); ++f) {
+      const FrictionRow& row = frictionRows[f];
+      this->rows[nN + f] = {row.n, row.axn, Vec3::Zero(), row.bias, localOf(row.a), -1};
+      scale[static_cast<Eigen::Index>(nN + f)] = std::sqrt(row.invWnn);
+      warm[static_cast<Eigen::Index>(nN + f)] = row.rn;
+    }
+    dof = rows.turnsNoBody() ? 3 : 6;
+    const std::size_t nb = global.size();
+    mass.resize(nb);
+    inertia.resize(nb);
+    invInertia.resize(nb);
+    for (std::size_t i = 0; i < nb; ++i) {
+      const BodyInverseMass& body = bodies[static_cast<std::size_t>(global[i])];
+      mass[i] = 1.0 / body.invMass;
+      if (dof == 6) {
+        inertia[i] = body.invInertia.inverse();
+        invInertia[i] = body.invInertia;
+      }
+    }
+  }
+
   // Jacobian row k applied to x: u_k = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a.
   double applyRow(const IpmRow& row, const Eigen::VectorXd& x) const {
     const int a = dof * row.a;
@@ -259,47 +309,8 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
     return 0;
   }
   const int world = static_cast<int>(bodies.size()) - 1;
-
-  s.factorised.clear();  // new rows: nothing factorised yet
-  // The unknowns: the bodies that carry a row, in order of first appearance.
-  s.local.assign(bodies.size(), -1);
-  s.global.clear();
-  auto localOf = [&](int body) {
-    if (body == world) return -1;
-    if (s.local[body] < 0) {
-      s.local[body] = static_cast<int>(s.global.size());
-      s.global.push_back(body);
-    }
-    return s.local[body];
-  };
-  s.rows.resize(m);
-  Eigen::VectorXd warm(static_cast<Eigen::Index>(m));
-  Eigen::VectorXd scale(static_cast<Eigen::Index>(m));  // W_nn^-1/2, the unit MPRGP measures the residual in
-  for (std::size_t k = 0; k < nN; ++k) {
-    const NormalRow& row = normalRows[k];
-    s.rows[k] = {row.n, row.axn, row.bxn, row.bias, localOf(row.a), localOf(row.b)};
-    scale[static_cast<Eigen::Index>(k)] = std::sqrt(row.invW);
-    warm[static_cast<Eigen::Index>(k)] = row.r;
-  }
-  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
-    const FrictionRow& row = frictionRows[f];
-    s.rows[nN + f] = {row.n, row.axn, Vec3::Zero(), row.bias, localOf(row.a), -1};
-    scale[static_cast<Eigen::Index>(nN + f)] = std::sqrt(row.invWnn);
-    warm[static_cast<Eigen::Index>(nN + f)] = row.rn;
-  }
-  s.dof = rows.turnsNoBody() ? 3 : 6;
-  const std::size_t nb = s.global.size();
-  s.mass.resize(nb);
-  s.inertia.resize(nb);
-  s.invInertia.resize(nb);
-  for (std::size_t i = 0; i < nb; ++i) {
-    const BodyInverseMass& body = bodies[static_cast<std::size_t>(s.global[i])];
-    s.mass[i] = 1.0 / body.invMass;
-    if (s.dof == 6) {
-      s.inertia[i] = body.invInertia.inverse();
-      s.invInertia[i] = body.invInertia;
-    }
-  }
+  Eigen::VectorXd warm, scale;  // the rows' warm-start impulses; W_nn^-1/2, the unit MPRGP measures the residual in
+  s.load(rows, bodies, warm, scale);
   const Eigen::Index N = s.size(), M = static_cast<Eigen::Index>(m);
 
   // v_base: the velocities without normal impulses (v_free plus the tangential impulses).

@@ -27,6 +27,7 @@ nscd::ContactGeometry touching(int a, int b, const Vec3& normal, const Vec3& poi
   c.a = a;
   c.b = b;
   c.normal = normal;
+  c.points.fill(Vec3::Zero());  // Eigen leaves the unused points uninitialised
   c.pointCount = 1;
   c.points[0] = point;
   c.gaps[0] = gap;
