@@ -96,21 +96,21 @@ const SettingsTable<RunConfig>& runConfigTable() {
 
 void to_json(json& j, const RunConfig& c) { j = runConfigTable().write(c); }
 
+json withWallsMoved(json j) {
+  if (!j.is_object() || !j.contains("box") || !j.at("box").is_object() || !j.at("box").contains("wall_friction"))
+    return j;
+  json& walls = j["walls"];
+  if (walls.is_null()) walls = json::object();
+  if (walls.is_object() && walls.contains("friction"))
+    throw std::invalid_argument("box.wall_friction: given twice, as walls.friction too (keep walls.friction)");
+  if (walls.is_object()) walls["friction"] = j["box"]["wall_friction"];
+  j["box"].erase("wall_friction");
+  return j;
+}
+
 void from_json(const json& j, RunConfig& c) {
   c = RunConfig{};
-  // config.json files written before the walls had their own object kept mu_w in the box.
-  if (j.is_object() && j.contains("box") && j.at("box").is_object() && j.at("box").contains("wall_friction")) {
-    json moved = j;
-    json& walls = moved["walls"];
-    if (walls.is_null()) walls = json::object();
-    if (walls.is_object() && walls.contains("friction"))
-      throw std::invalid_argument("box.wall_friction: given twice, as walls.friction too (keep walls.friction)");
-    if (walls.is_object()) walls["friction"] = moved["box"]["wall_friction"];
-    moved["box"].erase("wall_friction");
-    runConfigTable().readKeys(moved, c);
-    return;
-  }
-  runConfigTable().readKeys(j, c);  // the rules across fields are RunConfig::validate()'s
+  runConfigTable().readKeys(withWallsMoved(j), c);  // the rules across fields are RunConfig::validate()'s
 }
 
 void RunConfig::validate() const {

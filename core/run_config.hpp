@@ -97,6 +97,11 @@ struct RunConfig {
 /// The keys of RunConfig (config.json), its sections with their own tables (core/settings_table.hpp).
 const SettingsTable<RunConfig>& runConfigTable();
 void to_json(nlohmann::json& j, const RunConfig& c);
+/// Reads the keys `j` gives over the defaults, each checked for its type and range (the rules
+/// across keys are validate()'s), after withWallsMoved().
 void from_json(const nlohmann::json& j, RunConfig& c);
+/// A configuration written before the walls had their own object kept mu_w as box.wall_friction:
+/// `j` with it moved to walls.friction (unchanged otherwise); throws if both are given.
+nlohmann::json withWallsMoved(nlohmann::json j);
 
 }  // namespace confpack::core

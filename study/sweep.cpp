@@ -58,8 +58,13 @@ json mergedBase(const json& base) {
   return merged;
 }
 
-core::RunConfig resolveBase(const json& base, std::string_view source) {
-  json merged;
+core::RunConfig resolveBase(const json& given, std::string_view source) {
+  json merged, base;
+  try {
+    base = core::withWallsMoved(given);
+  } catch (const std::exception& e) {
+    bad(source, "base", e.what());
+  }
   core::to_json(merged, core::RunConfig{});
   checkKnownKeys(base, merged, "base", source);
   merged.merge_patch(base);
@@ -573,7 +578,11 @@ SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t m
   }
   if (doc.contains("base")) {
     if (!doc.at("base").is_object()) bad(source, "base", "expected an object (a run configuration)");
-    spec.base = doc.at("base");
+    try {  // a base written before the walls had their own object: mu_w moved to walls.friction
+      spec.base = core::withWallsMoved(doc.at("base"));
+    } catch (const std::exception& e) {
+      bad(source, "base", e.what());
+    }
   }
   resolveBase(spec.base, source);  // refuse a bad base before anything else
   if (doc.contains("biperiodic_width")) {

@@ -565,3 +565,15 @@ TEST_CASE("a run claimed by another live process is left to it, a dead holder's 
   for (const char* r : {"r0000", "r0004", "r0005"}) CHECK_FALSE(study::readClaim(study::claimsDir(dir), r));
   fs::remove_all(dir);
 }
+
+// A sweep file written before the walls had their own object sets mu_w as base.box.wall_friction.
+TEST_CASE("a sweep file's base with box.wall_friction sets walls.friction, and both given are refused") {
+  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({"name": "old", "base": {"box": {"wall_friction": 0.3}},
+    "vary": {"width": [5], "backend": "nscd"}})"));
+  const auto runs = study::expandRuns(spec);
+  REQUIRE(runs.size() == 1);
+  CHECK(runs[0].config.walls.friction == 0.3);
+  CHECK_THROWS_WITH(study::parseSweepSpec(json::parse(R"({"name": "both",
+    "base": {"box": {"wall_friction": 0.3}, "walls": {"friction": 0.3}}, "vary": {"width": [5]}})")),
+                    Catch::Contains("base: box.wall_friction: given twice"));
+}
