@@ -94,8 +94,7 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
                  "x_S, volume percentage of small grains (d_S = d_L/2)")
       ->check(realIn(0.0, 100.0, false, false, "a percentage in [0, 100]", "PERCENT"))
       ->capture_default_str();
-  sub.add_option("--wall-friction", cfg.walls.friction,
-                 "Coulomb friction mu_w of the side walls (floor frictionless)")
+  sub.add_option("--wall-friction", cfg.walls.friction, "Coulomb friction mu_w of the side walls (floor frictionless)")
       ->check(nonNegativeNumber())
       ->capture_default_str();
   std::vector<std::string> names;

@@ -1,7 +1,7 @@
-// `confpack options [config|box|walls|population|pinacoid|deposition|compaction|nscd|bullet]`: the settings each part reads, as Markdown tables
-// (key, default, unit, accepted values, meaning), printed from the descriptions that read them
-// (core/settings_table.hpp), so the listing cannot drift from the code. docs/backend-options.md
-// holds the same tables.
+// `confpack options [config|box|walls|population|pinacoid|deposition|compaction|nscd|bullet]`: the settings each part
+// reads, as Markdown tables (key, default, unit, accepted values, meaning), printed from the descriptions that read
+// them (core/settings_table.hpp), so the listing cannot drift from the code. docs/backend-options.md holds the same
+// tables.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
@@ -15,8 +15,8 @@
 #include "core/pinacoid.hpp"
 #include "core/population.hpp"
 #include "core/run_config.hpp"
-#include "core/walls.hpp"
 #include "core/settings_table.hpp"
+#include "core/walls.hpp"
 
 namespace confpack::app {
 
@@ -33,13 +33,15 @@ std::string optionsListing(const std::string& part) {
 
 void registerOptions(CLI::App& app) {
   auto part = std::make_shared<std::string>();
-  static constexpr const char* kParts[] = {"config", "box", "walls", "population", "pinacoid", "deposition",
-                                           "compaction", "nscd", "bullet"};
-  CLI::App* sub = app.add_subcommand(
-      "options", "Print the settings of the run configuration (config.json and its objects) or of a backend "
-                 "(--backend-options) as a Markdown table: key, default, unit, accepted values, meaning");
-  sub->add_option("part", *part,
-                  "config, box, walls, population, pinacoid, deposition, compaction, nscd or bullet; all of them when omitted")
+  static constexpr const char* kParts[] = {"config",     "box",        "walls", "population", "pinacoid",
+                                           "deposition", "compaction", "nscd",  "bullet"};
+  CLI::App* sub =
+      app.add_subcommand("options",
+                         "Print the settings of the run configuration (config.json and its objects) or of a backend "
+                         "(--backend-options) as a Markdown table: key, default, unit, accepted values, meaning");
+  sub->add_option(
+         "part", *part,
+         "config, box, walls, population, pinacoid, deposition, compaction, nscd or bullet; all of them when omitted")
       ->check(CLI::IsMember(std::vector<std::string>(std::begin(kParts), std::end(kParts))));
   sub->callback([part] {
     runWork("options", [&] {

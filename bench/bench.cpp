@@ -355,16 +355,18 @@ nlohmann::json benchTargets(const BenchDef& def, const nlohmann::json& cases) {
                            fmt::format("{:.0f} spheres: {}", n, restFigure(reached, wall)), met));
     }
     const nlohmann::json& k = cases["rest_exponent"]["wall"];
-    out.push_back(target("rest: time to equilibrium against n, t ~ n^k",
-                         k.is_null() ? std::string("fewer than two points at rest") : fmt::format("k = {:.2f}", k.get<double>()),
-                         std::nullopt));
+    out.push_back(
+        target("rest: time to equilibrium against n, t ~ n^k",
+               k.is_null() ? std::string("fewer than two points at rest") : fmt::format("k = {:.2f}", k.get<double>()),
+               std::nullopt));
   }
   if (cases.contains("scaling_exponent")) {
     const nlohmann::json& k = cases["scaling_exponent"]["nscd"];
     std::optional<bool> met;
     if (!k.is_null()) met = k.get<double>() <= 1.1;
-    out.push_back(target("scaling: nscd's cost per step linear in n, exponent at most 1.1",
-                         k.is_null() ? std::string("fewer than two points") : fmt::format("k = {:.2f}", k.get<double>()), met));
+    out.push_back(
+        target("scaling: nscd's cost per step linear in n, exponent at most 1.1",
+               k.is_null() ? std::string("fewer than two points") : fmt::format("k = {:.2f}", k.get<double>()), met));
   }
   return out;
 }
@@ -399,7 +401,9 @@ nlohmann::json runBench(const BenchDef& def, const std::function<void(const std:
   if (log)
     for (const nlohmann::json& t : targets)
       log(fmt::format("target {}: {} ({})", t["target"].get<std::string>(), t["figure"].get<std::string>(),
-                      t["met"].is_null() ? "not shown at this size" : t["met"].get<bool>() ? "met" : "not met"));
+                      t["met"].is_null()     ? "not shown at this size"
+                      : t["met"].get<bool>() ? "met"
+                                             : "not met"));
   return {{"machine", machineInfo()}, {"cases", cases}, {"targets", targets}};
 }
 

@@ -1,11 +1,11 @@
 #include "core/box.hpp"
 
-#include "core/settings_table.hpp"
-
 #include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+
+#include "core/settings_table.hpp"
 
 namespace confpack::core {
 
@@ -28,15 +28,20 @@ const SettingsTable<BoxDef>& boxTable() {
     t.number("length_x", &BoxDef::lengthX, Range::positive(), "d_L", "period along x")
         .number("width", &BoxDef::width, Range::positive(), "d_L", "gap W between the side walls, or period along y")
         .flag("periodic_y", &BoxDef::periodicY, "y periodic with period width (no side walls)")
-        .number("height", &BoxDef::height, Range::positive(), "d_L", "target final packing height (deposition aims for it)");
+        .number("height", &BoxDef::height, Range::positive(), "d_L",
+                "target final packing height (deposition aims for it)");
     return t;
   }();
   return table;
 }
 
-void BoxDef::validate() const { boxTable().validate(*this); }
+void BoxDef::validate() const {
+  boxTable().validate(*this);
+}
 
-void to_json(nlohmann::json& j, const BoxDef& b) { j = boxTable().write(b); }
+void to_json(nlohmann::json& j, const BoxDef& b) {
+  j = boxTable().write(b);
+}
 
 void from_json(const nlohmann::json& j, BoxDef& b) {
   b = BoxDef{};

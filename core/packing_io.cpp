@@ -1,7 +1,5 @@
 #include "core/packing_io.hpp"
 
-#include "core/settings_table.hpp"
-
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -16,6 +14,7 @@
 #include <system_error>
 
 #include "core/json_input.hpp"
+#include "core/settings_table.hpp"
 
 namespace confpack::core {
 

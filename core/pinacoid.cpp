@@ -1,13 +1,13 @@
 #include "core/pinacoid.hpp"
 
-#include "core/settings_table.hpp"
-
 #include <fmt/format.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
+
+#include "core/settings_table.hpp"
 
 namespace confpack::core {
 
@@ -30,9 +30,13 @@ const SettingsTable<PinacoidParams>& pinacoidTable() {
   return table;
 }
 
-void PinacoidParams::validate() const { pinacoidTable().validate(*this); }
+void PinacoidParams::validate() const {
+  pinacoidTable().validate(*this);
+}
 
-void to_json(nlohmann::json& j, const PinacoidParams& p) { j = pinacoidTable().write(p); }
+void to_json(nlohmann::json& j, const PinacoidParams& p) {
+  j = pinacoidTable().write(p);
+}
 
 void from_json(const nlohmann::json& j, PinacoidParams& p) {
   p = PinacoidParams{};

@@ -1,14 +1,14 @@
 #include "core/population.hpp"
 
-#include "core/pinacoid.hpp"
-#include "core/settings_table.hpp"
-
 #include <fmt/format.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+
+#include "core/pinacoid.hpp"
+#include "core/settings_table.hpp"
 
 namespace confpack::core {
 
@@ -41,7 +41,9 @@ const SettingsTable<PopulationDef>& populationTable() {
   return table;
 }
 
-void PopulationDef::validate() const { populationTable().validate(*this); }
+void PopulationDef::validate() const {
+  populationTable().validate(*this);
+}
 
 double PopulationDef::maxCircumscribedDiameter() const {
   Grain g;
@@ -59,7 +61,9 @@ double PopulationDef::meanGrainVolume(double size) const {
   return g.volume();
 }
 
-void to_json(nlohmann::json& j, const PopulationDef& p) { j = populationTable().write(p); }
+void to_json(nlohmann::json& j, const PopulationDef& p) {
+  j = populationTable().write(p);
+}
 
 void from_json(const nlohmann::json& j, PopulationDef& p) {
   p = PopulationDef{};

@@ -70,7 +70,8 @@ const SettingsTable<RunConfig>& runConfigTable() {
             "backend", "-", "\"nscd\" or \"bullet\"", "contact backend",
             [](const json& j, R& c) {
               if (!j.is_string())
-                throw std::invalid_argument(fmt::format("config.backend: must be a string (got {})", jsonExcerpt(j, 40)));
+                throw std::invalid_argument(
+                    fmt::format("config.backend: must be a string (got {})", jsonExcerpt(j, 40)));
               c.backend = j.get<std::string>();
             },
             [](const R& c) { return json(c.backend); },
@@ -80,8 +81,8 @@ const SettingsTable<RunConfig>& runConfigTable() {
             })
         .field(
             "backend_options", "-", "an object (`confpack options nscd`, `confpack options bullet`)",
-            "the backend's settings, checked by the backend",
-            [](const json& j, R& c) { c.backendOptions = j; }, [](const R& c) { return c.backendOptions; },
+            "the backend's settings, checked by the backend", [](const json& j, R& c) { c.backendOptions = j; },
+            [](const R& c) { return c.backendOptions; },
             [](const R& c) {
               if (!c.backendOptions.is_object())
                 throw std::invalid_argument(
@@ -94,7 +95,9 @@ const SettingsTable<RunConfig>& runConfigTable() {
   return table;
 }
 
-void to_json(json& j, const RunConfig& c) { j = runConfigTable().write(c); }
+void to_json(json& j, const RunConfig& c) {
+  j = runConfigTable().write(c);
+}
 
 json withWallsMoved(json j) {
   if (!j.is_object() || !j.contains("box") || !j.at("box").is_object() || !j.at("box").contains("wall_friction"))

@@ -146,12 +146,13 @@ class SettingsTable {
   template <class S>
   SettingsTable& section(const char* key, S T::*member, const SettingsTable<S>& (*table)(), const char* help,
                          std::function<bool(const T&)> appliesTo = {}) {
-    add(key, "-", fmt::format("an object (`confpack options {}`)", table().where()), help,
-               [member, table](const nlohmann::json& j, T& t) { table().readKeys(j, t.*member); },
-               [member, table](const T& t) { return table().write(t.*member); },
-               [member, table, appliesTo](const T& t) {
-                 if (!appliesTo || appliesTo(t)) table().validate(t.*member);
-               });
+    add(
+        key, "-", fmt::format("an object (`confpack options {}`)", table().where()), help,
+        [member, table](const nlohmann::json& j, T& t) { table().readKeys(j, t.*member); },
+        [member, table](const T& t) { return table().write(t.*member); },
+        [member, table, appliesTo](const T& t) {
+          if (!appliesTo || appliesTo(t)) table().validate(t.*member);
+        });
     fields_.back().nested = true;
     return *this;
   }
@@ -194,7 +195,8 @@ class SettingsTable {
   /// Throws "<where>.<key>: missing" for the first of `keys` that `j` (an object) lacks: for
   /// documents that must state a value rather than take its default.
   void require(const nlohmann::json& j, std::initializer_list<const char*> keys) const {
-    if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
+    if (!j.is_object())
+      throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
     for (const char* key : keys)
       if (!j.contains(key)) fail(where_, key, "missing");
   }

@@ -14,9 +14,13 @@ const SettingsTable<WallMaterial>& wallMaterialTable() {
   return table;
 }
 
-void WallMaterial::validate() const { wallMaterialTable().validate(*this); }
+void WallMaterial::validate() const {
+  wallMaterialTable().validate(*this);
+}
 
-void to_json(nlohmann::json& j, const WallMaterial& w) { j = wallMaterialTable().write(w); }
+void to_json(nlohmann::json& j, const WallMaterial& w) {
+  j = wallMaterialTable().write(w);
+}
 
 void from_json(const nlohmann::json& j, WallMaterial& w) {
   w = WallMaterial{};

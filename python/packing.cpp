@@ -281,8 +281,9 @@ void bindPacking(py::module_& m) {
            "wall_friction"_a = 0.0)
       .def("__len__", [](const PyPacking& p) { return p.packing.grains.size(); })
       .def_property_readonly("box", [](const PyPacking& p) { return p.packing.box; })
-      .def_property_readonly("wall_friction", [](const PyPacking& p) { return p.packing.walls.friction; },
-                             "Coulomb friction mu_w of the side walls the packing was made between")
+      .def_property_readonly(
+          "wall_friction", [](const PyPacking& p) { return p.packing.walls.friction; },
+          "Coulomb friction mu_w of the side walls the packing was made between")
       .def_property_readonly("source",
                              [](const PyPacking& p) -> py::object {
                                return p.source.empty() ? py::none() : py::object(py::str(p.source));

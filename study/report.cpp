@@ -144,7 +144,11 @@ struct ConfKey {
 
 ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
                 const std::vector<std::string>& names) {
-  ConfKey k{static_cast<int>(c.population.shape), c.population.smallFraction, c.walls.friction, {}, c.box.periodicY,
+  ConfKey k{static_cast<int>(c.population.shape),
+            c.population.smallFraction,
+            c.walls.friction,
+            {},
+            c.box.periodicY,
             c.box.width};
   for (std::size_t i = 0; i < paths.size(); ++i) {
     SettingValue v{names[i], settingText(c, paths[i]), std::nullopt};
@@ -727,17 +731,20 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
     bool pinacoidsOnly;
   };
   std::vector<Measured> measured;
-  if (fits.phi.empty() || std::none_of(fits.phi.begin(), fits.phi.end(), [](const FitRow& f) { return f.fit.has_value(); })) {
+  if (fits.phi.empty() ||
+      std::none_of(fits.phi.begin(), fits.phi.end(), [](const FitRow& f) { return f.fit.has_value(); })) {
     measured.push_back({"solid_fraction", "phi", "solid fraction of the bulk region", false});
-    measured.push_back({"coordination/Z", "Z", "coordination number of the bulk region (grain contacts per grain)", false});
+    measured.push_back(
+        {"coordination/Z", "Z", "coordination number of the bulk region (grain contacts per grain)", false});
   }
-  measured.push_back({"coordination/simple", "Z_s", "pinacoids: simple contacts per grain (vertex-face, edge-edge)", true});
+  measured.push_back(
+      {"coordination/simple", "Z_s", "pinacoids: simple contacts per grain (vertex-face, edge-edge)", true});
   measured.push_back({"coordination/double", "Z_d", "pinacoids: double contacts per grain (edge-face)", true});
   measured.push_back({"coordination/triple", "Z_t", "pinacoids: triple contacts per grain (face-face)", true});
   measured.push_back({"nematic/bulk", "S", "pinacoids: nematic order Q00^2 of the bulk region (1: aligned)", true});
   for (const Measured& m : measured) {
-    SummaryQuantity q{m.name,
-                      std::string(m.definition) + ", on the biperiodic sample (or the widest confined one)", {}};
+    SummaryQuantity q{
+        m.name, std::string(m.definition) + ", on the biperiodic sample (or the widest confined one)", {}};
     for (const SeriesKey& sk : study.seriesKeys())
       for (const std::string& b : study.backends) {
         if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;

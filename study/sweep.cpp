@@ -98,12 +98,11 @@ void checkRunCount(double runs, std::size_t maxRuns, std::string_view source, st
 
 // The named axes and the configuration paths they set: a group may not give both names of one.
 const std::vector<std::pair<std::string, std::string>>& namedAxisPaths() {
-  static const std::vector<std::pair<std::string, std::string>> m = {
-      {"width", "box.width"},
-      {"width", "box.periodic_y"},
-      {"shape", "population.shape"},
-      {"small_fraction", "population.small_fraction"},
-      {"wall_friction", "walls.friction"}};
+  static const std::vector<std::pair<std::string, std::string>> m = {{"width", "box.width"},
+                                                                     {"width", "box.periodic_y"},
+                                                                     {"shape", "population.shape"},
+                                                                     {"small_fraction", "population.small_fraction"},
+                                                                     {"wall_friction", "walls.friction"}};
   return m;
 }
 
@@ -314,9 +313,9 @@ class VariedSettings {
   // In path order, without those of the named axes (their own columns: W and biperiodic, shape,
   // x_S, mu_w, seed, backend).
   std::vector<std::string> paths() const {
-    static const std::set<std::string> named = {"box.width",         "box.periodic_y", "population.shape",
-                                                "population.small_fraction", "walls.friction", "seed",
-                                                "backend"};
+    static const std::set<std::string> named = {
+        "box.width",      "box.periodic_y", "population.shape", "population.small_fraction",
+        "walls.friction", "seed",           "backend"};
     std::vector<std::string> out;
     for (const std::string& p : varied_)
       if (!named.count(p)) out.push_back(p);
@@ -493,9 +492,9 @@ std::string settingText(const json& cfg, const std::string& path) {
 std::string SweepRun::label(const std::vector<std::string>& settings) const {
   const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
                                              : trimNumber(config.box.width);
-  std::string text = fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config),
-                                 trimNumber(config.population.smallFraction), w, trimNumber(config.walls.friction),
-                                 config.seed, config.backend);
+  std::string text =
+      fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config), trimNumber(config.population.smallFraction), w,
+                  trimNumber(config.walls.friction), config.seed, config.backend);
   if (settings.empty()) return text;
   const std::vector<std::string> names = settingNames(settings);
   json cfg;
@@ -829,9 +828,9 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
     if (taskIndex && !slice.count(r.index)) continue;
     const std::string w = r.config.box.periodicY ? fmt::format("bi{}", trimNumber(r.config.box.width))
                                                  : trimNumber(r.config.box.width);
-    out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(),
-                       familyName(r.config), trimNumber(r.config.population.smallFraction), w,
-                       trimNumber(r.config.walls.friction), r.config.seed, r.config.backend);
+    out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(), familyName(r.config),
+                       trimNumber(r.config.population.smallFraction), w, trimNumber(r.config.walls.friction),
+                       r.config.seed, r.config.backend);
     for (std::size_t i = 0; i < varied.size(); ++i) out << fmt::format(" {:<{}}", cells[k][i], widths[i]);
     if (!dir.empty()) out << ' ' << toString(runStatus(dir / "runs" / r.name));
     out << '\n';

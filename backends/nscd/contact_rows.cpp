@@ -47,8 +47,7 @@ std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va) {
 
 void ContactRows::build(const std::vector<ContactGeometry>& contacts, const std::vector<Vec3>& positions,
                         const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box,
-                        const core::WallMaterial& walls, double dt,
-                        const NscdSettings& settings) {
+                        const core::WallMaterial& walls, double dt, const NscdSettings& settings) {
   normalRows_.clear();
   frictionRows_.clear();
   rowRef_.clear();

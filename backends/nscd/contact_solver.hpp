@@ -50,8 +50,7 @@ class ContactSolver {
   /// Builds the rows of every contact point for settings.solver (ContactRows::build).
   void prepare(const std::vector<ContactGeometry>& contacts, const std::vector<core::Vec3>& positions,
                const std::vector<BodyInverseMass>& bodies, const core::BoxDef& box, const core::WallMaterial& walls,
-               double dt,
-               const NscdSettings& settings) {
+               double dt, const NscdSettings& settings) {
     rows_.build(contacts, positions, bodies, box, walls, dt, settings);
     bodies_ = &bodies;
   }

@@ -431,7 +431,8 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
 // changes. Near jamming the free block's softest modes extend over the whole pile; a coarse
 // correction or a deflation of them was tried offline and not built (docs/performance.md, "The
 // preconditioner", has those measurements).
-int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings, int maxThreads) {
+int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings,
+                       int maxThreads) {
   residual_ = 0.0;
   if (rows.rowCount() == 0) return 0;
   const std::span<const NormalRow> normalRows = rows.normalRows();

@@ -16,7 +16,8 @@ TEST_CASE("settings table: docs/backend-options.md lists every key as confpack o
   REQUIRE(in);
   std::stringstream doc;
   doc << in.rdbuf();
-  for (const char* part : {"config", "box", "walls", "population", "pinacoid", "deposition", "compaction", "nscd", "bullet"}) {
+  for (const char* part :
+       {"config", "box", "walls", "population", "pinacoid", "deposition", "compaction", "nscd", "bullet"}) {
     std::istringstream rows(app::optionsListing(part));
     std::string row;
     while (std::getline(rows, row)) {

@@ -161,8 +161,9 @@ TEST_CASE("a config.json with box.wall_friction reads it as walls.friction, and 
   CHECK(c.box.width == 5.0);
   CHECK(json(c)["box"].contains("wall_friction") == false);
   CHECK(json(c)["walls"]["friction"] == 0.4);
-  CHECK_THROWS_WITH(json::parse(R"({"box": {"wall_friction": 0.4}, "walls": {"friction": 0.4}})").get<core::RunConfig>(),
-                    Catch::StartsWith("box.wall_friction: given twice"));
+  CHECK_THROWS_WITH(
+      json::parse(R"({"box": {"wall_friction": 0.4}, "walls": {"friction": 0.4}})").get<core::RunConfig>(),
+      Catch::StartsWith("box.wall_friction: given twice"));
   CHECK_THROWS_WITH(json::parse(R"({"box": {"wall_friction": -1}})").get<core::RunConfig>(),
                     "walls.friction: must be >= 0 (got -1)");
 }

@@ -616,8 +616,8 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
                    const study::RunProgressFn&) {
     const double alpha = cfg.population.pinacoid.alphaDeg;
     const json r = {{"solid_fraction", 0.5 + alpha / 1000.0},
-                    {"coordination", {{"Z", 8.0 + alpha / 100.0}, {"simple", 5.0}, {"double", 2.0 + alpha / 100.0},
-                                      {"triple", 1.0}}},
+                    {"coordination",
+                     {{"Z", 8.0 + alpha / 100.0}, {"simple", 5.0}, {"double", 2.0 + alpha / 100.0}, {"triple", 1.0}}},
                     {"nematic", {{"bulk", alpha / 100.0}}},
                     {"equilibrium", {{"reached", true}}}};
     std::ofstream(runDir / "result.json") << r.dump();
@@ -639,12 +639,13 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
   CHECK(at60 < at75);
   // Without confined widths there is no phi_bulk to fit: the summary gives the biperiodic sample's
   // phi and Z, and the pinacoids' contact types and nematic order, each with its definition.
-  CHECK(md.find("| family | backend | runs at equilibrium / total | phi | Z | Z_s | Z_d | Z_t | S |\n",
-                summaryAt) != std::string::npos);
+  CHECK(md.find("| family | backend | runs at equilibrium / total | phi | Z | Z_s | Z_d | Z_t | S |\n", summaryAt) !=
+        std::string::npos);
   CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | 0.575 ± 0 | 8.75 ± 0 | 5 ± 0 | "
                 "2.75 ± 0 | 1 ± 0 | 0.75 ± 0 |",
                 summaryAt) != std::string::npos);
-  CHECK(md.find("- Z_t: pinacoids: triple contacts per grain (face-face), on the biperiodic sample") != std::string::npos);
+  CHECK(md.find("- Z_t: pinacoids: triple contacts per grain (face-face), on the biperiodic sample") !=
+        std::string::npos);
   // The runs say their value.
   CHECK(md.find("| MPP xS=0 W=bi20 mu=0 s1 nscd alpha_deg=75 | done |") != std::string::npos);
   // tables/: a column for the setting, by its path, a row per value.

@@ -568,7 +568,8 @@ TEST_CASE("a run claimed by another live process is left to it, a dead holder's 
 
 // A sweep file written before the walls had their own object sets mu_w as base.box.wall_friction.
 TEST_CASE("a sweep file's base with box.wall_friction sets walls.friction, and both given are refused") {
-  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({"name": "old", "base": {"box": {"wall_friction": 0.3}},
+  const study::SweepSpec spec =
+      study::parseSweepSpec(json::parse(R"({"name": "old", "base": {"box": {"wall_friction": 0.3}},
     "vary": {"width": [5], "backend": "nscd"}})"));
   const auto runs = study::expandRuns(spec);
   REQUIRE(runs.size() == 1);

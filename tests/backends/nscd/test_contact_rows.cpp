@@ -47,9 +47,9 @@ TEST_CASE("contact rows: a sphere on the floor has W_nn = 1/m, no lever arm and 
   CHECK(rows.frictionRows().empty());
   const nscd::NormalRow& row = rows.normalRows()[0];
   CHECK(row.invW == Approx(std::numbers::pi / 6.0).epsilon(1e-14));  // 1 / W_nn = m
-  CHECK(row.b == 1);                                                  // the static body
-  CHECK(row.axn.norm() < 1e-15);                                      // the normal passes through the centre
-  CHECK(row.bias == Approx(2e-3 / kDt).epsilon(1e-14));               // an open gap closes in one step at most
+  CHECK(row.b == 1);                                                 // the static body
+  CHECK(row.axn.norm() < 1e-15);                                     // the normal passes through the centre
+  CHECK(row.bias == Approx(2e-3 / kDt).epsilon(1e-14));              // an open gap closes in one step at most
   CHECK(rows.turnsNoBody());
 }
 
