@@ -419,18 +419,12 @@ Packing packingFromJson(const json& j, std::string_view source) {
   const json& box = top.at("box");
   try {  // the box's own keys and ranges (boxTable); a packing must state its size
     boxTable().require(box, {"length_x", "width"});
-    json geometry = box;
-    if (box.contains("wall_friction")) {  // the walls' material, kept in the file's box object
-      geometry.erase("wall_friction");
-      try {
-        wallMaterialTable().read(json{{"friction", box.at("wall_friction")}}, p.walls);
-      } catch (const std::invalid_argument& e) {  // "walls.friction: ..." named as the file has it
-        const std::string what = e.what(), table = "walls.friction";
-        throw std::invalid_argument("box.wall_friction" +
-                                    (what.rfind(table, 0) == 0 ? what.substr(table.size()) : ": " + what));
-      }
-    }
-    boxTable().read(geometry, p.box);
+    for (const auto& [key, value] : box.items())
+      if (key == "wall_friction")  // the walls' material, kept in the file's box object
+        readLegacyWallFriction(value, p.walls);
+      else
+        boxTable().readKey(key, value, p.box);
+    boxTable().validate(p.box);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
   }

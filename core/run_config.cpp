@@ -99,21 +99,47 @@ void to_json(json& j, const RunConfig& c) {
   j = runConfigTable().write(c);
 }
 
+namespace {
+
+bool hasLegacyWallFriction(const json& j) {
+  return j.is_object() && j.contains("box") && j.at("box").is_object() && j.at("box").contains("wall_friction");
+}
+
+void refuseWallFrictionTwice(const json& j) {
+  if (j.contains("walls") && j.at("walls").is_object() && j.at("walls").contains("friction"))
+    throw std::invalid_argument("box.wall_friction: given twice, as walls.friction too (keep walls.friction)");
+}
+
+}  // namespace
+
 json withWallsMoved(json j) {
-  if (!j.is_object() || !j.contains("box") || !j.at("box").is_object() || !j.at("box").contains("wall_friction"))
-    return j;
+  if (!hasLegacyWallFriction(j)) return j;
+  refuseWallFrictionTwice(j);
   json& walls = j["walls"];
   if (walls.is_null()) walls = json::object();
-  if (walls.is_object() && walls.contains("friction"))
-    throw std::invalid_argument("box.wall_friction: given twice, as walls.friction too (keep walls.friction)");
   if (walls.is_object()) walls["friction"] = j["box"]["wall_friction"];
   j["box"].erase("wall_friction");
   return j;
 }
 
+// The rules across fields are RunConfig::validate()'s. Key by key, never copying `j`: a value may
+// be nested deeper than a recursive copy's stack allows.
 void from_json(const json& j, RunConfig& c) {
   c = RunConfig{};
-  runConfigTable().readKeys(withWallsMoved(j), c);  // the rules across fields are RunConfig::validate()'s
+  const SettingsTable<RunConfig>& table = runConfigTable();
+  if (!hasLegacyWallFriction(j)) return table.readKeys(j, c);
+  refuseWallFrictionTwice(j);  // mu_w as written before the walls had their own object
+  for (const auto& [key, value] : j.items()) {
+    if (key != "box") {
+      table.readKey(key, value, c);
+      continue;
+    }
+    for (const auto& [k, v] : value.items())
+      if (k == "wall_friction")
+        readLegacyWallFriction(v, c.walls);
+      else
+        boxTable().readKey(k, v, c.box);
+  }
 }
 
 void RunConfig::validate() const {

@@ -98,10 +98,11 @@ struct RunConfig {
 const SettingsTable<RunConfig>& runConfigTable();
 void to_json(nlohmann::json& j, const RunConfig& c);
 /// Reads the keys `j` gives over the defaults, each checked for its type and range (the rules
-/// across keys are validate()'s), after withWallsMoved().
+/// across keys are validate()'s); a box.wall_friction is read as walls.friction (withWallsMoved).
 void from_json(const nlohmann::json& j, RunConfig& c);
 /// A configuration written before the walls had their own object kept mu_w as box.wall_friction:
-/// `j` with it moved to walls.friction (unchanged otherwise); throws if both are given.
+/// `j` with it moved to walls.friction (unchanged otherwise); throws if both are given. For a
+/// document kept as JSON (a sweep file's base); from_json reads the same without copying.
 nlohmann::json withWallsMoved(nlohmann::json j);
 
 }  // namespace confpack::core

@@ -180,23 +180,28 @@ class SettingsTable {
   /// rest, the rules across fields included, to validate(): a document read in parts (a sweep
   /// setting one key at a time) may pass through states its rules refuse.
   void readKeys(const nlohmann::json& j, T& t) const {
-    if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
-    for (const auto& [key, value] : j.items()) {
-      const Field* f = find(key);
-      if (!f) {
-        std::string known;
-        for (const Field& g : fields_) known += fmt::format("{}{}", known.empty() ? "" : ", ", g.key);
-        throw std::invalid_argument(fmt::format("{}.{}: unknown key (known: {})", where_, textExcerpt(key, 40), known));
-      }
-      f->read(value, t);
-      if (!f->nested) f->validate(t);
+    requireObject(j);
+    for (const auto& [key, value] : j.items()) readKey(key, value, t);
+  }
+  /// readKeys() for one key of an object, for a reader that handles some keys itself. The JSON
+  /// is never copied: a value may be nested deeper than a recursive copy's stack allows.
+  void readKey(const std::string& key, const nlohmann::json& value, T& t) const {
+    const Field* f = find(key);
+    if (!f) {
+      std::string known;
+      for (const Field& g : fields_) known += fmt::format("{}{}", known.empty() ? "" : ", ", g.key);
+      throw std::invalid_argument(fmt::format("{}.{}: unknown key (known: {})", where_, textExcerpt(key, 40), known));
     }
+    f->read(value, t);
+    if (!f->nested) f->validate(t);
+  }
+  void requireObject(const nlohmann::json& j) const {
+    if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
   }
   /// Throws "<where>.<key>: missing" for the first of `keys` that `j` (an object) lacks: for
   /// documents that must state a value rather than take its default.
   void require(const nlohmann::json& j, std::initializer_list<const char*> keys) const {
-    if (!j.is_object())
-      throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
+    requireObject(j);
     for (const char* key : keys)
       if (!j.contains(key)) fail(where_, key, "missing");
   }

@@ -18,6 +18,16 @@ void WallMaterial::validate() const {
   wallMaterialTable().validate(*this);
 }
 
+void readLegacyWallFriction(const nlohmann::json& value, WallMaterial& walls) {
+  try {
+    wallMaterialTable().readKey("friction", value, walls);
+  } catch (const std::invalid_argument& e) {  // "walls.friction: ..." as the document spells it
+    const std::string what = e.what(), key = "walls.friction";
+    throw std::invalid_argument("box.wall_friction" +
+                                (what.rfind(key, 0) == 0 ? what.substr(key.size()) : ": " + what));
+  }
+}
+
 void to_json(nlohmann::json& j, const WallMaterial& w) {
   j = wallMaterialTable().write(w);
 }

@@ -21,6 +21,9 @@ template <class T>
 class SettingsTable;
 /// The keys of WallMaterial (config.json's "walls"; core/settings_table.hpp).
 const SettingsTable<WallMaterial>& wallMaterialTable();
+/// Reads `value`, given as box.wall_friction (the packing file's spelling, and config.json's
+/// before the walls had their own object), into walls.friction; errors name box.wall_friction.
+void readLegacyWallFriction(const nlohmann::json& value, WallMaterial& walls);
 void to_json(nlohmann::json& j, const WallMaterial& w);
 void from_json(const nlohmann::json& j, WallMaterial& w);
 

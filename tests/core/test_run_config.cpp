@@ -165,5 +165,12 @@ TEST_CASE("a config.json with box.wall_friction reads it as walls.friction, and 
       json::parse(R"({"box": {"wall_friction": 0.4}, "walls": {"friction": 0.4}})").get<core::RunConfig>(),
       Catch::StartsWith("box.wall_friction: given twice"));
   CHECK_THROWS_WITH(json::parse(R"({"box": {"wall_friction": -1}})").get<core::RunConfig>(),
-                    "walls.friction: must be >= 0 (got -1)");
+                    "box.wall_friction: must be >= 0 (got -1)");
+  // Read in place, never copied: a value nested 100,000 deep (a recursive copy overflowed the
+  // stack under AddressSanitizer) is refused in a short message.
+  json deep = 1;
+  for (int i = 0; i < 100000; ++i) deep = json::array({std::move(deep)});
+  json legacy = json::parse(R"({"box": {"wall_friction": 0.1}})");
+  legacy["compaction"] = std::move(deep);
+  CHECK_THROWS_WITH(legacy.get<core::RunConfig>(), Catch::StartsWith("compaction: must be a JSON object (got array)"));
 }
