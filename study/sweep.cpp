@@ -704,18 +704,32 @@ void prepareSweepDir(const fs::path& dir, const SweepSpec& spec, const std::vect
   const fs::path tablePath = dir / kSweepTable;
   if (fs::exists(tablePath)) {
     const json existing = core::readJsonFile(tablePath, "sweep table");
-    // Each stored configuration as the reader sees it, so that a table written by an earlier
-    // version in another spelling (mu_w as box.wall_friction) still resumes.
-    const auto asRead = [](json runs) {
-      if (!runs.is_array()) return runs;
-      for (json& r : runs)
-        if (r.is_object() && r.contains("config")) try {
-            r["config"] = json(r["config"].get<core::RunConfig>());
-          } catch (const std::exception&) {  // left as written: it differs, and is refused below
-          }
-      return runs;
+    // Run by run, each stored configuration as the reader reads it, so that a table written by an
+    // earlier version in another spelling (mu_w as box.wall_friction) still resumes; nothing of
+    // the stored document is copied (a hand-edited value may be nested too deep for that).
+    const auto sameRun = [](const json& stored, const json& expected) {
+      if (!stored.is_object() || stored.size() != expected.size()) return false;
+      for (const auto& [key, value] : expected.items()) {
+        if (!stored.contains(key)) return false;
+        if (key != "config") {
+          if (stored.at(key) != value) return false;
+          continue;
+        }
+        try {
+          if (json(stored.at(key).get<core::RunConfig>()) != value) return false;
+        } catch (const std::exception&) {
+          return false;
+        }
+      }
+      return true;
     };
-    if (!existing.contains("runs") || asRead(existing.at("runs")) != table)
+    const auto sameTable = [&](const json& stored) {
+      if (!stored.is_array() || stored.size() != table.size()) return false;
+      for (std::size_t i = 0; i < table.size(); ++i)
+        if (!sameRun(stored[i], table[i])) return false;
+      return true;
+    };
+    if (!existing.contains("runs") || !sameTable(existing.at("runs")))
       throw std::invalid_argument(fmt::format(
           "{}: holds a different sweep (its run table differs from this sweep file's); resume it with the "
           "sweep file that made it, or choose a new output folder",
