@@ -20,6 +20,13 @@ namespace confpack::study {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+namespace {
+
+/// Standard error of a replica mean, std / sqrt(n); 0 below two replicas.
+double standardError(const ReplicaStat& st) { return st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0; }
+
+}  // namespace
+
 ReplicaStat replicaStat(const std::vector<double>& values) {
   ReplicaStat s;
   s.n = values.size();
@@ -324,6 +331,20 @@ class StudyView {
     return replicaStat(v);
   }
 
+  // The sample of series `sk` that a per-family quantity is read from: among the configurations
+  // with a value of `key` for `backend`, the widest confined one, or with `biperiodicFirst` the
+  // biperiodic one when there is one; null when none has a value.
+  const ConfKey* sampleOf(const SeriesKey& sk, const std::string& backend, const std::string& key,
+                          bool biperiodicFirst) const {
+    const ConfKey* sample = nullptr;
+    for (const auto& [k, _] : groups) {
+      if (seriesOf(k) != sk || (k.periodic && !biperiodicFirst) || statOf(k, backend, key).n == 0) continue;
+      if (!sample || (k.periodic && !sample->periodic) || (k.periodic == sample->periodic && k.width > sample->width))
+        sample = &k;
+    }
+    return sample;
+  }
+
   // A key that is null in every run (nematic order of spheres) does not apply to this study.
   bool applies(const std::string& key) const {
     for (const RunRecord& r : records) {
@@ -454,7 +475,7 @@ std::vector<FitRow> confinementFits(const StudyView& study, const std::string& k
         v.push_back(st.mean);
         // The replicas' standard error of the mean weighs each width; with a single replica
         // (or identical values) there is none and the fit is unweighted.
-        const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+        const double se = standardError(st);
         sigma.push_back(se);
         weighted = weighted && se > 0.0;
         row.points.push_back({1.0 / k.width, st.mean, se});
@@ -588,14 +609,10 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
     std::vector<double> cs, ls, sig;
     Series cSeries{b, static_cast<int>(bi) + 1, bi > 0, false, {}};
     for (const SeriesKey& sk : study.seriesKeys()) {
-      const ConfKey* widest = nullptr;
-      for (const auto& [k, __] : study.groups)
-        if (seriesOf(k) == sk && !k.periodic && study.statOf(k, b, "profile_fit/lambda_L").n > 0 &&
-            (!widest || k.width > widest->width))
-          widest = &k;
+      const ConfKey* widest = study.sampleOf(sk, b, "profile_fit/lambda_L", false);
       if (!widest) continue;
       const ReplicaStat st = study.statOf(*widest, b, "profile_fit/lambda_L");
-      const double err = st.n >= 2 ? st.std / std::sqrt(double(st.n)) : 0.0;
+      const double err = standardError(st);
       auto& ser = bySeries[SeriesKey{sk.shape, 0.0, sk.mu, sk.settings}];
       if (ser.name.empty())
         ser = Series{fmt::format("{} mu_w={}{} {}", sk.shape == 0 ? "spheres" : "pinacoids", num(sk.mu),
@@ -710,14 +727,10 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
       {}};
   for (const SeriesKey& sk : study.seriesKeys())
     for (const std::string& b : study.backends) {
-      const ConfKey* widest = nullptr;
-      for (const auto& [k, _] : study.groups)
-        if (seriesOf(k) == sk && !k.periodic && study.statOf(k, b, lambdaKey).n > 0 &&
-            (!widest || k.width > widest->width))
-          widest = &k;
+      const ConfKey* widest = study.sampleOf(sk, b, lambdaKey, false);
       if (!widest) continue;
       const ReplicaStat st = study.statOf(*widest, b, lambdaKey);
-      const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+      const double se = standardError(st);
       lambda.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
     }
   if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
@@ -748,16 +761,10 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
     for (const SeriesKey& sk : study.seriesKeys())
       for (const std::string& b : study.backends) {
         if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;
-        const ConfKey* sample = nullptr;
-        for (const auto& [k, _] : study.groups) {
-          if (seriesOf(k) != sk || study.statOf(k, b, m.key).n == 0) continue;
-          const bool better = !sample || (k.periodic && !sample->periodic) ||
-                              (k.periodic == sample->periodic && k.width > sample->width);
-          if (better) sample = &k;
-        }
+        const ConfKey* sample = study.sampleOf(sk, b, m.key, true);
         if (!sample) continue;
         const ReplicaStat st = study.statOf(*sample, b, m.key);
-        const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+        const double se = standardError(st);
         q.values[{sk, b}] = {st.mean, se, fmt::format("{:.4g} ± {:.2g}", st.mean, se)};
       }
     if (!q.values.empty()) out.quantities.push_back(std::move(q));
@@ -786,7 +793,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
       }
       if (v.empty()) continue;
       const ReplicaStat st = replicaStat(v);
-      const double se = st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0;
+      const double se = standardError(st);
       interpenetration.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
     }
   if (!interpenetration.values.empty()) out.quantities.push_back(std::move(interpenetration));
@@ -990,7 +997,7 @@ void addSettingSections(Document& doc, const StudyView& study, FigureWriter& fig
             line = Series{fmt::format("{} W={} {}", seriesText(seriesOf(rest)), widthText(rest), study.backends[bi]),
                           colors.at(rest), bi > 0, true, {}};
           line.points.push_back(
-              {*k.settings[i].number, st.mean, st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0});
+              {*k.settings[i].number, st.mean, standardError(st)});
         }
       }
       for (auto& [_, line] : lines) p.series.push_back(std::move(line));
