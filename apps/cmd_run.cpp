@@ -45,6 +45,7 @@ struct RunState {
   std::string from;            ///< --from PACKING: start from its grains instead of a deposit
   std::string configFile;      ///< --config FILE: the configuration instead of the flags
   bool allowImplausible = false;  ///< --allow-implausible: take an implausible --from packing
+  study::Checkpointing checkpointing;  ///< --checkpoint FILE, --checkpoint-every SECONDS
   CLI::App* sub = nullptr;
 };
 
@@ -54,8 +55,9 @@ constexpr const char* kGivenByPacking[] = {"--length-x", "--width", "--periodic-
                                            "--pinacoid-alpha"};
 
 /// Flags that --config may go with: they set nothing the configuration holds.
-constexpr const char* kBesideConfig[] = {"--help", "--config",           "--out", "--quiet", "--verbose",
-                                         "--from", "--allow-implausible"};
+constexpr const char* kBesideConfig[] = {"--help",       "--config",           "--out",
+                                         "--quiet",      "--verbose",          "--from",
+                                         "--checkpoint", "--checkpoint-every", "--allow-implausible"};
 
 /// The configuration of `run --config FILE` (config.json of a run, or part of one: missing keys
 /// take their defaults), read by the RunConfig reader. The file holds the whole configuration: a
@@ -124,6 +126,9 @@ void runRun(RunState& st) {
     // Here, not when the backend is built: an unknown key is bad input (exit 2), as bad JSON is.
     backends::checkBackendOptions(cfg.backend, cfg.backendOptions);
     checkOutputTarget(st.opts.out);
+    const std::filesystem::path& file = st.checkpointing.file;
+    if (!file.empty() && std::filesystem::is_directory(file))
+      throw std::invalid_argument(fmt::format("--checkpoint {}: is a folder; give the file to write", file.string()));
   });
   runWork("run", [&] {
     applyThreads(cfg.threads);
@@ -132,7 +137,7 @@ void runRun(RunState& st) {
     WorkStep step("compacting, analysing and writing the run");
     const nlohmann::json result = study::runAndWrite(
         cfg, output.dir(), [&](double fraction, const std::string& status) { progress.update(fraction, status); },
-        start ? &*start : nullptr);
+        start ? &*start : nullptr, st.checkpointing);
     progress.done(result["equilibrium"]["reached"].get<bool>() ? "equilibrium reached" : "time limit reached");
     step.next("writing config.json");
     writeJson(output.dir() / "config.json", resolvedConfig(cfg, result));
@@ -198,6 +203,17 @@ void registerRun(CLI::App& app) {
                   "Take the whole configuration from this file, e.g. DIR/config.json of an earlier run to rerun it "
                   "(missing keys take their defaults; goes with --out, --quiet, --verbose and --from only)")
       ->type_name("FILE");
+  sub->add_option("--checkpoint", st->checkpointing.file,
+                  "Save the run's state in FILE as it goes and resume from FILE when it holds this run's state: a "
+                  "run stopped by a time limit, SIGTERM or a dead machine goes on where it stood (docs/model.md, "
+                  "\"Checkpoints\"); removed when the run is done")
+      ->type_name("FILE");
+  sub->add_option("--checkpoint-every", st->checkpointing.everySeconds,
+                  "With --checkpoint: save at the first equilibrium check after this many seconds of wall time "
+                  "(and when SIGINT or SIGTERM stops the run)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str()
+      ->type_name("SECONDS");
   sub->add_option("--backend-options", st->backendOptions,
                   "Backend settings as JSON, e.g. '{\"tolerance\": 1e-5}' (see the README for the keys)");
   sub->add_option("--compaction-options", st->compactionOptions,

@@ -31,6 +31,7 @@ struct SweepState {
   std::filesystem::path out;
   int jobs = 1;
   int threads = 0;
+  double checkpointEvery = study::Checkpointing{}.everySeconds;  ///< --checkpoint-every
   std::size_t taskIndex = 0;
   std::size_t taskCount = 1;
   bool list = false;
@@ -170,7 +171,8 @@ void runSweepCommand(const SweepState& st) {
     opt.runs = only;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
-    summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads), study::pipelineDepositor());
+    summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads, st.checkpointEvery),
+                              study::pipelineDepositor());
   });
   if (summary.failed > 0) {
     fmt::print(stderr, "confpack sweep: error: {} run(s) failed (see runs/*/failed.json); run the same command again to retry them\n",
@@ -199,6 +201,13 @@ void registerSweep(CLI::App& app) {
   sub->add_option("--out", st->out, "Sweep folder (default: the sweep file's name without extension)");
   auto* jobs = sub->add_option("--jobs,-j", st->jobs, "Runs at the same time")->check(CLI::Range(1, 4096));
   sub->add_option("--threads", st->threads, "Threads per run (0: from the sweep file)")->check(CLI::Range(0, 4096));
+  sub->add_option("--checkpoint-every", st->checkpointEvery,
+                  "Each run saves its state in SWEEPDIR/checkpoints/ at the first equilibrium check after this many "
+                  "seconds of wall time and when SIGINT or SIGTERM stops it; the next invocation resumes it there "
+                  "(docs/model.md, \"Checkpoints\")")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str()
+      ->type_name("SECONDS");
   auto* taskIndex =
       sub->add_option("--task-index", st->taskIndex, "This task's slice, 0-based (e.g. $SLURM_ARRAY_TASK_ID)");
   auto* taskCount =

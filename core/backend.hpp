@@ -124,6 +124,25 @@ class ContactBackend {
   /// of a step (velocities dq / h, forces = impulse / h). Only backends with
   /// hasQuasiStaticStep() implement it; the others throw std::logic_error.
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);
+
+  /// The state after the last step, for a run's checkpoint (docs/model.md, "Checkpoints"): every
+  /// grain's pose and velocity (BodyStatesJson), and whatever else the next step reads (nscd: the
+  /// warm-start impulses and the finisher's metric weights). Doubles are written with 17
+  /// significant digits, so they read back to the same bits.
+  virtual nlohmann::json saveState() const;
+  /// Takes back a state saveState() wrote, on a backend built from the same SystemDef with the
+  /// grains at the saved poses. Throws std::invalid_argument when the state does not fit.
+  /// The steps that follow are the same bits as without the interruption when exactRestore().
+  virtual void restoreState(const nlohmann::json& state) = 0;
+  /// Whether restoreState() gives back everything a step reads (nscd: yes; Bullet: no, its
+  /// contact manifolds and their warm-start impulses are rebuilt from the poses).
+  virtual bool exactRestore() const { return false; }
 };
+
+/// Poses and velocities as JSON, one array [x y z qw qx qy qz vx vy vz wx wy wz] per grain.
+nlohmann::json bodyStatesToJson(const std::vector<BodyState>& states);
+/// The reverse of bodyStatesToJson; throws std::invalid_argument unless `j` holds exactly `count`
+/// such arrays of finite numbers.
+std::vector<BodyState> bodyStatesFromJson(const nlohmann::json& j, std::size_t count);
 
 }  // namespace confpack::core

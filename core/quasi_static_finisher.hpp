@@ -36,6 +36,11 @@ class QuasiStaticFinisher {
   double lastStepLength() const { return lastStep_; }      ///< h of the last step [t0]
   const QuasiStaticMove& lastMove() const { return lastMove_; }
 
+  /// The finisher's counters and next step, for a run's checkpoint (docs/model.md, "Checkpoints").
+  nlohmann::json saveState() const;
+  /// Takes back what saveState() wrote; throws std::invalid_argument on anything else.
+  void restoreState(const nlohmann::json& state);
+
  private:
   double trustRadius_ = 0.0;      ///< [d_L]
   double settleTolerance_ = 0.0;  ///< [d_L]

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <ctime>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "analysis/equilibrium.hpp"
@@ -104,20 +106,45 @@ core::Deposit depositFromPacking(const core::Packing& packing, const std::filesy
 }
 
 CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit, const std::filesystem::path& vtkDir,
-                          const RunProgressFn& progress) {
+                          const RunProgressFn& progress, const Checkpointing& checkpointing) {
   const auto start = Clock::now();
+  const core::CompactionDef& def = cfg.compaction;
+  // A checkpoint of this run, if there is one: the backend is then built at its poses.
+  const nlohmann::json identity = checkpointing.file.empty() ? nlohmann::json() : checkpointIdentity(cfg, deposit);
+  std::string ignoredWhy;
+  std::optional<LoadedCheckpoint> resumed;
+  if (!checkpointing.file.empty()) resumed = readCheckpoint(checkpointing.file, identity, ignoredWhy);
   core::SystemDef system;
   system.box = cfg.box;
   system.walls = cfg.walls;
   system.grains = deposit.grains;
   system.threads = cfg.threads;
-  auto backend = backends::makeBackend(cfg.backend, system,
-                                       cfg.backendOptions.is_null() ? nlohmann::json::object() : cfg.backendOptions);
-  const core::CompactionDef& def = cfg.compaction;
+  const auto makeBackend = [&] {
+    return backends::makeBackend(cfg.backend, system,
+                                 cfg.backendOptions.is_null() ? nlohmann::json::object() : cfg.backendOptions);
+  };
+  std::unique_ptr<core::ContactBackend> backend;
+  if (resumed) {
+    try {
+      const std::vector<core::BodyState> saved =
+          core::bodyStatesFromJson(resumed->backend.value("grains", nlohmann::json()), deposit.grains.size());
+      for (std::size_t i = 0; i < saved.size(); ++i) {
+        system.grains[i].position = saved[i].position;
+        system.grains[i].orientation = saved[i].orientation;
+      }
+      backend = makeBackend();
+      backend->restoreState(resumed->backend);
+    } catch (const std::exception& e) {
+      ignoredWhy = fmt::format("its state does not fit ({})", e.what());
+      resumed.reset();
+      backend.reset();
+      system.grains = deposit.grains;
+    }
+  }
+  if (!backend) backend = makeBackend();
 
   CompactionOutcome out;
   out.dt = def.dt > 0.0 ? def.dt : defaultTimeStep(cfg, deposit);
-  out.dtLargest = out.dt;
   const bool adaptive = def.adaptiveDt;
   // Bullet has no finisher: its runs stay dynamic, and result.json says which protocol ran.
   const bool finisher = def.protocol == core::Protocol::QuasiStatic && backend->hasQuasiStaticStep();
@@ -134,8 +161,43 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                                             timeLimit, out.dt));
   const long maxSteps = static_cast<long>(stepsToLimit);
   const AdaptiveTimeStep adaptiveStep(deposit.grains, system.gravity.norm(), out.dt);
-  double simTime = 0.0, lastCheckTime = 0.0;
-  double dt = out.dt;
+  // Where the compaction stands; a resumed run takes it over from its checkpoint.
+  CompactionCounters c;
+  c.dt = out.dt;
+  c.dtLargest = out.dt;
+  // The finisher's first step is the last dynamic one; it is made when the fall ends.
+  std::optional<core::QuasiStaticFinisher> finish;
+  const auto makeFinisher = [&] { finish.emplace(def, core::smallestSize(deposit.grains), c.dt); };
+
+  if (resumed) {
+    c = resumed->counters;
+    ++c.resumes;
+    if (c.finisherStage) {
+      makeFinisher();
+      finish->restoreState(resumed->finisher);
+    }
+  }
+  const auto elapsed = [&] { return c.elapsedSeconds + secondsSince(start); };
+  auto lastSave = Clock::now();
+  const auto save = [&] {
+    CompactionCounters now = c;
+    now.elapsedSeconds = elapsed();
+    writeCheckpoint(checkpointing.file, identity, now, backend->saveState(),
+                    finish ? finish->saveState() : nlohmann::json());
+    lastSave = Clock::now();
+  };
+  // At the top of a step: a stop signal saves the state before the run gives up, and so does the
+  // first check after every checkpointing.everySeconds.
+  const auto stopIfAsked = [&](const std::string& where) {
+    if (core::stopSignal() == 0) return;
+    if (checkpointing.file.empty()) throw core::Interrupted(core::stopSignal(), where);
+    save();
+    throw core::Interrupted(core::stopSignal(), fmt::format("{}; its state is saved in {}; the same command resumes it",
+                                                            where, checkpointing.file.string()));
+  };
+  const auto saveIfDue = [&] {
+    if (!checkpointing.file.empty() && secondsSince(lastSave) >= checkpointing.everySeconds) save();
+  };
 
   std::optional<core::VtkSeries> frames;
   if (!vtkDir.empty()) {
@@ -144,26 +206,20 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     frames->addFrame(0.0, initial);
   }
 
-  core::StepProfile totals;
-  long steps = 0;
-  long totalIterations = 0;
-  double rowUpdates = 0.0;  // contact rows x sweeps, for contact updates per second
   analysis::EquilibriumReport eq;
-  bool haveEq = false;
-  double stepSeconds = 0.0;  // wall time inside the backend's steps, without checks and frames
-  double stepCpuSeconds = 0.0;  // the same in CPU time
+  bool haveEq = resumed.has_value();  // a checkpoint is written after a check
   // One step of either stage: time it and add its profile to the totals.
   auto timed = [&](auto&& stepFn) {
     const Clock::time_point stepStart = Clock::now();
     const double cpuStart = processCpuSeconds();
     stepFn();
-    stepSeconds += secondsSince(stepStart);
-    stepCpuSeconds += processCpuSeconds() - cpuStart;
-    ++steps;
+    c.stepSeconds += secondsSince(stepStart);
+    c.stepCpuSeconds += processCpuSeconds() - cpuStart;
+    ++c.steps;
     const core::StepProfile& prof = backend->profile();
-    for (std::size_t k = 0; k < totals.seconds.size(); ++k) totals.seconds[k] += prof.seconds[k];
-    totalIterations += prof.iterations;
-    rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
+    for (std::size_t k = 0; k < c.phaseSeconds.size(); ++k) c.phaseSeconds[k] += prof.seconds[k];
+    c.iterations += prof.iterations;
+    c.rowUpdates += static_cast<double>(prof.contactPoints) * prof.iterations;
   };
   // The equilibrium test (docs/model.md, "Equilibrium") of the state now, recorded in the history
   // and reported as progress.
@@ -174,135 +230,150 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     analysis::InterpenetrationDef exactOnly;
     exactOnly.lattice = false;  // the lattice bounds are for the final state only (costly)
     const double overlap = analysis::interpenetration(now, analysis::bulkRegion(now), exactOnly).exactPercent;
-    out.history.push_back({steps, simTime, secondsSince(start), eq.maxForceRatio, eq.maxMomentRatio,
-                           eq.maxKineticRatio, overlap, totalIterations, rowUpdates, totals[core::Phase::Solve],
-                           stepSeconds, stepCpuSeconds});
+    c.history.push_back({c.steps, c.simTime, elapsed(), eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio,
+                         overlap, c.iterations, c.rowUpdates, c.phaseSeconds[static_cast<int>(core::Phase::Solve)],
+                         c.stepSeconds, c.stepCpuSeconds});
     if (progress)
       progress(fraction, fmt::format("{} {} step {} iterations/step {:.1f} force {:.1e} moment {:.1e} kinetic {:.1e}",
-                                     backend->name(), stage, steps, static_cast<double>(totalIterations) / steps,
+                                     backend->name(), stage, c.steps, static_cast<double>(c.iterations) / c.steps,
                                      eq.maxForceRatio, eq.maxMomentRatio, eq.maxKineticRatio));
   };
 
   // Stage 1: time steps, until equilibrium, the time limit, or (quasi-static protocol) the end of
   // the fall.
-  bool handOver = false;
-  while (adaptive ? simTime < timeLimit : steps < maxSteps) {
-    if (core::stopSignal() != 0)
-      throw core::Interrupted(core::stopSignal(), fmt::format("at t = {:.3g} (step {})", simTime, steps));
-    if (adaptive && steps > 0) {
-      dt = adaptiveStep.next(dt, backend->states());
-      out.dtLargest = std::max(out.dtLargest, dt);
+  bool handOver = c.finisherStage;
+  while (!c.finisherStage && (adaptive ? c.simTime < timeLimit : c.steps < maxSteps)) {
+    stopIfAsked(fmt::format("at t = {:.3g} (step {})", c.simTime, c.steps));
+    if (adaptive && c.steps > 0) {
+      c.dt = adaptiveStep.next(c.dt, backend->states());
+      c.dtLargest = std::max(c.dtLargest, c.dt);
     }
-    timed([&] { backend->step(dt); });
-    simTime = adaptive ? simTime + dt : static_cast<double>(steps) * out.dt;
-    const bool lastStep = adaptive ? simTime >= timeLimit : steps == maxSteps;
+    timed([&] { backend->step(c.dt); });
+    c.simTime = adaptive ? c.simTime + c.dt : static_cast<double>(c.steps) * out.dt;
+    const bool lastStep = adaptive ? c.simTime >= timeLimit : c.steps == maxSteps;
 
-    const bool frameDue = frames && def.frameInterval > 0 && steps % def.frameInterval == 0;
-    const bool checkDue = steps % def.checkInterval == 0 || lastStep ||
-                          (adaptive && simTime - lastCheckTime >= kAdaptiveCheckSpacing);
+    const bool frameDue = frames && def.frameInterval > 0 && c.steps % def.frameInterval == 0;
+    const bool checkDue = c.steps % def.checkInterval == 0 || lastStep ||
+                          (adaptive && c.simTime - c.lastCheckTime >= kAdaptiveCheckSpacing);
     if (!frameDue && !checkDue) continue;
     const core::Packing now = snapshot(cfg, deposit.grains, *backend);
-    if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
+    if (frameDue) frames->addFrame(c.simTime, now, velocities(backend->states()));
     if (checkDue) {
-      lastCheckTime = simTime;
-      check(now, std::min(1.0, simTime / timeLimit),
-            fmt::format("t={:.1f}{}", simTime, adaptive ? fmt::format(" dt {:.1e}", dt) : ""));
+      c.lastCheckTime = c.simTime;
+      check(now, std::min(1.0, c.simTime / timeLimit),
+            fmt::format("t={:.1f}{}", c.simTime, adaptive ? fmt::format(" dt {:.1e}", c.dt) : ""));
       if (eq.reached) break;
       if (finisher && eq.meanKineticRatio < def.switchKineticRatio) {
         handOver = true;
+        c.handOverAt = "switch_kinetic_ratio";
         break;
       }
+      if (!lastStep) saveIfDue();
     }
   }
   // The quasi-static protocol's dynamic stage ends at the time limit too: the finisher takes over
-  // from there, bounded by its own step count. `handOverAt` says which ended the fall.
-  const char* handOverAt = handOver ? "switch_kinetic_ratio" : nullptr;
-  if (finisher && !handOver && !eq.reached) {
-    handOver = true;
-    handOverAt = fallBounded ? "fall_time_limit" : "time_limit";
+  // from there, bounded by its own step count. handOverAt says which ended the fall; how far the
+  // fall had got shows a pile the finisher (meant for the creep after the fall, docs/model.md)
+  // was handed while still falling.
+  if (!c.finisherStage) {
+    if (finisher && !handOver && !eq.reached) {
+      handOver = true;
+      c.handOverAt = fallBounded ? "fall_time_limit" : "time_limit";
+    }
+    c.handOverKineticRatio = haveEq ? eq.meanKineticRatio : 0.0;
+    c.dynamicSteps = c.steps;
+    c.dynamicIterations = c.iterations;
+    c.dynamicWallSeconds = elapsed();
+    c.finisherStage = handOver;
+    if (handOver) makeFinisher();
   }
-  // How far the fall had got when the finisher took over: the finisher is meant for the creep after
-  // the fall (docs/model.md), and this shows a pile it was handed while still falling.
-  const double handOverKineticRatio = haveEq ? eq.meanKineticRatio : 0.0;
-  const long dynamicSteps = steps;
-  const long dynamicIterations = totalIterations;
-  const double dynamicWall = secondsSince(start);
 
   // Stage 2 (quasi-static protocol): the finisher's steps from rest
   // (core/quasi_static_finisher.hpp). The equilibrium test is checked after each step that moved
   // nothing more than the settle tolerance (and every 20 steps, for the progress line); the
   // finisher stops once it holds there.
-  core::QuasiStaticFinisher finish(def, core::smallestSize(deposit.grains), dt);
   if (handOver) {
-    for (long k = 1; k <= def.finisherMaxSteps; ++k) {
-      if (core::stopSignal() != 0)
-        throw core::Interrupted(core::stopSignal(), fmt::format("in finisher step {} of the quasi-static protocol", k));
-      timed([&] { finish.step(*backend); });
+    for (long k = finish->steps() + 1; k <= def.finisherMaxSteps; ++k) {
+      stopIfAsked(fmt::format("in finisher step {} of the quasi-static protocol", k));
+      timed([&] { finish->step(*backend); });
       const bool last = k == def.finisherMaxSteps;
-      const bool frameDue = frames && def.frameInterval > 0 && steps % def.frameInterval == 0;
-      if (!frameDue && !last && !finish.settled() && k % 20 != 0) continue;
+      const bool frameDue = frames && def.frameInterval > 0 && c.steps % def.frameInterval == 0;
+      if (!frameDue && !last && !finish->settled() && k % 20 != 0) continue;
       const core::Packing now = snapshot(cfg, deposit.grains, *backend);
-      if (frameDue) frames->addFrame(simTime, now, velocities(backend->states()));
+      if (frameDue) frames->addFrame(c.simTime, now, velocities(backend->states()));
       check(now, static_cast<double>(k) / def.finisherMaxSteps,
-            fmt::format("finisher {} h {:.1e} moved {:.1e}", k, finish.lastStepLength(),
-                        finish.lastMove().maxDisplacement));
-      if (eq.reached && finish.settled()) break;
+            fmt::format("finisher {} h {:.1e} moved {:.1e}", k, finish->lastStepLength(),
+                        finish->lastMove().maxDisplacement));
+      if (eq.reached && finish->settled()) break;
+      if (!last) saveIfDue();
     }
   }
 
   out.packing = snapshot(cfg, deposit.grains, *backend);
   out.states = backend->states();
+  out.history = c.history;
+  out.dtLargest = c.dtLargest;
   if (!haveEq)
     eq = analysis::equilibrium(out.packing, out.states, system.gravity, system.density, def.forceRatio,
                                def.momentRatio, def.kineticRatio);
   if (frames) {
-    frames->addFrame(simTime, out.packing, velocities(out.states));
+    frames->addFrame(c.simTime, out.packing, velocities(out.states));
     frames->finish();
   }
   // With the finisher, equilibrium also needs its last step to have moved (almost) nothing: its
   // steps are so long that the force and kinetic ratios of a step say little about motion.
-  out.reached = eq.reached && (!handOver || finish.settled());
+  out.reached = eq.reached && (!handOver || finish->settled());
   out.equilibrium = eq;
   out.equilibrium["reached"] = out.reached;
-  out.equilibrium["simulated_time"] = simTime;
+  out.equilibrium["simulated_time"] = c.simTime;
   out.equilibrium["time_limit"] = def.timeLimit;
 
   nlohmann::json phases = nlohmann::json::object();
   for (int k = 0; k < static_cast<int>(core::Phase::Count); ++k)
-    phases[std::string(core::toString(static_cast<core::Phase>(k)))] = totals.seconds[k];
-  const double solveSeconds = totals[core::Phase::Solve];
+    phases[std::string(core::toString(static_cast<core::Phase>(k)))] = c.phaseSeconds[k];
+  const double solveSeconds = c.phaseSeconds[static_cast<int>(core::Phase::Solve)];
   nlohmann::json history = nlohmann::json::array();
-  for (const CheckPoint& c : out.history)
-    history.push_back({{"steps", c.steps}, {"time", c.time}, {"wall_s", c.wallSeconds},
-                       {"max_force_ratio", c.maxForceRatio}, {"max_moment_ratio", c.maxMomentRatio},
-                       {"max_kinetic_ratio", c.maxKineticRatio}, {"interpenetration_percent", c.interpenetrationPercent},
-                       {"iterations", c.iterations}});
+  for (const CheckPoint& p : out.history)
+    history.push_back({{"steps", p.steps},
+                       {"time", p.time},
+                       {"wall_s", p.wallSeconds},
+                       {"max_force_ratio", p.maxForceRatio},
+                       {"max_moment_ratio", p.maxMomentRatio},
+                       {"max_kinetic_ratio", p.maxKineticRatio},
+                       {"interpenetration_percent", p.interpenetrationPercent},
+                       {"iterations", p.iterations}});
   nlohmann::json stages = {{"dynamic",
-                            {{"steps", dynamicSteps},
-                             {"simulated_time", simTime},
-                             {"iterations", dynamicIterations},
-                             {"wall_s", dynamicWall}}}};
+                            {{"steps", c.dynamicSteps},
+                             {"simulated_time", c.simTime},
+                             {"iterations", c.dynamicIterations},
+                             {"wall_s", c.dynamicWallSeconds}}}};
+  const double wall = elapsed();
   if (handOver)
-    stages["quasi_static"] = {{"handed_over_at", handOverAt},
-                              {"mean_kinetic_ratio_at_hand_over", handOverKineticRatio},
-                              {"steps", finish.steps()},
-                              {"clipped_steps", finish.clippedSteps()},
-                              {"iterations", totalIterations - dynamicIterations},
-                              {"wall_s", secondsSince(start) - dynamicWall},
-                              {"last_step", finish.lastStepLength()},
-                              {"last_displacement", finish.lastMove().maxDisplacement}};
-  out.timing = {{"wall_s", secondsSince(start)},
-                {"compaction_s", secondsSince(start)},
+    stages["quasi_static"] = {{"handed_over_at", c.handOverAt},
+                              {"mean_kinetic_ratio_at_hand_over", c.handOverKineticRatio},
+                              {"steps", finish->steps()},
+                              {"clipped_steps", finish->clippedSteps()},
+                              {"iterations", c.iterations - c.dynamicIterations},
+                              {"wall_s", wall - c.dynamicWallSeconds},
+                              {"last_step", finish->lastStepLength()},
+                              {"last_displacement", finish->lastMove().maxDisplacement}};
+  out.timing = {{"wall_s", wall},
+                {"compaction_s", wall},
                 {"protocol", core::toString(out.protocol)},
                 {"stages", stages},
-                {"steps", steps},
+                {"steps", c.steps},
                 {"dt", out.dt},
                 {"dt_largest", out.dtLargest},
-                {"iterations", totalIterations},
-                {"iterations_per_step", steps > 0 ? static_cast<double>(totalIterations) / steps : 0.0},
-                {"contact_updates_per_s", solveSeconds > 0.0 ? rowUpdates / solveSeconds : 0.0},
+                {"iterations", c.iterations},
+                {"iterations_per_step", c.steps > 0 ? static_cast<double>(c.iterations) / c.steps : 0.0},
+                {"contact_updates_per_s", solveSeconds > 0.0 ? c.rowUpdates / solveSeconds : 0.0},
                 {"phases", phases},
                 {"history", history}};
+  // Only where the run was given a checkpoint file, so that other runs' result.json is unchanged.
+  if (!checkpointing.file.empty()) {
+    out.timing["checkpoint"] = {{"resumes", c.resumes}, {"exact", backend->exactRestore()}};
+    if (!ignoredWhy.empty()) out.timing["checkpoint"]["ignored"] = ignoredWhy;
+  }
   out.backendSettings = backend->settings();
   return out;
 }
@@ -329,21 +400,26 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
 }
 
 FinishedRun runProtocol(const core::RunConfig& cfg, const std::filesystem::path& vtkDir, const RunProgressFn& progress,
-                        const core::Deposit* shared) {
+                        const core::Deposit* shared, const Checkpointing& checkpointing) {
   const core::Deposit dep = shared ? *shared : core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  CompactionOutcome out = compact(cfg, dep, vtkDir, progress);
+  CompactionOutcome out = compact(cfg, dep, vtkDir, progress, checkpointing);
   analysis::Analysis measured = analysis::analyze(out.packing, analysisOptions());
   nlohmann::json result = makeResult(cfg, dep, out, measured);
   return {std::move(out.packing), std::move(measured), std::move(result)};
 }
 
 nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
-                           const RunProgressFn& progress, const core::Deposit* shared) {
-  const FinishedRun run = runProtocol(cfg, outDir / "vtk", progress, shared);
+                           const RunProgressFn& progress, const core::Deposit* shared,
+                           const Checkpointing& checkpointing) {
+  const FinishedRun run = runProtocol(cfg, outDir / "vtk", progress, shared, checkpointing);
   core::writePacking(run.packing, outDir / "packing.json");
   analysis::writeProfiles(outDir, run.measured,
                           {{"seed", cfg.seed}, {"backend", cfg.backend}, {"version", CONFPACK_VERSION}});
   core::writeFileAtomically(outDir / "result.json", run.result.dump(2));
+  if (!checkpointing.file.empty()) {
+    std::error_code ignored;  // a checkpoint left behind is ignored once the run is done
+    std::filesystem::remove(checkpointing.file, ignored);
+  }
   return run.result;
 }
 

@@ -12,6 +12,7 @@
 #include "core/deposition.hpp"
 #include "core/packing.hpp"
 #include "core/run_config.hpp"
+#include "study/checkpoint.hpp"
 
 namespace confpack::study {
 
@@ -56,22 +57,6 @@ class AdaptiveTimeStep {
   double floor_ = 0.0;          ///< the fixed step [t0]
 };
 
-/// The state of a compaction at one equilibrium check.
-struct CheckPoint {
-  long steps = 0;
-  double time = 0.0;              ///< simulated time [t0]
-  double wallSeconds = 0.0;       ///< since the start of the compaction [s]
-  double maxForceRatio = 0.0;     ///< equilibrium ratios at this check
-  double maxMomentRatio = 0.0;
-  double maxKineticRatio = 0.0;
-  double interpenetrationPercent = 0.0;  ///< exact bulk interpenetration [%] (no lattice)
-  long iterations = 0;            ///< solver iterations (sweeps) since the start, summed over steps
-  double rowUpdates = 0.0;        ///< contact rows x iterations since the start
-  double solveSeconds = 0.0;      ///< time in the solve phase since the start [s]
-  double stepSeconds = 0.0;       ///< time in the backend's steps since the start (no checks) [s]
-  double stepCpuSeconds = 0.0;    ///< the same in process CPU time (all threads) [s]
-};
-
 struct CompactionOutcome {
   core::Packing packing;                  ///< final poses with the last step's contacts and forces
   std::vector<core::BodyState> states;    ///< final velocities
@@ -93,8 +78,13 @@ struct CompactionOutcome {
 core::Deposit depositFromPacking(const core::Packing& packing, const std::filesystem::path& source);
 
 /// Compacts a deposit with cfg.backend. Writes ParaView frames into `vtkDir` when it is not empty.
+/// With a checkpoint file (study/checkpoint.hpp) it resumes from the file when that holds a
+/// checkpoint of this run, and saves its state there as it goes; result.json's timing then says
+/// how often the run was resumed. A resumed run's ParaView series starts with the deposit and
+/// goes on from the resume.
 CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& deposit,
-                          const std::filesystem::path& vtkDir = {}, const RunProgressFn& progress = {});
+                          const std::filesystem::path& vtkDir = {}, const RunProgressFn& progress = {},
+                          const Checkpointing& checkpointing = {});
 
 /// Analysis options of a run: the defaults, without analysis's own zero-velocity equilibrium
 /// block (the pipeline writes the real one, with velocities).
@@ -121,13 +111,15 @@ struct FinishedRun {
 /// Deposit (unless `shared` is given) + compact + analyse, writing nothing but the ParaView frames
 /// into `vtkDir` when it is not empty. runAndWrite and the Python module's run call it.
 FinishedRun runProtocol(const core::RunConfig& cfg, const std::filesystem::path& vtkDir = {},
-                        const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr);
+                        const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr,
+                        const Checkpointing& checkpointing = {});
 
 /// Deposit (unless `shared` is given: sweeps compact one deposit with both backends) + compact +
 /// analyse, writing into `outDir` (which must exist): result.json, packing.json (final, with
 /// contacts), profiles (*.csv), vtk/. Files are written atomically; result.json last, so its
-/// presence means the run finished.
+/// presence means the run finished; then the checkpoint file, if any, is removed.
 nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::path& outDir,
-                           const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr);
+                           const RunProgressFn& progress = {}, const core::Deposit* shared = nullptr,
+                           const Checkpointing& checkpointing = {});
 
 }  // namespace confpack::study

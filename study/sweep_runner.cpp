@@ -5,12 +5,17 @@
 
 namespace confpack::study {
 
-SweepRunFn pipelineRunner(int threads) {
-  return [threads](const core::RunConfig& cfg, const std::filesystem::path& runDir, const core::Deposit& deposit,
-                   const RunProgressFn& progress) {
+SweepRunFn pipelineRunner(int threads, double checkpointEvery) {
+  return [threads, checkpointEvery](const core::RunConfig& cfg, const std::filesystem::path& runDir,
+                                    const core::Deposit& deposit, const RunProgressFn& progress) {
     core::RunConfig c = cfg;
     if (threads > 0) c.threads = threads;
-    return runAndWrite(c, runDir, progress, &deposit);
+    // Outside the run's folder, which a new attempt clears (SWEEPDIR/runs/rNNNN ->
+    // SWEEPDIR/checkpoints/rNNNN.json).
+    Checkpointing checkpointing;
+    checkpointing.everySeconds = checkpointEvery;
+    checkpointing.file = runDir.parent_path().parent_path() / "checkpoints" / (runDir.filename().string() + ".json");
+    return runAndWrite(c, runDir, progress, &deposit, checkpointing);
   };
 }
 

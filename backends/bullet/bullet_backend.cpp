@@ -318,6 +318,7 @@ class BulletBackend final : public core::ContactBackend {
 
   std::string_view name() const override { return "bullet"; }
   void step(double dt) override;
+  void restoreState(const nlohmann::json& state) override;
   const std::vector<core::BodyState>& states() const override { return states_; }
   const std::vector<core::Contact>& contacts() const override { return contacts_; }
   const core::StepProfile& profile() const override { return profile_; }
@@ -643,6 +644,20 @@ void BulletBackend::wrapIntoBox() {
 // internalSingleStepSimulation): forces, collision at the current poses, the solve (gravity
 // enters as the solver bodies' external impulse m g dt), integration. Bullet applies the warm
 // start while it builds the rows, so WarmStart stays inside PrepareContacts.
+// Built from the SystemDef at the saved poses, the backend takes back the velocities. Its contact
+// manifolds and their warm-start impulses are not part of the state (Bullet has no way to write
+// them out): the first step after a restore finds the contacts again and solves them cold.
+void BulletBackend::restoreState(const nlohmann::json& state) {
+  if (!state.is_object() || !state.contains("grains"))
+    throw std::invalid_argument("checkpoint: bullet state: expected an object with the grains' states");
+  const std::vector<core::BodyState> saved = core::bodyStatesFromJson(state["grains"], grains_.size());
+  for (std::size_t i = 0; i < grains_.size(); ++i) {
+    grains_[i]->setLinearVelocity(toBt(saved[i].velocity));
+    grains_[i]->setAngularVelocity(toBt(saved[i].angularVelocity));
+  }
+  readStates();
+}
+
 void BulletBackend::step(double dt) {
   beginStep(dt);
   core::PhaseClock clock(profile_);

@@ -1,6 +1,7 @@
 #include "backends/nscd/contact_cache.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace confpack::nscd {
 
@@ -45,6 +46,49 @@ void ContactCache::replace(std::vector<CachedContact>& entries, double dt) {
   std::merge(entries.begin(), head, head, entries.end(), entries_.begin(), keyLess);
   entries.clear();
   dt_ = dt;
+}
+
+nlohmann::json ContactCache::toJson() const {
+  nlohmann::json entries = nlohmann::json::array();
+  for (const CachedContact& c : entries_) {
+    const auto points = [&](const std::array<double, kMaxContactPoints>& a) {
+      return nlohmann::json(std::vector<double>(a.begin(), a.begin() + c.pointCount));
+    };
+    entries.push_back({c.key.a, c.key.b, c.key.shiftX, c.key.shiftY, c.key.feature, points(c.normal),
+                       points(c.tangent1), points(c.tangent2)});
+  }
+  return {{"dt", dt_}, {"entries", std::move(entries)}};
+}
+
+void ContactCache::fromJson(const nlohmann::json& j, int grains) {
+  const auto bad = [] { return std::invalid_argument("checkpoint: the contact cache is not one this build wrote"); };
+  if (!j.is_object() || !j.contains("dt") || !j["dt"].is_number() || !j.contains("entries") || !j["entries"].is_array())
+    throw bad();
+  std::vector<CachedContact> entries;
+  entries.reserve(j["entries"].size());
+  for (const nlohmann::json& e : j["entries"]) {
+    if (!e.is_array() || e.size() != 8) throw bad();
+    for (int k = 0; k < 5; ++k)
+      if (!e[k].is_number_integer()) throw bad();
+    CachedContact c;
+    c.key = {e[0].get<int>(), e[1].get<int>(), static_cast<std::int8_t>(e[2].get<int>()),
+             static_cast<std::int8_t>(e[3].get<int>()), e[4].get<std::uint32_t>()};
+    if (c.key.a < 0 || c.key.a >= grains || c.key.b < static_cast<int>(core::WallId::SideHigh) || c.key.b >= grains)
+      throw bad();
+    if (!e[5].is_array() || e[5].size() > static_cast<std::size_t>(kMaxContactPoints)) throw bad();
+    const std::size_t count = e[5].size();
+    c.pointCount = static_cast<int>(count);
+    for (int k = 5; k < 8; ++k) {
+      if (!e[k].is_array() || e[k].size() != count) throw bad();
+      std::array<double, kMaxContactPoints>& to = k == 5 ? c.normal : k == 6 ? c.tangent1 : c.tangent2;
+      for (std::size_t p = 0; p < count; ++p) {
+        if (!e[k][p].is_number()) throw bad();
+        to[p] = e[k][p].get<double>();
+      }
+    }
+    entries.push_back(c);
+  }
+  replace(entries, j["dt"].get<double>());
 }
 
 }  // namespace confpack::nscd

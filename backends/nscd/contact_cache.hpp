@@ -7,6 +7,7 @@
 #include <compare>
 #include <cstddef>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "backends/nscd/narrow_phase.hpp"
@@ -46,6 +47,13 @@ class ContactCache {
   /// Replaces the content by `entries` (taken over, left empty) stored with time step dt.
   void replace(std::vector<CachedContact>& entries, double dt);
   std::size_t size() const { return entries_.size(); }
+
+  /// The cache as JSON, for a run's checkpoint: {"dt": ..., "entries": [[a, b, shiftX, shiftY,
+  /// feature, [normal], [tangent1], [tangent2]], ...]}, one impulse a point.
+  nlohmann::json toJson() const;
+  /// Replaces the content by what toJson() wrote; throws std::invalid_argument on anything else
+  /// (a grain index outside [0, grains); b may be a core::WallId).
+  void fromJson(const nlohmann::json& j, int grains);
 
  private:
   std::vector<CachedContact> entries_;

@@ -1,5 +1,7 @@
 #include "backends/nscd/nscd_backend.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -119,6 +121,60 @@ class NscdBackend final : public core::ContactBackend {
   }
 
   bool hasQuasiStaticStep() const override { return true; }
+
+  // Everything a step reads besides the SystemDef: poses and velocities (states_ is a copy of
+  // position_, orientation_ and velocity_), the warm-start impulses, the damping's loaded grains
+  // and the finisher's metric state. The narrow phase's and the broad phase's data are rebuilt
+  // by every step.
+  nlohmann::json saveState() const override {
+    nlohmann::json lastMove = nlohmann::json::array();
+    for (const BodyVelocity& m : lastMove_) lastMove.push_back({m.v.x(), m.v.y(), m.v.z(), m.w.x(), m.w.y(), m.w.z()});
+    return {{"grains", core::bodyStatesToJson(states_)},
+            {"cache", cache_.toJson()},
+            {"loaded", loaded_},
+            {"metric_weights", metricWeight_},
+            {"last_moves", std::move(lastMove)},
+            {"last_finisher_step_clipped", lastFinisherStepClipped_}};
+  }
+
+  void restoreState(const nlohmann::json& state) override {
+    const auto bad = [](const char* what) {
+      return std::invalid_argument(fmt::format("checkpoint: nscd state: {}", what));
+    };
+    if (!state.is_object()) throw bad("not an object");
+    const std::vector<core::BodyState> grains = core::bodyStatesFromJson(state.value("grains", nlohmann::json()), n_);
+    const nlohmann::json& weights = state.value("metric_weights", nlohmann::json());
+    const nlohmann::json& moves = state.value("last_moves", nlohmann::json());
+    const nlohmann::json& loaded = state.value("loaded", nlohmann::json());
+    if (!weights.is_array() || weights.size() != static_cast<std::size_t>(n_)) throw bad("metric_weights");
+    if (!moves.is_array() || moves.size() != static_cast<std::size_t>(n_)) throw bad("last_moves");
+    if (!loaded.is_array() || (!loaded.empty() && loaded.size() != static_cast<std::size_t>(n_))) throw bad("loaded");
+    if (!state.value("last_finisher_step_clipped", nlohmann::json()).is_boolean())
+      throw bad("last_finisher_step_clipped");
+    cache_.fromJson(state.value("cache", nlohmann::json()), n_);
+    for (int i = 0; i < n_; ++i) {
+      position_[i] = grains[i].position;
+      orientation_[i] = grains[i].orientation;
+      velocity_[i] = {grains[i].velocity, grains[i].angularVelocity};
+      if (!weights[i].is_number() || !(weights[i].get<double>() >= 1.0)) throw bad("metric_weights");
+      metricWeight_[i] = weights[i].get<double>();
+      const nlohmann::json& m = moves[i];
+      if (!m.is_array() || m.size() != 6) throw bad("last_moves");
+      double x[6];
+      for (int k = 0; k < 6; ++k) {
+        if (!m[k].is_number()) throw bad("last_moves");
+        x[k] = m[k].get<double>();
+      }
+      lastMove_[i] = {Vec3(x[0], x[1], x[2]), Vec3(x[3], x[4], x[5])};
+    }
+    loaded_ = loaded.get<std::vector<char>>();
+    lastFinisherStepClipped_ = state["last_finisher_step_clipped"].get<bool>();
+    positionMid_ = position_;
+    orientationMid_ = orientation_;
+    writeStates();
+  }
+
+  bool exactRestore() const override { return true; }
 
   // The Moreau-Jean step from rest with theta = 1: v_free = h g / w_i, the contact law with the
   // gaps closed exactly (finisherSettings_), then dq = h v_{i+1}, which is the minimiser of

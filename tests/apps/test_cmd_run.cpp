@@ -194,3 +194,46 @@ TEST_CASE("SIGTERM stops a run at its next step: one line saying where, exit 143
   CHECK(message.find("confpack run: error: interrupted by SIGTERM") != std::string::npos);
   CHECK(s.empty());  // neither out/ nor its staging folder
 }
+
+// docs/model.md, "Checkpoints": a run given --checkpoint saves its state when SIGTERM stops it (a
+// cluster's time limit) and the same command goes on from there, to the same bits as a run never
+// stopped (nscd).
+TEST_CASE("run --checkpoint: stopped by SIGTERM, the same command resumes it and ends on the same packing") {
+  ConfpackSession s("cmd_run_checkpoint");
+  const std::vector<std::string> args = {"run",           "--length-x",   "6",  "--width", "6", "--height", "8",
+                                         "--adaptive-dt", "--time-limit", "60", "-q"};
+  const auto whole = s.run("run --length-x 6 --width 6 --height 8 --adaptive-dt --time-limit 60 -q --out whole");
+  REQUIRE(whole.code == 0);
+
+  const fs::path err = s.dir.string() + ".err";
+  std::vector<std::string> stopped = args;
+  for (const char* a : {"--out", "out", "--checkpoint", "state/run.json", "--checkpoint-every", "0.001"})
+    stopped.push_back(a);
+  const pid_t pid = testing::startConfpack(s.dir, stopped, err);
+  REQUIRE(pid >= 0);
+  // Stopped once it has saved a state (at every check, with --checkpoint-every 0.001).
+  const fs::path state = s.dir / "state" / "run.json";
+  for (int k = 0; k < 2000 && !fs::exists(state); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const std::string message = testing::slurp(err);
+  fs::remove(err);
+  INFO(message);
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 143);
+  CHECK(testing::lineCount(message) == 1);
+  CHECK(message.find("its state is saved in state/run.json; the same command resumes it") != std::string::npos);
+  REQUIRE(fs::exists(state));
+  CHECK(!fs::exists(s.dir / "out"));
+
+  const auto resumed = s.run(
+      "run --length-x 6 --width 6 --height 8 --adaptive-dt --time-limit 60 -q --out out "
+      "--checkpoint state/run.json");
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  CHECK(testing::slurp(s.dir / "out" / "packing.json") == testing::slurp(s.dir / "whole" / "packing.json"));
+  const nlohmann::json result = nlohmann::json::parse(testing::slurp(s.dir / "out" / "result.json"));
+  CHECK(result["timing"]["checkpoint"]["resumes"] == 1);
+  CHECK(!fs::exists(state));  // removed once the run is done
+}

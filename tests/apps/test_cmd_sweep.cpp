@@ -67,6 +67,38 @@ TEST_CASE("a sweep killed with SIGKILL and restarted finishes with no run lost o
   CHECK(fs::exists(dir / "sw" / "deposits" / "d0001.json"));
 }
 
+// A run stopped mid-compaction (SIGTERM: a task's time limit) goes on from its checkpoint in
+// SWEEPDIR/checkpoints/ when the sweep is started again, instead of from its deposit.
+TEST_CASE("a sweep stopped by SIGTERM mid-run resumes that run from its checkpoint") {
+  const ConfpackSession s("cmd_sweep_checkpoint");
+  const fs::path& dir = s.dir;
+  std::ofstream(dir / "s.json") << R"({
+    "name": "stop",
+    "base": { "box": { "length_x": 6, "height": 8 }, "compaction": { "time_limit": 60, "adaptive_dt": true } },
+    "vary": { "width": [6], "seed": [1], "backend": ["nscd"] } })";
+  const pid_t pid =
+      testing::startConfpack(dir, {"sweep", "s.json", "--out", "sw", "--checkpoint-every", "0.001", "-q"});
+  REQUIRE(pid >= 0);
+  const fs::path state = dir / "sw" / "checkpoints" / "r0000.json";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (!fs::exists(state) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  REQUIRE(fs::exists(state));
+  REQUIRE(study::runStatus(dir / "sw" / "runs" / "r0000") != study::RunStatus::Done);
+
+  const auto resumed = s.run("sweep s.json --out sw -q");
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  REQUIRE(study::runStatus(dir / "sw" / "runs" / "r0000") == study::RunStatus::Done);
+  const nlohmann::json result = nlohmann::json::parse(slurp(dir / "sw" / "runs" / "r0000" / "result.json"));
+  CHECK(result["timing"]["checkpoint"]["resumes"] == 1);
+  CHECK(result["equilibrium"]["reached"] == true);
+  CHECK(!fs::exists(state));
+}
+
 TEST_CASE("confpack sweep refuses a sweep file listing more runs than --max-runs: one line, exit 2") {
   const ConfpackSession s("cmd_sweep_max_runs");
   std::ofstream(s.dir / "huge.json") << R"({"vary": {"width": [4], "replicas": 100000000}})";

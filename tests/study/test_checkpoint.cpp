@@ -1,0 +1,176 @@
+// study/checkpoint.hpp: a compaction stopped and resumed from its checkpoint. nscd saves
+// everything its next step reads, so the resumed run takes the same steps, bit for bit, as the run
+// never stopped, in the fall and in the finisher; Bullet takes back poses and velocities only.
+// The stop here is a dead process (the progress callback throws at a check, as a kill -9 would
+// end the run between two saves); SIGTERM's own save is tested through the CLI
+// (tests/apps/test_cmd_run.cpp).
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "core/deposition.hpp"
+#include "core/run_config.hpp"
+#include "study/checkpoint.hpp"
+#include "study/run_pipeline.hpp"
+#include "tests/support/scratch.hpp"
+
+using namespace confpack;
+namespace fs = std::filesystem;
+
+namespace {
+
+core::RunConfig smallPile(const std::string& backend, core::ShapeKind shape) {
+  core::RunConfig cfg;
+  cfg.box.lengthX = 4.0;
+  cfg.box.width = 3.0;
+  cfg.box.height = 4.0;
+  cfg.walls.friction = 0.3;  // the friction rows' impulses are warm-started too
+  cfg.population.shape = shape;
+  cfg.backend = backend;
+  cfg.seed = 2;
+  cfg.compaction.protocol = core::Protocol::QuasiStatic;
+  cfg.compaction.timeLimit = 40.0;
+  cfg.compaction.checkInterval = 50;
+  return cfg;
+}
+
+struct Killed : std::runtime_error {
+  Killed() : std::runtime_error("killed") {}
+};
+
+/// The compaction with a checkpoint saved at every check, killed at the `killAt`-th check.
+void killedAt(const core::RunConfig& cfg, const core::Deposit& dep, const fs::path& file, int killAt) {
+  study::Checkpointing every;
+  every.file = file;
+  every.everySeconds = 0.0;
+  int checks = 0;
+  CHECK_THROWS_AS(study::compact(
+                      cfg, dep, {},
+                      [&](double, const std::string&) {
+                        if (++checks == killAt) throw Killed();
+                      },
+                      every),
+                  Killed);
+}
+
+nlohmann::json readJson(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+void checkSamePacking(const study::CompactionOutcome& a, const study::CompactionOutcome& b) {
+  REQUIRE(a.packing.grains.size() == b.packing.grains.size());
+  for (std::size_t i = 0; i < a.packing.grains.size(); ++i) {
+    INFO("grain " << i);
+    REQUIRE(a.packing.grains[i].position == b.packing.grains[i].position);  // the same bits
+    REQUIRE(a.packing.grains[i].orientation.coeffs() == b.packing.grains[i].orientation.coeffs());
+  }
+  CHECK(a.timing["steps"] == b.timing["steps"]);
+  CHECK(a.timing["iterations"] == b.timing["iterations"]);
+  CHECK(a.reached == b.reached);
+  CHECK(a.history.size() == b.history.size());
+}
+
+}  // namespace
+
+TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends on the same bits") {
+  const core::ShapeKind shape = GENERATE(core::ShapeKind::Sphere, core::ShapeKind::Pinacoid);
+  const bool inFinisher = GENERATE(false, true);
+  const bool pinacoids = shape == core::ShapeKind::Pinacoid;
+  INFO("pinacoids " << pinacoids << ", killed in the " << (inFinisher ? "finisher" : "fall"));
+  core::RunConfig cfg = smallPile("nscd", shape);
+  if (pinacoids) cfg.box.height = 3.0;
+  // Handed over at the first check after the fall has begun, so that the finisher has steps to
+  // spare; bounded, since the same bits, not rest, are what is tested.
+  if (inFinisher) cfg.compaction.switchKineticRatio = 1.0;
+  cfg.compaction.finisherMaxSteps = 100;
+  cfg.compaction.fallTimeLimit = 6.0;
+  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const study::CompactionOutcome whole = study::compact(cfg, dep);
+  const auto& stages = whole.timing["stages"];
+  INFO(stages.dump());
+  REQUIRE(stages.contains("quasi_static"));
+  // Checks of the fall come every 50 steps; the finisher's every 20 of its steps.
+  const long fallChecks = (stages["dynamic"]["steps"].get<long>() + 49) / 50;
+  REQUIRE(stages["quasi_static"]["steps"].get<long>() >= 60);
+  REQUIRE(fallChecks >= 4);
+
+  const fs::path file = testing::freshDir("checkpoint_nscd") / "run.json";
+  // Killed at a check: the checkpoint is the one saved at the check before.
+  killedAt(cfg, dep, file, inFinisher ? static_cast<int>(fallChecks + 2) : 3);
+  REQUIRE(fs::exists(file));
+  CHECK(readJson(file)["stage"] == (inFinisher ? "finisher" : "fall"));
+  study::Checkpointing resume;
+  resume.file = file;
+  const study::CompactionOutcome resumed = study::compact(cfg, dep, {}, {}, resume);
+  checkSamePacking(whole, resumed);
+  CHECK(resumed.timing["checkpoint"]["resumes"] == 1);
+  CHECK(resumed.timing["checkpoint"]["exact"] == true);
+}
+
+TEST_CASE("checkpoint: Bullet resumes from the saved poses and velocities and still runs its time") {
+  core::RunConfig cfg = smallPile("bullet", core::ShapeKind::Sphere);
+  cfg.compaction.timeLimit = 3.0;
+  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const study::CompactionOutcome whole = study::compact(cfg, dep);
+  const fs::path file = testing::freshDir("checkpoint_bullet") / "run.json";
+  killedAt(cfg, dep, file, 4);
+  const nlohmann::json saved = readJson(file);
+  const long savedSteps = saved["steps"].get<long>();
+  study::Checkpointing resume;
+  resume.file = file;
+  const study::CompactionOutcome resumed = study::compact(cfg, dep, {}, {}, resume);
+  CHECK(resumed.timing["checkpoint"]["exact"] == false);
+  CHECK(resumed.timing["checkpoint"]["resumes"] == 1);
+  // The same step count to the same time limit, the history of the first attempt kept.
+  CHECK(resumed.timing["steps"] == whole.timing["steps"]);
+  CHECK(resumed.history.size() == whole.history.size());
+  CHECK(resumed.history.front().steps == whole.history.front().steps);
+  CHECK(savedSteps == 4 * 50 - 50);  // saved at the third check, killed at the fourth
+  // The contacts are solved cold once: the pile ends close to, not on, the uninterrupted one's.
+  double farthest = 0.0;
+  for (std::size_t i = 0; i < whole.packing.grains.size(); ++i)
+    farthest = std::max(farthest, (whole.packing.grains[i].position - resumed.packing.grains[i].position).norm());
+  CHECK(farthest < 0.5);
+}
+
+TEST_CASE("checkpoint: another run's checkpoint, or a damaged one, is set aside and the run starts afresh") {
+  core::RunConfig cfg = smallPile("nscd", core::ShapeKind::Sphere);
+  cfg.compaction.timeLimit = 2.0;
+  cfg.compaction.protocol = core::Protocol::Dynamic;
+  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const study::CompactionOutcome whole = study::compact(cfg, dep);
+  const fs::path file = testing::freshDir("checkpoint_other") / "run.json";
+  killedAt(cfg, dep, file, 2);
+  study::Checkpointing resume;
+  resume.file = file;
+
+  SECTION("another seed's") {
+    core::RunConfig other = cfg;
+    other.seed = 3;
+    const core::Deposit otherDep = core::deposit(other.box, other.population, other.deposition, other.seed);
+    const study::CompactionOutcome out = study::compact(other, otherDep, {}, {}, resume);
+    CHECK(out.timing["checkpoint"]["resumes"] == 0);
+    CHECK(out.timing["checkpoint"]["ignored"].get<std::string>().find("another run's") != std::string::npos);
+  }
+  SECTION("the same run's with another thread count: resumed, the same bits") {
+    core::RunConfig two = cfg;
+    two.threads = 2;
+    const study::CompactionOutcome out = study::compact(two, dep, {}, {}, resume);
+    CHECK(out.timing["checkpoint"]["resumes"] == 1);
+    checkSamePacking(whole, out);
+  }
+  SECTION("a damaged file") {
+    nlohmann::json j = readJson(file);
+    j["backend"]["cache"]["entries"] = 7;
+    std::ofstream(file) << j.dump();
+    const study::CompactionOutcome out = study::compact(cfg, dep, {}, {}, resume);
+    CHECK(out.timing["checkpoint"]["resumes"] == 0);
+    CHECK(out.timing["checkpoint"]["ignored"].get<std::string>().find("does not fit") != std::string::npos);
+    checkSamePacking(whole, out);
+  }
+}
