@@ -171,4 +171,21 @@ std::optional<LoadedCheckpoint> readCheckpoint(const std::filesystem::path& file
   }
 }
 
+std::string describeCheckpoint(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) return {};
+  try {
+    std::ifstream in(file, std::ios::binary);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    const double minutes = j.at("elapsed_s").get<double>() / 60.0;
+    const double t = j.at("sim_time").get<double>();
+    if (j.at("stage") == "finisher")
+      return fmt::format("checkpoint: finisher step {} (t = {:.1f}), {:.0f} min",
+                         j.at("finisher").at("steps").get<long>(), t, minutes);
+    return fmt::format("checkpoint: fall at t = {:.1f}, {:.0f} min", t, minutes);
+  } catch (const std::exception&) {
+    return {};
+  }
+}
+
 }  // namespace confpack::study

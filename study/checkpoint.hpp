@@ -85,6 +85,17 @@ struct LoadedCheckpoint {
 std::optional<LoadedCheckpoint> readCheckpoint(const std::filesystem::path& file, const nlohmann::json& identity,
                                                std::string& why);
 
+/// A sweep run's checkpoint: SWEEPDIR/checkpoints/rNNNN.json, outside the run's folder, which a
+/// new attempt clears.
+inline std::filesystem::path sweepCheckpointFile(const std::filesystem::path& sweepDir, const std::string& run) {
+  return sweepDir / "checkpoints" / (run + ".json");
+}
+
+/// Where the checkpoint in `file` stands, for a sweep's status: "checkpoint: fall at t = 83.5,
+/// 12 min" or "checkpoint: finisher step 140 (t = 83.5), 15 min"; empty when there is none or it
+/// cannot be read.
+std::string describeCheckpoint(const std::filesystem::path& file);
+
 /// Writes the checkpoint atomically (core::writeFileAtomically), creating its folder.
 void writeCheckpoint(const std::filesystem::path& file, const nlohmann::json& identity,
                      const CompactionCounters& counters, const nlohmann::json& backend, const nlohmann::json& finisher);

@@ -10,11 +10,10 @@ SweepRunFn pipelineRunner(int threads, double checkpointEvery) {
                                     const core::Deposit& deposit, const RunProgressFn& progress) {
     core::RunConfig c = cfg;
     if (threads > 0) c.threads = threads;
-    // Outside the run's folder, which a new attempt clears (SWEEPDIR/runs/rNNNN ->
-    // SWEEPDIR/checkpoints/rNNNN.json).
+    // runDir is SWEEPDIR/runs/rNNNN.
     Checkpointing checkpointing;
     checkpointing.everySeconds = checkpointEvery;
-    checkpointing.file = runDir.parent_path().parent_path() / "checkpoints" / (runDir.filename().string() + ".json");
+    checkpointing.file = sweepCheckpointFile(runDir.parent_path().parent_path(), runDir.filename().string());
     return runAndWrite(c, runDir, progress, &deposit, checkpointing);
   };
 }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/json_input.hpp"
+#include "study/checkpoint.hpp"
 #include "study/process.hpp"
 #include "study/slurm.hpp"
 
@@ -29,8 +30,9 @@ std::string_view toString(RunState s) {
   return "?";
 }
 
-RunReport classifyRun(const RunFacts& f) {
-  if (f.markers == RunStatus::Done) return {RunState::Done, "", ""};
+namespace {
+
+RunReport classifyUnfinished(const RunFacts& f) {
   if (f.claim && f.claimHolder != Liveness::Dead)
     return {RunState::Running, f.claim->job,
             fmt::format("{} since {}{}", describe(*f.claim), f.claim->since,
@@ -51,6 +53,15 @@ RunReport classifyRun(const RunFacts& f) {
     return {RunState::Failed, f.task, fmt::format("its task ended without finishing it{}", log)};
   if (!f.task.empty()) return {RunState::Missing, f.task, "submitted, but squeue did not answer"};
   return {RunState::Missing, "", f.markers == RunStatus::Incomplete ? "interrupted" : ""};
+}
+
+}  // namespace
+
+RunReport classifyRun(const RunFacts& f) {
+  if (f.markers == RunStatus::Done) return {RunState::Done, "", ""};
+  RunReport r = classifyUnfinished(f);
+  if (!f.checkpoint.empty()) r.detail = r.detail.empty() ? f.checkpoint : r.detail + "; " + f.checkpoint;
+  return r;
 }
 
 std::vector<RunReport> sweepStatus(const fs::path& dir, const std::vector<SweepRun>& runs, const LivenessFn& alive,
@@ -89,6 +100,7 @@ std::vector<RunReport> sweepStatus(const fs::path& dir, const std::vector<SweepR
     }
     const std::string logOf = f.claim && !f.claim->job.empty() ? f.claim->job : f.task;
     if (!logOf.empty()) f.taskLogLine = lastOutputLine(taskLog(dir, logOf));
+    f.checkpoint = describeCheckpoint(sweepCheckpointFile(dir, r.name));
     out.push_back(classifyRun(f));
   }
   return out;

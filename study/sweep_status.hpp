@@ -35,6 +35,7 @@ struct RunFacts {
   std::optional<std::string>
       taskState;            ///< that task's Slurm state ("" ended and forgotten); nothing: squeue did not answer
   std::string taskLogLine;  ///< the last line of that task's log
+  std::string checkpoint;   ///< where its checkpoint stands (describeCheckpoint); empty: none
 };
 
 struct RunReport {
@@ -46,7 +47,8 @@ struct RunReport {
 /// The state of a run from its facts, in this order: done.json; a claim whose holder is not dead
 /// (running); failed.json (failed, its error) unless a live task was submitted for it after it
 /// failed (queued); a task Slurm lists as live (queued); a dead claim or an ended task (failed,
-/// the last line of the task's log); otherwise missing.
+/// the last line of the task's log); otherwise missing. A run that is not done says where its
+/// checkpoint stands, the point a new attempt resumes from.
 RunReport classifyRun(const RunFacts& facts);
 
 /// How the status asks Slurm about a job (slurmJobState; a test passes its own).

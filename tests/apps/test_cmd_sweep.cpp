@@ -88,6 +88,11 @@ TEST_CASE("a sweep stopped by SIGTERM mid-run resumes that run from its checkpoi
   ::waitpid(pid, &status, 0);
   REQUIRE(fs::exists(state));
   REQUIRE(study::runStatus(dir / "sw" / "runs" / "r0000") != study::RunStatus::Done);
+  // --status says where the run will go on from.
+  const auto listed = s.run("sweep sw --status");
+  INFO(listed.out << listed.err);
+  CHECK_THAT(listed.out, Catch::Contains("r0000   missing"));
+  CHECK_THAT(listed.out, Catch::Contains("interrupted; checkpoint: fall at t = "));
 
   const auto resumed = s.run("sweep s.json --out sw -q");
   INFO(resumed.err);

@@ -28,6 +28,13 @@ TEST_CASE("status: a run's state from its markers, claim and Slurm task, in orde
   CHECK(study::classifyRun(f).detail.empty());
   f.markers = RunStatus::Incomplete;
   CHECK(study::classifyRun(f).detail == "interrupted");
+  // With a checkpoint, where the next attempt goes on from (not for a run that is done).
+  f.checkpoint = "checkpoint: fall at t = 83.5, 12 min";
+  CHECK(study::classifyRun(f).detail == "interrupted; checkpoint: fall at t = 83.5, 12 min");
+  f.markers = RunStatus::Done;
+  CHECK(study::classifyRun(f).detail.empty());
+  f.markers = RunStatus::Incomplete;
+  f.checkpoint.clear();
 
   // Handed to a task Slurm still lists: queued.
   f.task = "12_3";
