@@ -2,9 +2,11 @@
 // resting column is stopped exactly with the weight above each contact, and on piles of spheres
 // and of pinacoids between rough walls it reaches the velocities of MPRGP, the other solver of
 // the same problem.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
+#include <thread>
+#include <vector>
 
 #include "tests/backends/nscd/nscd_problems.hpp"
 
@@ -77,4 +79,27 @@ TEST_CASE("nscd ipm: on a pressed pinacoid pile between walls with friction it r
   INFO("largest velocity " << largest << ", largest difference " << difference);
   CHECK(largest > 0.1 * ColdStep::kDt);
   CHECK(difference < 1e-5 * largest);
+}
+
+// CHOLMOD's factorisations call BLAS, and a serial OpenBLAS is not safe to call from two threads
+// at once: two runs of a sweep (`--jobs 2`) solving at the same time must each get the bits of a
+// solve alone.
+TEST_CASE("nscd ipm: solves in two threads at once give the bits of a solve alone", "[nscd]") {
+  const core::SystemDef s = testing::touchingSpheres(12.0, 12.0, false, 1500, 11);
+  const ColdStep alone(s, ipm());
+  REQUIRE(alone.solver.rowCount() > 1500);
+  for (int round = 0; round < 3; ++round) {
+    std::vector<std::unique_ptr<ColdStep>> steps(2);
+    std::vector<std::thread> threads;
+    for (auto& step : steps) threads.emplace_back([&] { step = std::make_unique<ColdStep>(s, ipm()); });
+    for (std::thread& t : threads) t.join();
+    for (const auto& step : steps) {
+      INFO("round " << round);
+      REQUIRE(step->iterations == alone.iterations);
+      for (std::size_t i = 0; i < alone.velocities.size(); ++i) {
+        REQUIRE(step->velocities[i].v == alone.velocities[i].v);
+        REQUIRE(step->velocities[i].w == alone.velocities[i].w);
+      }
+    }
+  }
 }
