@@ -18,10 +18,7 @@ namespace {
 // The three families of the confinement study (docs/model.md, "The study and its report") as groups
 // of one sweep file. Values that do not vary within a group are given as one-element lists so that
 // the file reads as the study's definition.
-// `pinacoidSettings`: configuration paths the pinacoid group sets apart from the base (one value
-// each), where the spheres' compaction settings do not suit them.
-json studyGroups(const json& widths, const json& fractions, const json& frictions, int replicas, bool pinacoids,
-                 const json& pinacoidSettings = json::object()) {
+json studyGroups(const json& widths, const json& fractions, const json& frictions, int replicas, bool pinacoids) {
   const json backends = {"nscd", "bullet"};
   json groups = json::array();
   // Spheres, mono- and bidisperse, frictionless walls: phi(W), Z(W), profiles, lambda_L(x_S).
@@ -44,12 +41,13 @@ json studyGroups(const json& widths, const json& fractions, const json& friction
                       {"replicas", replicas},
                       {"backend", backends}});
   // Monodisperse pinacoids.
-  if (pinacoids) {
-    json group = {{"shape", {"pinacoid"}},  {"small_fraction", {0.0}}, {"width", widths},
-                  {"wall_friction", {0.0}}, {"replicas", replicas},    {"backend", backends}};
-    for (const auto& [path, value] : pinacoidSettings.items()) group[path] = json::array({value});
-    groups.push_back(std::move(group));
-  }
+  if (pinacoids)
+    groups.push_back({{"shape", {"pinacoid"}},
+                      {"small_fraction", {0.0}},
+                      {"width", widths},
+                      {"wall_friction", {0.0}},
+                      {"replicas", replicas},
+                      {"backend", backends}});
   return groups;
 }
 
@@ -79,13 +77,13 @@ json reproductionSweep(std::string_view scale) {
     // (pinacoids, W = 20) grains a monodisperse run, up to 12,500 for x_S = 40 at W = 20 (the
     // small grains' count), and a bulk region (3 d_L from the floor and from the free surface)
     // about 6 d_L thick, some 410 grains at W = 5.
-    // Sphere piles fall on the adaptive step until they are all but at rest (mean kinetic ratio
-    // 1e-8), and the finisher only ends it: handed over at 1e-4 after a fixed-step fall, a
-    // 1,648-sphere pile at W = 10 crept in the finisher for 3,000 steps (2,305 s) without coming
-    // to rest; this way it is at rest in 131 s, and a 1,968-sphere biperiodic one in 320 s, which
-    // the dynamic protocol alone had not reached in 300 t0 (docs/performance.md, "The medium
-    // scale"). The fall is bounded at 300 t0. Pinacoid piles keep the quick study's fall
-    // (fixed step, handed over at 1e-4, at most 40 t0), the way its pinacoid piles reached rest.
+    // The piles fall on the adaptive step until they are all but at rest (mean kinetic ratio
+    // 1e-8), the fall bounded at 300 t0, and the finisher only ends it (a last rattler, the last
+    // balance of forces): a 1,648-sphere pile at W = 10 is at rest in 131 s this way, a
+    // 1,968-sphere biperiodic one in 320 s, which the dynamic protocol alone had not brought to
+    // rest in 300 t0, and a flat, sharp pinacoid pile of the shape study in 326 s, which the quick
+    // study's way (a fixed-step fall handed over at 1e-4) had not in 3,000 finisher steps
+    // (docs/performance.md, "The medium scale").
     // Bullet, which has no finisher, stops at 20 t0 and is reported as not at rest.
     return studySweep(
         "medium", "the confinement study in a 12 x W x 12 box, meant to run overnight on 2 cores", 12.0, 12.0,
@@ -94,11 +92,7 @@ json reproductionSweep(std::string_view scale) {
          {"protocol", "quasi-static"},
          {"adaptive_dt", true},
          {"switch_kinetic_ratio", 1e-8}},
-        12.0,
-        studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3, true,
-                    {{"compaction.adaptive_dt", false},
-                     {"compaction.switch_kinetic_ratio", 1e-4},
-                     {"compaction.fall_time_limit", 40.0}}));
+        12.0, studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3, true));
   }
   if (scale == "quick") {
     // Shrunken box: L_x = 4 d_L, h = 7 d_L (the bulk region, 3 d_L away from the floor and from
