@@ -38,6 +38,21 @@ core::Packing looseColumn() {
   return p;
 }
 
+/// SIGTERM to a running `confpack run` (started with its stderr to `err`): it must exit with 143
+/// and one line on stderr, which is returned (and `err` removed).
+std::string stopWithSigterm(pid_t pid, const fs::path& err) {
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const std::string message = testing::slurp(err);
+  fs::remove(err);
+  INFO(message);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 143);
+  CHECK(testing::lineCount(message) == 1);
+  return message;
+}
+
 }  // namespace
 
 TEST_CASE("run --from brings a packing's grains to rest: a bead column carries k m g at its k-th contact") {
@@ -182,15 +197,8 @@ TEST_CASE("SIGTERM stops a run at its next step: one line saying where, exit 143
       s.dir, {"run", "--length-x", "10", "--width", "10", "--height", "10", "--out", "out", "-q"}, err);
   REQUIRE(pid >= 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  const std::string message = testing::slurp(err);
-  fs::remove(err);
+  const std::string message = stopWithSigterm(pid, err);
   INFO(message);
-  REQUIRE(WIFEXITED(status));
-  CHECK(WEXITSTATUS(status) == 143);
-  CHECK(testing::lineCount(message) == 1);
   CHECK(message.find("confpack run: error: interrupted by SIGTERM") != std::string::npos);
   CHECK(s.empty());  // neither out/ nor its staging folder
 }
@@ -214,15 +222,8 @@ TEST_CASE("run --checkpoint: stopped by SIGTERM, the same command resumes it and
   // Stopped once it has saved a state (at every check, with --checkpoint-every 0.001).
   const fs::path state = s.dir / "state" / "run.json";
   for (int k = 0; k < 2000 && !fs::exists(state); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  const std::string message = testing::slurp(err);
-  fs::remove(err);
+  const std::string message = stopWithSigterm(pid, err);
   INFO(message);
-  REQUIRE(WIFEXITED(status));
-  REQUIRE(WEXITSTATUS(status) == 143);
-  CHECK(testing::lineCount(message) == 1);
   CHECK(message.find("its state is saved in state/run.json; the same command resumes it") != std::string::npos);
   REQUIRE(fs::exists(state));
   CHECK(!fs::exists(s.dir / "out"));

@@ -17,6 +17,7 @@
 #include "study/checkpoint.hpp"
 #include "study/run_pipeline.hpp"
 #include "tests/support/scratch.hpp"
+#include "tests/support/systems.hpp"
 
 using namespace confpack;
 namespace fs = std::filesystem;
@@ -24,17 +25,8 @@ namespace fs = std::filesystem;
 namespace {
 
 core::RunConfig smallPile(const std::string& backend, core::ShapeKind shape) {
-  core::RunConfig cfg;
-  cfg.box.lengthX = 4.0;
-  cfg.box.width = 3.0;
-  cfg.box.height = 4.0;
-  cfg.walls.friction = 0.3;  // the friction rows' impulses are warm-started too
+  core::RunConfig cfg = testing::smallQuasiStaticRun(backend, 0.3);  // friction rows are warm-started too
   cfg.population.shape = shape;
-  cfg.backend = backend;
-  cfg.seed = 2;
-  cfg.compaction.protocol = core::Protocol::QuasiStatic;
-  cfg.compaction.timeLimit = 40.0;
-  cfg.compaction.checkInterval = 50;
   return cfg;
 }
 

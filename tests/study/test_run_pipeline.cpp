@@ -109,17 +109,7 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
 namespace {
 
 core::RunConfig smallBox(const std::string& backend, double wallFriction) {
-  core::RunConfig cfg;
-  cfg.box.lengthX = 4.0;
-  cfg.box.width = 3.0;
-  cfg.box.height = 4.0;
-  cfg.walls.friction = wallFriction;
-  cfg.backend = backend;
-  cfg.seed = 2;
-  cfg.compaction.protocol = core::Protocol::QuasiStatic;
-  cfg.compaction.timeLimit = 40.0;
-  cfg.compaction.checkInterval = 50;
-  return cfg;
+  return testing::smallQuasiStaticRun(backend, wallFriction);
 }
 
 double floorReaction(const core::Packing& p) {

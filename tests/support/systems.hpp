@@ -3,8 +3,10 @@
 // lowest vertex sits at a given height, and an empty system in a box. Both grain builders take
 // (size, position[, orientation]) in that order.
 #include <algorithm>
+#include <string>
 
 #include "core/backend.hpp"
+#include "core/run_config.hpp"
 
 namespace confpack::testing {
 
@@ -57,6 +59,22 @@ inline core::SystemDef boxSystem(double lengthX, double width, bool periodicY, d
   s.box.periodicY = periodicY;
   s.walls.friction = mu;
   return s;
+}
+
+/// A run of the quasi-static protocol on a small walled pile (L_x = 4, W = 3, h = 4, about 40
+/// spheres, seed 2), checked every 50 steps: the compaction tests' pile, a few seconds to rest.
+inline core::RunConfig smallQuasiStaticRun(const std::string& backend, double wallFriction) {
+  core::RunConfig cfg;
+  cfg.box.lengthX = 4.0;
+  cfg.box.width = 3.0;
+  cfg.box.height = 4.0;
+  cfg.walls.friction = wallFriction;
+  cfg.backend = backend;
+  cfg.seed = 2;
+  cfg.compaction.protocol = core::Protocol::QuasiStatic;
+  cfg.compaction.timeLimit = 40.0;
+  cfg.compaction.checkInterval = 50;
+  return cfg;
 }
 
 }  // namespace confpack::testing
