@@ -132,6 +132,10 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
         system.grains[i].position = saved[i].position;
         system.grains[i].orientation = saved[i].orientation;
       }
+      if (resumed->counters.finisherStage) {  // checked here, so that a bad one is set aside too
+        core::QuasiStaticFinisher probe(def, core::smallestSize(deposit.grains), resumed->counters.dt);
+        probe.restoreState(resumed->finisher);
+      }
       backend = makeBackend();
       backend->restoreState(resumed->backend);
     } catch (const std::exception& e) {
@@ -207,7 +211,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   }
 
   analysis::EquilibriumReport eq;
-  bool haveEq = resumed.has_value();  // a checkpoint is written after a check
+  bool haveEq = false;
   // One step of either stage: time it and add its profile to the totals.
   auto timed = [&](auto&& stepFn) {
     const Clock::time_point stepStart = Clock::now();

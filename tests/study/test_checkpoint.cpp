@@ -102,6 +102,15 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
   checkSamePacking(whole, resumed);
   CHECK(resumed.timing["checkpoint"]["resumes"] == 1);
   CHECK(resumed.timing["checkpoint"]["exact"] == true);
+  if (inFinisher) {  // a finisher state that cannot be: set aside, the run starts afresh
+    nlohmann::json j = readJson(file);
+    j["finisher"]["h"] = -1.0;
+    std::ofstream(file) << j.dump();
+    const study::CompactionOutcome afresh = study::compact(cfg, dep, {}, {}, resume);
+    CHECK(afresh.timing["checkpoint"]["resumes"] == 0);
+    CHECK_THAT(afresh.timing["checkpoint"]["ignored"].get<std::string>(), Catch::Contains("does not fit"));
+    checkSamePacking(whole, afresh);
+  }
 }
 
 TEST_CASE("checkpoint: Bullet resumes from the saved poses and velocities and still runs its time") {
