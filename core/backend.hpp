@@ -126,7 +126,7 @@ class ContactBackend {
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);
 
   /// The state after the last step, for a run's checkpoint (docs/model.md, "Checkpoints"): every
-  /// grain's pose and velocity (BodyStatesJson), and whatever else the next step reads (nscd: the
+  /// grain's pose and velocity (bodyStatesToJson), and whatever else the next step reads (nscd: the
   /// warm-start impulses and the finisher's metric weights). Doubles are written with 17
   /// significant digits, so they read back to the same bits.
   virtual nlohmann::json saveState() const;

@@ -640,10 +640,6 @@ void BulletBackend::wrapIntoBox() {
     broadphase_->getOverlappingPairCache()->cleanProxyFromPairs(body->getBroadphaseHandle(), dispatcher_.get());
 }
 
-// One fixed step in Bullet's order (btDiscreteDynamicsWorld::stepSimulation and
-// internalSingleStepSimulation): forces, collision at the current poses, the solve (gravity
-// enters as the solver bodies' external impulse m g dt), integration. Bullet applies the warm
-// start while it builds the rows, so WarmStart stays inside PrepareContacts.
 // Built from the SystemDef at the saved poses, the backend takes back the velocities. Its contact
 // manifolds and their warm-start impulses are not part of the state (Bullet has no way to write
 // them out): the first step after a restore finds the contacts again and solves them cold.
@@ -658,6 +654,10 @@ void BulletBackend::restoreState(const nlohmann::json& state) {
   readStates();
 }
 
+// One fixed step in Bullet's order (btDiscreteDynamicsWorld::stepSimulation and
+// internalSingleStepSimulation): forces, collision at the current poses, the solve (gravity
+// enters as the solver bodies' external impulse m g dt), integration. Bullet applies the warm
+// start while it builds the rows, so WarmStart stays inside PrepareContacts.
 void BulletBackend::step(double dt) {
   beginStep(dt);
   core::PhaseClock clock(profile_);
