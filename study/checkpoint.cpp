@@ -5,11 +5,11 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <limits>
-#include <sstream>
+#include <new>
 #include <stdexcept>
 
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::study {
@@ -124,11 +124,7 @@ std::optional<LoadedCheckpoint> readCheckpoint(const std::filesystem::path& file
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) return std::nullopt;
   try {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (!in) throw std::runtime_error("cannot read it");
-    const nlohmann::json j = nlohmann::json::parse(text.str());
+    const nlohmann::json j = core::readJsonFile(file, "checkpoint");
     if (j.value("format", "") != kFormat || j.value("version", 0) != kVersion)
       throw std::runtime_error(fmt::format("not a {} file of version {}", kFormat, kVersion));
     if (j.at("identity") != identity) {
@@ -165,6 +161,8 @@ std::optional<LoadedCheckpoint> readCheckpoint(const std::filesystem::path& file
       out.finisher = j.at("finisher");
     }
     return out;
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory is the run's failure, not a damaged file
   } catch (const std::exception& e) {
     why = fmt::format("it cannot be read ({})", e.what());
     return std::nullopt;
@@ -175,8 +173,7 @@ std::string describeCheckpoint(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) return {};
   try {
-    std::ifstream in(file, std::ios::binary);
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j = core::readJsonFile(file, "checkpoint");
     const double minutes = j.at("elapsed_s").get<double>() / 60.0;
     const double t = j.at("sim_time").get<double>();
     if (j.at("stage") == "finisher")

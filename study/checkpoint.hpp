@@ -24,8 +24,8 @@ namespace confpack::study {
 /// after every `everySeconds` of wall time, and when SIGINT or SIGTERM stops it.
 struct Checkpointing {
   std::filesystem::path file;  ///< empty: no checkpoint
-  /// 5 min: at most that much work lost to a machine that dies, for a write of about 1 MB per
-  /// 1,000 grains (a few tens of ms).
+  /// 5 min: at most that much work lost to a machine that dies, for a save of about 1 MB and
+  /// 10 to 20 ms per 1,650 spheres (docs/performance.md, "Checkpoints").
   double everySeconds = 300.0;
 };
 

@@ -124,6 +124,12 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                                  cfg.backendOptions.is_null() ? nlohmann::json::object() : cfg.backendOptions);
   };
   std::unique_ptr<core::ContactBackend> backend;
+  // The finisher's first step is the last dynamic one; it is made when the fall ends, or here for
+  // a run resumed in its finisher.
+  std::optional<core::QuasiStaticFinisher> finish;
+  const auto makeFinisher = [&](double firstStep) {
+    finish.emplace(def, core::smallestSize(deposit.grains), firstStep);
+  };
   if (resumed) {
     try {
       const std::vector<core::BodyState> saved =
@@ -132,9 +138,9 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
         system.grains[i].position = saved[i].position;
         system.grains[i].orientation = saved[i].orientation;
       }
-      if (resumed->counters.finisherStage) {  // checked here, so that a bad one is set aside too
-        core::QuasiStaticFinisher probe(def, core::smallestSize(deposit.grains), resumed->counters.dt);
-        probe.restoreState(resumed->finisher);
+      if (resumed->counters.finisherStage) {
+        makeFinisher(resumed->counters.dt);
+        finish->restoreState(resumed->finisher);
       }
       backend = makeBackend();
       backend->restoreState(resumed->backend);
@@ -142,6 +148,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       ignoredWhy = fmt::format("its state does not fit ({})", e.what());
       resumed.reset();
       backend.reset();
+      finish.reset();
       system.grains = deposit.grains;
     }
   }
@@ -169,17 +176,9 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   CompactionCounters c;
   c.dt = out.dt;
   c.dtLargest = out.dt;
-  // The finisher's first step is the last dynamic one; it is made when the fall ends.
-  std::optional<core::QuasiStaticFinisher> finish;
-  const auto makeFinisher = [&] { finish.emplace(def, core::smallestSize(deposit.grains), c.dt); };
-
   if (resumed) {
     c = resumed->counters;
     ++c.resumes;
-    if (c.finisherStage) {
-      makeFinisher();
-      finish->restoreState(resumed->finisher);
-    }
   }
   const auto elapsed = [&] { return c.elapsedSeconds + secondsSince(start); };
   auto lastSave = Clock::now();
@@ -289,7 +288,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
     c.dynamicIterations = c.iterations;
     c.dynamicWallSeconds = elapsed();
     c.finisherStage = handOver;
-    if (handOver) makeFinisher();
+    if (handOver) makeFinisher(c.dt);
   }
 
   // Stage 2 (quasi-static protocol): the finisher's steps from rest

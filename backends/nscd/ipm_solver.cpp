@@ -44,8 +44,9 @@ constexpr int kPolishRounds = 6;
 
 /// CHOLMOD's factorisations and solves call BLAS, and Debian's serial OpenBLAS (the one its
 /// SuiteSparse pulled in here) is not safe to call from two threads at once: with `sweep --jobs 2`
-/// two finishers of 1,648 spheres, each at rest in 20 steps alone, got wrong steps and crept
-/// for 600 steps and more. One lock for the process serialises them (uncontended in one run).
+/// the finishers of two W = 10 piles (1,637 and 1,648 spheres, at rest in 27 and 20 steps alone)
+/// ran side by side and crept for 600 steps and more. One lock for the process serialises them
+/// (uncontended in one run).
 std::unique_lock<std::mutex> blasLock() {
   static std::mutex m;
   return std::unique_lock<std::mutex>(m);

@@ -152,6 +152,8 @@ class NscdBackend final : public core::ContactBackend {
     if (!state.value("last_finisher_step_clipped", nlohmann::json()).is_boolean())
       throw bad("last_finisher_step_clipped");
     cache_.fromJson(state.value("cache", nlohmann::json()), n_);
+    // The poses again, although the SystemDef had them: the constructor wraps and normalises them,
+    // which may change their last bits.
     for (int i = 0; i < n_; ++i) {
       position_[i] = grains[i].position;
       orientation_[i] = grains[i].orientation;
