@@ -233,40 +233,38 @@ WorkStep::~WorkStep() {
   if (std::uncaught_exceptions() == uncaught_) currentStep = previous_;
 }
 
-void checkInput(std::string_view command, const std::function<void()>& checks) {
+namespace {
+
+// Runs one stage of a subcommand: CLI11's own errors and out-of-memory go up to main (which
+// reports them), a stop by signal exits 128 + the signal (as a shell reports a process the signal
+// killed), any other error exits `failure`. Staged output has been removed on the way here
+// (StagedOutput's destructor); a sweep keeps its finished runs.
+void runStage(std::string_view command, const char* stepName, int failure, const std::function<void()>& body) {
   currentCommand = command;
-  const WorkStep step("checking the input");
+  const WorkStep step(stepName);
   try {
-    checks();
+    body();
   } catch (const CLI::RuntimeError&) {
     throw;
   } catch (const std::bad_alloc&) {
     throw;
   } catch (const core::Interrupted& e) {
-    // A check can be long work (analyze analyses the packing before it writes anything): a stop
-    // there is no refusal of the input. Nothing is written yet.
     failWith(command, e, 128 + e.signal());
   } catch (const std::exception& e) {
-    failWith(command, e, kExitBadInput);
+    failWith(command, e, failure);
   }
 }
 
+}  // namespace
+
+// A check can be long work (analyze analyses the packing before it writes anything): a stop there
+// is no refusal of the input, and nothing is written yet.
+void checkInput(std::string_view command, const std::function<void()>& checks) {
+  runStage(command, "checking the input", kExitBadInput, checks);
+}
+
 void runWork(std::string_view command, const std::function<void()>& work) {
-  currentCommand = command;
-  const WorkStep step("preparing the output");
-  try {
-    work();
-  } catch (const CLI::RuntimeError&) {
-    throw;
-  } catch (const std::bad_alloc&) {
-    throw;
-  } catch (const core::Interrupted& e) {
-    // Exit 128 + the signal, as a shell reports a process the signal killed. Staged output has
-    // been removed on the way here (StagedOutput's destructor); a sweep keeps its finished runs.
-    failWith(command, e, 128 + e.signal());
-  } catch (const std::exception& e) {
-    failWith(command, e, kExitRuntimeFailure);
-  }
+  runStage(command, "preparing the output", kExitRuntimeFailure, work);
 }
 
 CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow) {

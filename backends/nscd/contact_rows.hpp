@@ -98,6 +98,19 @@ struct FrictionRow {
   int a = 0;
 };
 
+/// Relative normal velocity at a point, without the bias c: u_n = n.(v_b - v_a) + (l_b x n).w_b -
+/// (l_a x n).w_a, for any row carrying the Jacobian pieces n, axn, bxn (a NormalRow, or a solver's
+/// own copy of one). One expression for every solver, so they agree on its bits.
+template <class Row>
+inline double normalVelocity(const Row& row, const BodyVelocity& va, const BodyVelocity& vb) {
+  return row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+}
+
+/// The same at a side-wall point: the wall does not move, u_n = -(n.v_a + (l_a x n).w_a).
+inline double normalVelocity(const FrictionRow& row, const BodyVelocity& va) {
+  return -(row.n.dot(va.v) + row.axn.dot(va.w));
+}
+
 /// Tangential update of a side-wall friction point at its current normal impulse: one local
 /// Gauss-Seidel step projected on the Coulomb disc ||r_t|| <= mu r_n (nlgs_solver.hpp states it),
 /// applied to the velocity of its grain `va`. Returns the change (d1, d2). Used by both solvers.

@@ -340,13 +340,12 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
       const NormalRow& row = normalRows[k];
       const BodyVelocity& va = v[static_cast<std::size_t>(row.a)];
       const BodyVelocity& vb = v[static_cast<std::size_t>(row.b)];
-      out[static_cast<Eigen::Index>(k)] =
-          row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w) + row.bias;
+      out[static_cast<Eigen::Index>(k)] = normalVelocity(row, va, vb) + row.bias;
     }
     for (std::size_t f = 0; f < frictionRows.size(); ++f) {
       const FrictionRow& row = frictionRows[f];
       const BodyVelocity& va = v[static_cast<std::size_t>(row.a)];
-      out[static_cast<Eigen::Index>(nN + f)] = -row.n.dot(va.v) - row.axn.dot(va.w) + row.bias;
+      out[static_cast<Eigen::Index>(nN + f)] = normalVelocity(row, va) + row.bias;
     }
   };
   // vel = base + M^-1 J^T r (the solvers' own update, with the rows' inverse masses).

@@ -180,7 +180,7 @@ double MprgpSolver::contactVelocities(const std::vector<BodyVelocity>& vel, std:
     const GatherRow& row = gatherRows_[k];
     const BodyVelocity& va = vel[row.a];
     const BodyVelocity& vb = vel[row.b];
-    out[k] = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w) + row.bias;
+    out[k] = normalVelocity(row, va, vb) + row.bias;
     return 0.0;
   });
 }
@@ -195,7 +195,7 @@ inline double MprgpSolver::dvAlongRow(std::size_t k) const {
   const GatherRow& row = gatherRows_[k];
   const BodyVelocity& va = dv_[row.a];
   const BodyVelocity& vb = dv_[row.b];
-  return row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+  return normalVelocity(row, va, vb);
 }
 
 // out = A x = S H^T M^-1 H S x, in two passes (impulses to body velocities, then back to rows);
@@ -392,7 +392,7 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
       const GatherRow& row = rows[k];
       BodyVelocity& va = dv[row.a];
       BodyVelocity& vb = dv[row.b];
-      const double delta = g[k] - (row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w));
+      const double delta = g[k] - normalVelocity(row, va, vb);
       z[k] += delta;
       va.v -= (delta * mass[k].invMa) * row.n;
       va.w -= delta * angular[k].a;

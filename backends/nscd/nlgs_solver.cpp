@@ -19,7 +19,7 @@ int NlgsSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const N
     auto normalRow = [&](NormalRow& row) {
       BodyVelocity& va = vel[row.a];
       BodyVelocity& vb = vel[row.b];
-      const double un = row.n.dot(vb.v - va.v) + row.bxn.dot(vb.w) - row.axn.dot(va.w);
+      const double un = normalVelocity(row, va, vb);
       const double rNew = std::max(0.0, row.r - omega * (un + row.bias) * row.invW);
       const double dr = rNew - row.r;
       row.r = rNew;
@@ -33,7 +33,7 @@ int NlgsSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const N
     auto frictionRow = [&](FrictionRow& row) {
       BodyVelocity& va = vel[row.a];
       // Normal part. The wall does not move: u = -(v_a + w_a x l_a).
-      const double un = -(row.n.dot(va.v) + row.axn.dot(va.w));
+      const double un = normalVelocity(row, va);
       const double rn = std::max(0.0, row.rn - (un + row.bias) * row.invWnn);
       const double dn = rn - row.rn;
       row.rn = rn;
