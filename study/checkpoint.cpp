@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -176,10 +177,23 @@ std::string describeCheckpoint(const std::filesystem::path& file) {
     const nlohmann::json j = core::readJsonFile(file, "checkpoint");
     const double minutes = j.at("elapsed_s").get<double>() / 60.0;
     const double t = j.at("sim_time").get<double>();
-    if (j.at("stage") == "finisher")
-      return fmt::format("checkpoint: finisher step {} (t = {:.1f}), {:.0f} min",
-                         j.at("finisher").at("steps").get<long>(), t, minutes);
-    return fmt::format("checkpoint: fall at t = {:.1f}, {:.0f} min", t, minutes);
+    std::string where = j.at("stage") == "finisher"
+                            ? fmt::format("checkpoint: finisher step {} (t = {:.1f}), {:.0f} min",
+                                          j.at("finisher").at("steps").get<long>(), t, minutes)
+                            : fmt::format("checkpoint: fall at t = {:.1f}, {:.0f} min", t, minutes);
+    // How far from rest: the last check that measured the ratios (the first checks of a fall have
+    // no contacts to measure), against the run's bounds.
+    const std::vector<CheckPoint> history = historyFromJson(j.at("history"));
+    const auto measured = std::find_if(history.rbegin(), history.rend(), [](const CheckPoint& c) {
+      return std::isfinite(c.maxForceRatio) && std::isfinite(c.maxKineticRatio);
+    });
+    if (measured != history.rend()) {
+      const nlohmann::json& bounds = j.at("identity").at("config").at("compaction");
+      where += fmt::format("; last check: force ratio {:.2g} (rest below {:.2g}), kinetic ratio {:.2g} (below {:.2g})",
+                           measured->maxForceRatio, bounds.at("force_ratio").get<double>(), measured->maxKineticRatio,
+                           bounds.at("kinetic_ratio").get<double>());
+    }
+    return where;
   } catch (const std::exception&) {
     return {};
   }

@@ -92,8 +92,9 @@ inline std::filesystem::path sweepCheckpointFile(const std::filesystem::path& sw
 }
 
 /// Where the checkpoint in `file` stands, for a sweep's status: "checkpoint: fall at t = 83.5,
-/// 12 min" or "checkpoint: finisher step 140 (t = 83.5), 15 min"; empty when there is none or it
-/// cannot be read.
+/// 12 min" or "checkpoint: finisher step 140 (t = 83.5), 15 min", then how far from rest its last
+/// measured check was: "; last check: force ratio 0.42 (rest below 0.0001), kinetic ratio 3e-05
+/// (below 1e-08)"; empty when there is none or it cannot be read.
 std::string describeCheckpoint(const std::filesystem::path& file);
 
 /// Writes the checkpoint atomically (core::writeFileAtomically), creating its folder.

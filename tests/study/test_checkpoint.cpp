@@ -4,6 +4,8 @@
 // The stop here is a dead process (the progress callback throws at a check, as a kill -9 would
 // end the run between two saves); SIGTERM's own save is tested through the CLI
 // (tests/apps/test_cmd_run.cpp).
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -174,4 +176,34 @@ TEST_CASE("checkpoint: another run's checkpoint, or a damaged one, is set aside 
     CHECK(out.timing["checkpoint"]["ignored"].get<std::string>().find("does not fit") != std::string::npos);
     checkSamePacking(whole, out);
   }
+}
+
+TEST_CASE("checkpoint: its description says the stage and how far from rest its last measured check was") {
+  core::RunConfig cfg = smallPile("nscd", core::ShapeKind::Sphere);
+  cfg.compaction.timeLimit = 2.0;
+  cfg.compaction.protocol = core::Protocol::Dynamic;
+  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const fs::path file = testing::freshDir("checkpoint_describe") / "run.json";
+  cfg.compaction.timeLimit = 6.0;
+  killedAt(cfg, dep, file, 8);
+  nlohmann::json j = readJson(file);
+  // The last check with ratios measured: [steps, time, wall, force, moment, kinetic, ...].
+  nlohmann::json last;
+  for (const nlohmann::json& e : j["history"])
+    if (e[3].is_number() && e[5].is_number()) last = e;
+  REQUIRE(!last.is_null());
+  const std::string said = study::describeCheckpoint(file);
+  CHECK_THAT(said, Catch::StartsWith(fmt::format("checkpoint: fall at t = {:.1f}, ", j["sim_time"].get<double>())));
+  CHECK_THAT(said, Catch::EndsWith(fmt::format("; last check: force ratio {:.2g} (rest below 0.0001), kinetic ratio "
+                                               "{:.2g} (below 1e-08)",
+                                               last[3].get<double>(), last[5].get<double>())));
+
+  // A fall whose checks have measured nothing yet (no contacts): no ratios to tell.
+  for (nlohmann::json& e : j["history"]) e[3] = "inf";
+  std::ofstream(file) << j.dump();
+  CHECK(study::describeCheckpoint(file).find("last check") == std::string::npos);
+  // Nothing to say of a missing or unreadable file.
+  std::ofstream(file) << "{";
+  CHECK(study::describeCheckpoint(file).empty());
+  CHECK(study::describeCheckpoint(file.parent_path() / "none.json").empty());
 }
