@@ -301,7 +301,21 @@ ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>
   if (!found) {
     best = ProfileFit{};
     best.reason = lastReason.empty() ? "no start converged" : lastReason;
+    return best;
   }
+  // A decay length beyond the profile's extent is not measured by it: the layering does not
+  // decay within the data, and the fit lets lambda run away (to 1e9 d_L on 6 d_L wide piles).
+  const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
+  const double extent = *hi - *lo;
+  for (int i = 0; i < (def.bidisperse ? 2 : 1); ++i)
+    if (best.law.lambda[i] > extent) {
+      best.ok = false;
+      best.reason = fmt::format(
+          "the layering does not decay within the profile: lambda_{} = {:.3g} d_L is longer "
+          "than the {:.3g} d_L it spans",
+          i == 0 ? 'L' : 'S', best.law.lambda[i], extent);
+      break;
+    }
   return best;
 }
 
