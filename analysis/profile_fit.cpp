@@ -305,6 +305,8 @@ ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>
   }
   // A decay length beyond the profile's extent is not measured by it: the layering does not
   // decay within the data, and the fit lets lambda run away (to 1e9 d_L on 6 d_L wide piles).
+  // Judged on the best start only: another start's shorter lambda, with a larger chi^2, is no
+  // better measure of it.
   const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
   const double extent = *hi - *lo;
   for (int i = 0; i < (def.bidisperse ? 2 : 1); ++i)

@@ -23,15 +23,20 @@ Synthetic synthetic(const analysis::ProfileLaw& law, double noise, std::uint64_t
   }
   return s;
 }
+/// A monodisperse layering near a wall, decaying over lambdaL [d_L].
+analysis::ProfileLaw layered(double lambdaL) {
+  analysis::ProfileLaw law;
+  law.alpha = 0.08;
+  law.phiBulk = 0.61;
+  law.beta[0] = 0.2;
+  law.gamma[0] = 0.92;
+  law.lambda[0] = lambdaL;
+  return law;
+}
 }  // namespace
 
 TEST_CASE("nonlinear phi(y) fit recovers known parameters with honest errors", "[analysis][fit]") {
-  analysis::ProfileLaw truth;
-  truth.alpha = 0.08;
-  truth.phiBulk = 0.61;
-  truth.beta[0] = 0.2;
-  truth.gamma[0] = 0.92;
-  truth.lambda[0] = 0.8;
+  const analysis::ProfileLaw truth = layered(0.8);
 
   const auto clean = synthetic(truth, 0.0, 1);
   const auto exact = analysis::fitProfile(clean.y, clean.phi);
@@ -81,19 +86,13 @@ TEST_CASE("nonlinear phi(y) fit recovers known parameters with honest errors", "
 TEST_CASE("phi(y) fit: a layering that does not decay within the profile gives no decay length", "[analysis][fit]") {
   // Undamped layering over 5 d_L: the law's lambda is not determined by these data (the fit lets it
   // run far beyond them); a decay within the data is still measured.
-  analysis::ProfileLaw law;
-  law.alpha = 0.08;
-  law.phiBulk = 0.61;
-  law.beta[0] = 0.2;
-  law.gamma[0] = 0.92;
-  law.lambda[0] = 1e6;
-  const auto undamped = synthetic(law, 0.002, 4);
+  const auto undamped = synthetic(layered(1e6), 0.002, 4);
   const auto f = analysis::fitProfile(undamped.y, undamped.phi);
   CHECK_FALSE(f.ok);
   CHECK_THAT(f.reason, Catch::Contains("does not decay within the profile"));
 
-  law.lambda[0] = 2.0;  // 2 d_L: the amplitude falls by e^2.5 across the 5 d_L of data
-  const auto damped = synthetic(law, 0.002, 4);
+  // 2 d_L: the amplitude falls by e^2.5 across the 5 d_L of data.
+  const auto damped = synthetic(layered(2.0), 0.002, 4);
   const auto g = analysis::fitProfile(damped.y, damped.phi);
   REQUIRE(g.ok);
   CHECK(std::abs(g.law.lambda[0] - 2.0) < 4 * g.error.lambda[0]);
