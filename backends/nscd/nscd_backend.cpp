@@ -203,22 +203,26 @@ class NscdBackend final : public core::ContactBackend {
     NscdSettings solve = finisherSettings_;
     if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
     solveContacts(h, finisherSettings_, solve, clock);
-    // The trust radius caps each grain's move on its own. Scaling the whole step instead (which
-    // keeps it inside the convex linearised constraints) made the whole pile advance at the pace
-    // of its fastest grain: on msp-w10 every one of 740 steps was cut (docs/performance.md).
-    // Capped alone, a grain can leave a neighbour overlapping it by at most the trust radius, an
-    // overlap the next step removes whole once the grain's weight has grown; at the fixed point
-    // nothing is capped.
+    // The trust radius caps the largest motion of a grain's surface in a step: when some grain
+    // would move further, the whole step is scaled down to it. A scaled step stays inside the
+    // linearised constraints (they are convex), so it leaves only the linearisation's overlaps.
+    // Capping each grain alone left a capped grain's neighbours their whole move: on a
+    // 1,064-pinacoid pile the overlap at the start of a step was about the trust radius (median
+    // 8.7e-3 d, against 1e-3 d scaled whole), the next step pushed it apart, the moves reversed,
+    // the metric weights grew to a mean of 1e4, and the pile crept on with force ratios of 2 to 20.
+    // Scaled whole, the same pile is at rest in 479 steps (docs/performance.md, "The medium scale").
+    // The grain that set the scale gets heavier (updateMetricWeight), so that one grain still
+    // rearranging does not hold the whole pile to its pace for long.
+    double largest = 0.0;
+    for (int i = 0; i < n_; ++i) largest = std::max(largest, surfaceMove(i, h));
+    const double scale = largest > trustRadius ? trustRadius / largest : 1.0;
     core::QuasiStaticMove move;
+    move.clipped = scale < 1.0;
+    move.maxDisplacement = largest * scale;
     for (int i = 0; i < n_; ++i) {
-      const double d = h * (velocity_[i].v.norm() + velocity_[i].w.norm() * radius_[i]);
-      if (d > trustRadius) {
-        const double s = trustRadius / d;
-        velocity_[i].v *= s;
-        velocity_[i].w *= s;
-        move.clipped = true;
-      }
-      move.maxDisplacement = std::max(move.maxDisplacement, std::min(d, trustRadius));
+      const double d = surfaceMove(i, h);
+      velocity_[i].v *= scale;
+      velocity_[i].w *= scale;
       updateMetricWeight(i, d, trustRadius);
     }
     lastFinisherStepClipped_ = move.clipped;
@@ -247,12 +251,14 @@ class NscdBackend final : public core::ContactBackend {
     clock.charge(Phase::Solve);
   }
 
+  // How far grain i's surface moves in a step of length h at its velocity: |v| h + |w| r_bound h.
+  double surfaceMove(int i, double h) const { return h * (velocity_[i].v.norm() + velocity_[i].w.norm() * radius_[i]); }
+
   // Per-grain metric weights of the finisher (docs/model.md). The finisher's fixed point dq = 0 is
   // static equilibrium whatever the metric, so the weights change the path, not the packing.
   // After each step, a grain's weight is multiplied by
-  // - d / trustRadius when its move d was capped, so that its next free move is about the trust
-  //   radius and the overlap its cap left gets removed (without this, on a 123-pinacoid pile the
-  //   capped grains' overlaps grew from step to step, to 0.6 d, and the pile sank through itself);
+  // - d / trustRadius when its unscaled move d exceeded the trust radius, so that its next free
+  //   move is about the trust radius and it does not scale the whole next step down again;
   // - 4 when its move reverses its last one without shrinking to less than half of it (a move
   //   above 1e-4 of the trust radius): with h = 1 t0 a pinacoid rocking between an edge and a face
   //   overshoots, a 2-cycle that grew by 6 % a step and never settled in 3,000 steps; a heavier

@@ -209,7 +209,9 @@ TEST_CASE("quasi-static protocol: a pinacoid pile handed over early still ends a
   for (const core::Contact& c : *out.packing.contacts)
     for (const core::ContactPoint& p : c.points) deepest = std::min(deepest, p.gap);
   CHECK(deepest > -1e-6);
-  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-8));
+  // The finisher stops once no grain moved more than settle_tolerance (1e-6 d) in its last step;
+  // the floor carries the weight to that relative accuracy.
+  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-6));
 }
 
 TEST_CASE("quasi-static protocol: Bullet has no finisher, runs dynamic and records it") {
