@@ -180,11 +180,10 @@ TEST_CASE("checkpoint: another run's checkpoint, or a damaged one, is set aside 
 
 TEST_CASE("checkpoint: its description says the stage and how far from rest its last measured check was") {
   core::RunConfig cfg = smallPile("nscd", core::ShapeKind::Sphere);
-  cfg.compaction.timeLimit = 2.0;
   cfg.compaction.protocol = core::Protocol::Dynamic;
+  cfg.compaction.timeLimit = 6.0;
   const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   const fs::path file = testing::freshDir("checkpoint_describe") / "run.json";
-  cfg.compaction.timeLimit = 6.0;
   killedAt(cfg, dep, file, 8);
   nlohmann::json j = readJson(file);
   // The last check with ratios measured: [steps, time, wall, force, moment, kinetic, ...].
