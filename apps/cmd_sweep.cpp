@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -15,10 +16,11 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "backends/backend_factory.hpp"
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
+#include "study/run_pipeline.hpp"
 #include "study/slurm.hpp"
 #include "study/sweep.hpp"
-#include "study/run_pipeline.hpp"
 #include "study/sweep_runner.hpp"
 #include "study/sweep_status.hpp"
 
@@ -39,6 +41,7 @@ struct SweepState {
   std::size_t maxRuns = study::kDefaultMaxRuns;
   std::string runList;  ///< --runs: names, comma-separated
   bool status = false;
+  bool reanalyse = false;  ///< --reanalyse
   bool slurm = false;
   bool submit = false;
   study::SlurmOptions slurmOptions;
@@ -104,6 +107,38 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
   });
 }
 
+// --reanalyse: every finished run (or those of --runs) measured again from its packing.json, one
+// after another (a run's analysis takes seconds against its compaction's minutes to hours); runs
+// not finished are left to the sweep.
+void reanalyseRuns(const SweepState& st, const study::SweepSpec& spec, const std::vector<study::SweepRun>& runs,
+                   const fs::path& out, const std::vector<std::size_t>& only) {
+  std::vector<std::size_t> done;
+  std::size_t notDone = 0;
+  for (const study::SweepRun& r : runs) {
+    if (!only.empty() && std::find(only.begin(), only.end(), r.index) == only.end()) continue;
+    if (study::runStatus(out / "runs" / r.name) == study::RunStatus::Done)
+      done.push_back(r.index);
+    else
+      ++notDone;
+  }
+  runWork("sweep", [&] {
+    const WorkStep step("analysing the finished runs again");
+    for (std::size_t k = 0; k < done.size(); ++k) {
+      const study::SweepRun& r = runs[done[k]];
+      const fs::path dir = out / "runs" / r.name;
+      const double before = core::readJsonFile(dir / "result.json", "result file").value("solid_fraction", 0.0);
+      const nlohmann::json now = study::reanalyseRun(dir);
+      if (!st.quiet)
+        fmt::print(stderr, "[{}/{}] {} phi {:.4f} -> {:.4f}\n", k + 1, done.size(), r.name, before,
+                   now.value("solid_fraction", 0.0));
+    }
+  });
+  fmt::print(
+      "sweep {}: {} finished runs analysed again, {} not finished left to the sweep; report with: confpack "
+      "report {}\n",
+      spec.name, done.size(), notDone, out.string());
+}
+
 void runSweepCommand(const SweepState& st) {
   study::SweepSpec spec;
   std::vector<study::SweepRun> runs;
@@ -140,12 +175,16 @@ void runSweepCommand(const SweepState& st) {
       study::checkSlurmOptions(st.slurmOptions);
       study::checkSlurmPath(out);
     }
-    if (st.status && !fs::exists(out / study::kSweepTable))
+    if ((st.status || st.reanalyse) && !fs::exists(out / study::kSweepTable))
       throw std::invalid_argument(fmt::format("{}: not a sweep folder (no {}): nothing has run", out.string(),
                                               study::kSweepTable));
   });
   if (st.status) {
     runWork("sweep", [&] { std::fputs(study::formatStatus(runs, study::sweepStatus(out, runs)).c_str(), stdout); });
+    return;
+  }
+  if (st.reanalyse) {
+    reanalyseRuns(st, spec, runs, out, only);
     return;
   }
   if (st.slurm) {
@@ -225,12 +264,19 @@ void registerSweep(CLI::App& app) {
                                "reason, missing) and exit")
                      ->excludes(list)
                      ->excludes(runList);
+  auto* reanalyse = sub->add_flag("--reanalyse", st->reanalyse,
+                                  "Analyse every finished run's packing.json again with this version (its "
+                                  "measurements and profiles; the compaction's blocks of result.json are kept), so "
+                                  "that a study run over several versions is reported with one analysis, and exit")
+                        ->excludes(list)
+                        ->excludes(status);
   // Slurm (docs/cluster.md).
   auto* slurm = sub->add_flag("--slurm", st->slurm,
                               "Write OUT/slurm/study.sbatch, a Slurm job array over the runs not done, running or "
                               "queued (one deposit's runs per task), and exit")
                     ->excludes(list)
                     ->excludes(status)
+                    ->excludes(reanalyse)
                     ->excludes(runList)
                     ->excludes(taskIndex)
                     ->excludes(taskCount)

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -10,11 +11,13 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <string_view>
 
 #include "analysis/equilibrium.hpp"
 #include "analysis/interpenetration.hpp"
 #include "backends/backend_factory.hpp"
 #include "core/interrupt.hpp"
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "core/quasi_static_finisher.hpp"
 #include "core/vtk_writer.hpp"
@@ -381,9 +384,16 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   return out;
 }
 
+namespace {
+// The keys of result.json that makeResult writes beside the analysis blocks: the compaction's.
+constexpr std::array<std::string_view, 8> kCompactionKeys = {"backend", "seed",    "n_grains", "equilibrium",
+                                                             "timing",  "deposit", "config",   "confpack_version"};
+}  // namespace
+
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
                           const analysis::Analysis& measured) {
   nlohmann::json r = analysis::toJson(measured);
+  // Every key set here is one of kCompactionKeys, which reanalyseRun keeps.
   r["backend"] = cfg.backend;
   r["seed"] = cfg.seed;
   r["n_grains"] = out.packing.grains.size();
@@ -399,6 +409,23 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
   r["config"]["backend_settings"] = out.backendSettings;
   r["config"]["compaction"]["dt"] = out.dt;
   r["confpack_version"] = CONFPACK_VERSION;
+  return r;
+}
+
+nlohmann::json reanalyseRun(const std::filesystem::path& runDir) {
+  const std::filesystem::path resultFile = runDir / "result.json";
+  const nlohmann::json old = core::readJsonFile(resultFile, "result file");
+  if (!old.is_object()) throw std::runtime_error(fmt::format("{}: not a JSON object", resultFile.string()));
+  const core::Packing packing = core::readPacking(runDir / "packing.json");
+  const analysis::Analysis measured = analysis::analyze(packing, analysisOptions());
+  nlohmann::json r = analysis::toJson(measured);
+  for (std::string_view key : kCompactionKeys)
+    if (old.contains(key)) r[std::string(key)] = old[std::string(key)];
+  analysis::writeProfiles(runDir, measured,
+                          {{"seed", old.value("seed", nlohmann::json())},
+                           {"backend", old.value("backend", nlohmann::json())},
+                           {"version", CONFPACK_VERSION}});
+  core::writeFileAtomically(resultFile, r.dump(2));
   return r;
 }
 

@@ -288,3 +288,50 @@ TEST_CASE("confpack sweep --slurm --submit hands the script to sbatch and record
   CHECK_THAT(status.out, Catch::Contains("r0000   missing  4242_0 MSP xS=0 W=3 mu=0 s1 nscd: submitted, but squeue did "
                                          "not answer\n"));
 }
+
+TEST_CASE("confpack sweep --reanalyse measures finished runs again and keeps what the compaction wrote") {
+  const ConfpackSession s("cmd_sweep_reanalyse");
+  std::ofstream(s.dir / "one.json") << R"({
+    "name": "one",
+    "base": { "box": { "length_x": 4, "height": 7 }, "compaction": { "time_limit": 1 } },
+    "biperiodic_width": 4,
+    "vary": { "width": ["biperiodic"], "backend": "nscd" } })";
+  REQUIRE(s.run("sweep one.json --out sw -q").code == 0);
+  const fs::path run = s.dir / "sw" / "runs" / "r0000";
+  const nlohmann::json original = nlohmann::json::parse(slurp(run / "result.json"));
+  const std::string profile = slurp(run / "phi_y.csv");
+  REQUIRE(original.at("solid_fraction").get<double>() > 0.3);
+
+  // The analysis is deterministic and packing.json gives back the final poses' bits: measured
+  // again, an untouched run's result.json is the one its compaction wrote.
+  const auto again = s.run("sweep sw --reanalyse -q");
+  REQUIRE(again.code == 0);
+  CHECK(again.out ==
+        "sweep one: 1 finished runs analysed again, 0 not finished left to the sweep; report with: "
+        "confpack report sw\n");
+  CHECK(nlohmann::json::parse(slurp(run / "result.json")) == original);
+
+  // A result.json from an older analysis: a measurement changed, one missing, one no longer made.
+  nlohmann::json stale = original;
+  stale["solid_fraction"] = 0.1;
+  stale.erase("coordination");
+  stale["retired_block"] = {{"value", 1}};
+  std::ofstream(run / "result.json") << stale.dump(2);
+  fs::remove(run / "phi_y.csv");
+  REQUIRE(s.run("sweep sw --reanalyse -q").code == 0);
+  const nlohmann::json mended = nlohmann::json::parse(slurp(run / "result.json"));
+  CHECK(mended == original);
+  CHECK(slurp(run / "phi_y.csv") == profile);
+
+  // A finished run without its packing: one line naming the file, exit 1, result.json untouched.
+  fs::remove(run / "packing.json");
+  const auto missing = s.run("sweep sw --reanalyse -q");
+  CHECK(missing.code == 1);
+  CHECK_THAT(missing.err, Catch::Contains("packing.json"));
+  CHECK(std::count(missing.err.begin(), missing.err.end(), '\n') == 1);
+  CHECK(nlohmann::json::parse(slurp(run / "result.json")) == original);
+
+  // Not a sweep folder: bad input, exit 2.
+  fs::create_directory(s.dir / "empty");
+  CHECK(s.run("sweep empty --reanalyse").code == 2);
+}
