@@ -119,11 +119,16 @@ class ContactBackend {
   /// One step of the quasi-static finisher: every velocity set to zero, then the implicit Euler
   /// step of length h [t0] from rest, i.e. the displacement dq solving
   ///     min 1/2 dq.M dq / h^2 - F_ext.dq   subject to  gap + J dq >= 0  (contacts re-detected),
-  /// whose multipliers are the contact forces; a grain whose surface would move more than
-  /// `trustRadius` [d_L] has its displacement scaled down to it. States and contacts are then those
+  /// whose multipliers are the contact forces; when some grain's surface would move more than
+  /// `trustRadius` [d_L], the whole step is scaled down so that it moves that far. States and contacts are then those
   /// of a step (velocities dq / h, forces = impulse / h). Only backends with
   /// hasQuasiStaticStep() implement it; the others throw std::logic_error.
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);
+  /// Loosens the stopping threshold of step()'s contact solves to `tolerance` (> 0), in the step
+  /// solver's own measure (nscd, MPRGP: the relative projected gradient), for the quasi-static
+  /// protocol's fall: its last state is balanced by the finisher, whose solves keep their own
+  /// threshold. A backend without quasiStaticStep() is never asked; it ignores it.
+  virtual void setFallTolerance(double tolerance) { (void)tolerance; }
 
   /// The state after the last step, for a run's checkpoint (docs/model.md, "Checkpoints"): every
   /// grain's pose and velocity (bodyStatesToJson), and whatever else the next step reads (nscd: the

@@ -78,6 +78,7 @@ class NscdBackend final : public core::ContactBackend {
     }
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
+    stepSolve_ = settings_;
     finisherSettings_ = settings_;
     SolverKind finisher = settings_.finisherSolver == FinisherSolverKind::Mprgp ? SolverKind::Mprgp : SolverKind::Ipm;
     if (settings_.finisherSolver == FinisherSolverKind::Auto)
@@ -113,7 +114,7 @@ class NscdBackend final : public core::ContactBackend {
     if (settings_.damping > 0.0) damp(std::exp(-settings_.damping * dt));
     predict(dt);
     clock.charge(Phase::Integrate);
-    solveContacts(dt, settings_, settings_, clock);
+    solveContacts(dt, settings_, stepSolve_, clock);
     correct(dt, settings_.theta);
     clock.charge(Phase::Integrate);
     storeImpulses(dt, settings_.theta);
@@ -121,6 +122,12 @@ class NscdBackend final : public core::ContactBackend {
   }
 
   bool hasQuasiStaticStep() const override { return true; }
+
+  void setFallTolerance(double tolerance) override {
+    if (!(tolerance > 0.0) || !std::isfinite(tolerance))
+      throw std::invalid_argument("nscd: the fall's solver tolerance must be positive");
+    stepSolve_.tolerance = tolerance;
+  }
 
   // Everything a step reads besides the SystemDef: poses and velocities (states_ is a copy of
   // position_, orientation_ and velocity_), the warm-start impulses, the damping's loaded grains
@@ -397,6 +404,7 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
   std::vector<double> reach_;
   std::vector<double> radius_;  // bounding radius: a grain's surface moves at most |v| + |w| radius
+  NscdSettings stepSolve_;      // settings_, or the fall's looser tolerance (setFallTolerance)
   NscdSettings finisherSettings_;
   bool lastFinisherStepClipped_ = false;
   // The finisher's per-grain metric weights and each grain's last move (updateMetricWeight()).
