@@ -124,11 +124,10 @@ class ContactBackend {
   /// of a step (velocities dq / h, forces = impulse / h). Only backends with
   /// hasQuasiStaticStep() implement it; the others throw std::logic_error.
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);
-  /// Loosens the stopping threshold of step()'s contact solves to `tolerance` (> 0), in the step
-  /// solver's own measure (nscd, MPRGP: the relative projected gradient), for the quasi-static
-  /// protocol's fall: its last state is balanced by the finisher, whose solves keep their own
-  /// threshold. A backend without quasiStaticStep() is never asked; it ignores it.
-  virtual void setFallTolerance(double tolerance) { (void)tolerance; }
+  /// Says that the step()s that follow are the quasi-static protocol's fall, whose last state the
+  /// finisher balances: a backend may then solve them less tightly (nscd's fall_tolerance).
+  /// Called only on backends with hasQuasiStaticStep(), before their first step.
+  virtual void startQuasiStaticFall() {}
 
   /// The state after the last step, for a run's checkpoint (docs/model.md, "Checkpoints"): every
   /// grain's pose and velocity (bodyStatesToJson), and whatever else the next step reads (nscd: the

@@ -38,9 +38,6 @@ const SettingsTable<CompactionDef>& compactionTable() {
                 "time steps to equilibrium, or time steps until the fall is over then the finisher")
         .number("switch_kinetic_ratio", &C::switchKineticRatio, Range::positive(), "-",
                 "quasi-static: hand over when the mean kinetic ratio is below this")
-        .number("fall_tolerance", &C::fallTolerance, Range::atLeast(0.0), "-",
-                "quasi-static: stopping threshold of the fall's contact solves (nscd: MPRGP's relative projected "
-                "gradient); 0 = the backend's")
         .number("trust_radius", &C::trustRadius, Range::leftOpen(0.0, 0.5), "smallest grain size",
                 "quasi-static: largest motion of a grain's surface in one finisher step")
         .number("settle_tolerance", &C::settleTolerance, Range::positive(), "smallest grain size",

@@ -53,11 +53,6 @@ struct CompactionDef {
   /// creeps. The mean, not the largest: a lone grain sliding on the frictionless floor keeps the
   /// largest ratio up for ever (docs/model.md).
   double switchKineticRatio = 1e-4;
-  /// Quasi-static protocol: the stopping threshold of the fall's contact solves, in the backend's
-  /// measure (nscd: MPRGP's relative projected gradient, whose own default, 1e-10, the equilibrium
-  /// test of the dynamic protocol needs); 0 = the backend's [-]. The fall need not be balanced to
-  /// that accuracy: the finisher, with its own threshold, balances its end.
-  double fallTolerance = 0.0;
   /// Quasi-static protocol: the largest motion of a grain's surface in one finisher step, as a
   /// fraction of the smallest grain's size [-]. A third of nscd's default alert distance (0.03):
   /// two grains closing on each other cannot cross the alert band unseen in one step.

@@ -162,7 +162,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
   const bool adaptive = def.adaptiveDt;
   // Bullet has no finisher: its runs stay dynamic, and result.json says which protocol ran.
   const bool finisher = def.protocol == core::Protocol::QuasiStatic && backend->hasQuasiStaticStep();
-  if (finisher && def.fallTolerance > 0.0) backend->setFallTolerance(def.fallTolerance);
+  if (finisher) backend->startQuasiStaticFall();
   // With the finisher, the dynamic steps are the fall, bounded by fall_time_limit when given.
   const bool fallBounded = finisher && def.fallTimeLimit > 0.0;
   const double timeLimit = fallBounded ? def.fallTimeLimit : def.timeLimit;

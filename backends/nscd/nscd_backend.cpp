@@ -81,9 +81,8 @@ class NscdBackend final : public core::ContactBackend {
     stepSolve_ = settings_;
     finisherSettings_ = settings_;
     SolverKind finisher = settings_.finisherSolver == FinisherSolverKind::Mprgp ? SolverKind::Mprgp : SolverKind::Ipm;
-    if (settings_.finisherSolver == FinisherSolverKind::Auto)
-      for (const core::Grain& g : system.grains)
-        if (g.shape != core::ShapeKind::Sphere) finisher = SolverKind::Mprgp;
+    for (const core::Grain& g : system.grains) pinacoids_ = pinacoids_ || g.shape != core::ShapeKind::Sphere;
+    if (settings_.finisherSolver == FinisherSolverKind::Auto && pinacoids_) finisher = SolverKind::Mprgp;
     if (finisher != settings_.solver) {  // its own cap; the tolerance if it means the same
       const NscdSettings own = defaultsFor(finisher);
       finisherSettings_.solver = own.solver;
@@ -123,9 +122,9 @@ class NscdBackend final : public core::ContactBackend {
 
   bool hasQuasiStaticStep() const override { return true; }
 
-  void setFallTolerance(double tolerance) override {
-    if (!(tolerance > 0.0) || !std::isfinite(tolerance))
-      throw std::invalid_argument("nscd: the fall's solver tolerance must be positive");
+  void startQuasiStaticFall() override {
+    double tolerance = settings_.fallTolerance;
+    if (tolerance == 0.0) tolerance = pinacoids_ ? kPinacoidFallTolerance : settings_.tolerance;
     stepSolve_.tolerance = tolerance;
   }
 
@@ -404,7 +403,8 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
   std::vector<double> reach_;
   std::vector<double> radius_;  // bounding radius: a grain's surface moves at most |v| + |w| radius
-  NscdSettings stepSolve_;      // settings_, or the fall's looser tolerance (setFallTolerance)
+  NscdSettings stepSolve_;      // settings_, or the fall's looser tolerance (startQuasiStaticFall)
+  bool pinacoids_ = false;      // some grain is not a sphere
   NscdSettings finisherSettings_;
   bool lastFinisherStepClipped_ = false;
   // The finisher's per-grain metric weights and each grain's last move (updateMetricWeight()).

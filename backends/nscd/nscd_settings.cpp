@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace confpack::nscd {
@@ -11,12 +12,17 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
   using S = NscdSettings;
   static const core::SettingsTable<S> table = [] {
     core::SettingsTable<S> t("nscd");
-    t.number("theta", &S::theta, Range::closed(0.5, 1.0), "-", "Moreau-Jean theta: 0.5 integrates free flight exactly, 1 is implicit Euler")
-        .choice("solver", &S::solver, {{"mprgp", SolverKind::Mprgp}, {"nlgs", SolverKind::Nlgs}, {"ipm", SolverKind::Ipm}},
+    t.number("theta", &S::theta, Range::closed(0.5, 1.0), "-",
+             "Moreau-Jean theta: 0.5 integrates free flight exactly, 1 is implicit Euler")
+        .choice("solver", &S::solver,
+                {{"mprgp", SolverKind::Mprgp}, {"nlgs", SolverKind::Nlgs}, {"ipm", SolverKind::Ipm}},
                 "contact solver; its choice sets the defaults of tolerance and max_iterations")
-        .choice("finisher_solver", &S::finisherSolver,
-                {{"auto", FinisherSolverKind::Auto}, {"ipm", FinisherSolverKind::Ipm}, {"mprgp", FinisherSolverKind::Mprgp}},
-                "solver of the finisher's steps: auto = ipm for spheres, mprgp for pinacoids (tolerance as for the steps)")
+        .choice(
+            "finisher_solver", &S::finisherSolver,
+            {{"auto", FinisherSolverKind::Auto},
+             {"ipm", FinisherSolverKind::Ipm},
+             {"mprgp", FinisherSolverKind::Mprgp}},
+            "solver of the finisher's steps: auto = ipm for spheres, mprgp for pinacoids (tolerance as for the steps)")
         .choice("expansion", &S::expansion,
                 {{"projected_cg", ExpansionKind::ProjectedCg}, {"gradient", ExpansionKind::Gradient}},
                 "mprgp: the step taken when a conjugate gradient step would make an impulse negative")
@@ -24,19 +30,40 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
                 {{"sgs", PreconditionerKind::SymmetricGaussSeidel}, {"none", PreconditionerKind::None}},
                 "mprgp: symmetric Gauss-Seidel sweeps over the free rows, or Jacobi scaling only")
         .number("tolerance", &S::tolerance, Range::positive(), "-",
-                "stopping threshold: mprgp and ipm relative projected gradient (1e-10), nlgs relative impulse change (1e-6)")
+                "stopping threshold: mprgp and ipm relative projected gradient (1e-10), nlgs relative impulse change "
+                "(1e-6)")
         .integer("max_iterations", &S::maxIterations, Range::atLeast(1), "-",
                  "iterations per step at most: mprgp 5000, nlgs 2000, ipm 200")
-        .integer("min_iterations", &S::minIterations, Range::atLeast(1), "-", "nlgs: sweeps done before testing convergence")
+        .integer("min_iterations", &S::minIterations, Range::atLeast(1), "-",
+                 "nlgs: sweeps done before testing convergence")
         .number("relaxation", &S::relaxation, Range::open(0.0, 2.0), "-", "nlgs: over-relaxation factor omega")
         .number("alert_distance", &S::alertDistance, Range::atLeast(0.0), "d",
                 "a pair closer than this (fraction of the smaller size) becomes a contact row")
-        .number("gap_correction", &S::gapCorrection, Range::leftOpen(0.0, 1.0), "-", "fraction of an overlap removed per step")
+        .number("gap_correction", &S::gapCorrection, Range::leftOpen(0.0, 1.0), "-",
+                "fraction of an overlap removed per step")
         .number("max_correction_velocity", &S::maxCorrectionVelocity, Range::positive(), "sqrt(g d_L)",
                 "largest separation velocity the overlap correction asks for")
         .number("damping", &S::damping, Range::atLeast(0.0), "sqrt(g / d_L)", "damping rate of slow grains in contact")
         .numberOrNone("damping_speed", &S::dampingSpeed, Range::positive(), "sqrt(g d_L)",
                       "grains faster than this are not damped")
+        .field(
+            "fall_tolerance", "-", "> 0, or \"auto\"",
+            "stopping threshold of the quasi-static protocol's fall: auto = 1e-6 for pinacoids, tolerance for spheres",
+            [](const nlohmann::json& j, S& s) {
+              if (j == "auto") {
+                s.fallTolerance = 0.0;
+                return;
+              }
+              if (!j.is_number() || !(j.get<double>() > 0.0) || !std::isfinite(j.get<double>()))
+                throw std::invalid_argument(
+                    fmt::format("nscd.fall_tolerance: expected a positive number or \"auto\" (got {})", j.dump()));
+              s.fallTolerance = j.get<double>();
+            },
+            [](const S& s) { return s.fallTolerance > 0.0 ? nlohmann::json(s.fallTolerance) : nlohmann::json("auto"); },
+            [](const S& s) {
+              if (!(s.fallTolerance >= 0.0) || !std::isfinite(s.fallTolerance))
+                throw std::invalid_argument("nscd.fall_tolerance: must be positive or \"auto\"");
+            })
         .rule([](const S& s) {
           if (s.minIterations > s.maxIterations)
             throw std::invalid_argument(fmt::format("nscd.min_iterations: must be at most max_iterations ({}) (got {})",
