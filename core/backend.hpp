@@ -120,9 +120,9 @@ class ContactBackend {
   /// step of length h [t0] from rest, i.e. the displacement dq solving
   ///     min 1/2 dq.M dq / h^2 - F_ext.dq   subject to  gap + J dq >= 0  (contacts re-detected),
   /// whose multipliers are the contact forces; when some grain's surface would move more than
-  /// `trustRadius` [d_L], the whole step is scaled down so that it moves that far. States and contacts are then those
-  /// of a step (velocities dq / h, forces = impulse / h). Only backends with
-  /// hasQuasiStaticStep() implement it; the others throw std::logic_error.
+  /// `trustRadius` [d_L], the whole step is scaled down so that it moves that far. States and
+  /// contacts are then those of a step (velocities dq / h, forces = impulse / h). Only backends
+  /// with hasQuasiStaticStep() implement it; the others throw std::logic_error.
   virtual QuasiStaticMove quasiStaticStep(double h, double trustRadius);
   /// Says that the step()s that follow are the quasi-static protocol's fall, whose last state the
   /// finisher balances: a backend may then solve them less tightly (nscd's fall_tolerance).

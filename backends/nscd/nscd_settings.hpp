@@ -123,9 +123,9 @@ struct NscdSettings {
   /// 1e-6 for a pile with pinacoids, `tolerance` for a sphere pile. The finisher balances the
   /// fall's last state with its own solves, so the fall need not be balanced to 1e-10. Measured
   /// (docs/performance.md, "The fall solved to 1e-6"): at 1e-6 a 235-pinacoid pile fell with 741k
-  /// MPRGP iterations instead of 4.6 million and a 1,064-pinacoid medium pile about ten times
-  /// faster, both coming to rest; a 1,648-sphere pile crept longer (to t = 128 against 83) and
-  /// gained nothing, so sphere piles keep their tight solves.
+  /// MPRGP iterations instead of 4.6 million and came to rest as before, a 1,064-pinacoid medium
+  /// pile fell about ten times faster; a 1,648-sphere pile crept longer (to t = 128 against 83)
+  /// and gained nothing, so sphere piles keep their tight solves.
   double fallTolerance = 0.0;
   /// Throws std::invalid_argument naming the field if a value is out of range.
   void validate() const;
