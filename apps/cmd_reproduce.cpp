@@ -85,7 +85,7 @@ void registerReproduce(CLI::App& app) {
       "Run the confinement study (docs/model.md) with both backends and write its report (DIR/report/report.html). "
       "Rerunning the same command resumes an interrupted study.");
   sub->add_option("--scale", st->scale,
-                  "tiny (smoke test, minutes), quick (shrunk box, about 20 min on 2 cores), medium (830 to 4,300 "
+                  "tiny (smoke test, minutes), quick (shrunk box, about 10 min on 2 cores), medium (830 to 4,300 "
                   "monodisperse grains a run, meant to run overnight on 2 cores) or paper (the paper's sizes, for a cluster)")
       ->check(CLI::IsMember({"tiny", "quick", "medium", "paper"}))
       ->capture_default_str();
