@@ -121,16 +121,19 @@ void reanalyseRuns(const SweepState& st, const study::SweepSpec& spec, const std
     else
       ++notDone;
   }
+  // A run without a bulk region has no solid fraction (null).
+  const auto phi = [](const nlohmann::json& result) {
+    const auto it = result.find("solid_fraction");
+    return it != result.end() && it->is_number() ? fmt::format("{:.4f}", it->get<double>()) : std::string("-");
+  };
   runWork("sweep", [&] {
     const WorkStep step("analysing the finished runs again");
     for (std::size_t k = 0; k < done.size(); ++k) {
       const study::SweepRun& r = runs[done[k]];
       const fs::path dir = out / "runs" / r.name;
-      const double before = core::readJsonFile(dir / "result.json", "result file").value("solid_fraction", 0.0);
+      const std::string before = phi(core::readJsonFile(dir / "result.json", "result file"));
       const nlohmann::json now = study::reanalyseRun(dir);
-      if (!st.quiet)
-        fmt::print(stderr, "[{}/{}] {} phi {:.4f} -> {:.4f}\n", k + 1, done.size(), r.name, before,
-                   now.value("solid_fraction", 0.0));
+      if (!st.quiet) fmt::print(stderr, "[{}/{}] {} phi {} -> {}\n", k + 1, done.size(), r.name, before, phi(now));
     }
   });
   fmt::print(

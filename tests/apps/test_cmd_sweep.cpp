@@ -311,14 +311,17 @@ TEST_CASE("confpack sweep --reanalyse measures finished runs again and keeps wha
         "confpack report sw\n");
   CHECK(nlohmann::json::parse(slurp(run / "result.json")) == original);
 
-  // A result.json from an older analysis: a measurement changed, one missing, one no longer made.
+  // A result.json from an older analysis: a measurement missing (null, as where a box has no bulk
+  // region), a block missing, one no longer made; progress lines on.
   nlohmann::json stale = original;
-  stale["solid_fraction"] = 0.1;
+  stale["solid_fraction"] = nullptr;
   stale.erase("coordination");
   stale["retired_block"] = {{"value", 1}};
   std::ofstream(run / "result.json") << stale.dump(2);
   fs::remove(run / "phi_y.csv");
-  REQUIRE(s.run("sweep sw --reanalyse -q").code == 0);
+  const auto mend = s.run("sweep sw --reanalyse");
+  REQUIRE(mend.code == 0);
+  CHECK_THAT(mend.err, Catch::Contains("[1/1] r0000 phi - -> 0."));
   const nlohmann::json mended = nlohmann::json::parse(slurp(run / "result.json"));
   CHECK(mended == original);
   CHECK(slurp(run / "phi_y.csv") == profile);
