@@ -16,7 +16,6 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "backends/backend_factory.hpp"
-#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "study/run_pipeline.hpp"
 #include "study/slurm.hpp"
@@ -131,9 +130,10 @@ void reanalyseRuns(const SweepState& st, const study::SweepSpec& spec, const std
     for (std::size_t k = 0; k < done.size(); ++k) {
       const study::SweepRun& r = runs[done[k]];
       const fs::path dir = out / "runs" / r.name;
-      const std::string before = phi(core::readJsonFile(dir / "result.json", "result file"));
-      const nlohmann::json now = study::reanalyseRun(dir);
-      if (!st.quiet) fmt::print(stderr, "[{}/{}] {} phi {} -> {}\n", k + 1, done.size(), r.name, before, phi(now));
+      const study::Reanalysed again = study::reanalyseRun(dir);
+      if (!st.quiet)
+        fmt::print(stderr, "[{}/{}] {} phi {} -> {}\n", k + 1, done.size(), r.name, phi(again.before),
+                   phi(again.after));
     }
   });
   fmt::print(

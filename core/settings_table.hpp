@@ -84,6 +84,25 @@ class SettingsTable {
                  if (!(std::isinf(t.*member) && t.*member > 0)) inRange(w, key, t.*member, range);
                });
   }
+  /// A number where JSON "auto" (held as 0, which `range` must exclude) leaves the value to the
+  /// settings' owner. A number is checked as it is read: a 0 in the file is refused, not "auto".
+  SettingsTable& numberOrAuto(const char* key, double T::*member, Range range, const char* unit, const char* help) {
+    return add(
+        key, unit, range.text() + ", or \"auto\"", help,
+        [w = where_, key, member, range](const nlohmann::json& j, T& t) {
+          if (j == "auto") {
+            t.*member = 0.0;
+            return;
+          }
+          if (!j.is_number()) fail(w, key, fmt::format("must be a number or \"auto\" (got {})", jsonExcerpt(j, 40)));
+          inRange(w, key, j.get<double>(), range);  // here, so that a number the range refuses is never read as "auto"
+          t.*member = j.get<double>();
+        },
+        [member](const T& t) { return t.*member == 0.0 ? nlohmann::json("auto") : nlohmann::json(t.*member); },
+        [w = where_, key, member, range](const T& t) {
+          if (t.*member != 0.0) inRange(w, key, t.*member, range);
+        });
+  }
   template <class Int>
   SettingsTable& integer(const char* key, Int T::*member, Range range, const char* unit, const char* help) {
     return add(key, unit, range.text(), help,

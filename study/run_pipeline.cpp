@@ -386,6 +386,11 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
 }
 
 namespace {
+// The metadata lines of a run's profiles (analysis::writeProfiles).
+nlohmann::json profileMetadata(const nlohmann::json& seed, const std::string& backend) {
+  return {{"seed", seed}, {"backend", backend}, {"version", CONFPACK_VERSION}};
+}
+
 // The keys of result.json that makeResult writes beside the analysis blocks: the compaction's.
 constexpr std::array<std::string_view, 8> kCompactionKeys = {"backend", "seed",    "n_grains", "equilibrium",
                                                              "timing",  "deposit", "config",   "confpack_version"};
@@ -413,20 +418,17 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
   return r;
 }
 
-nlohmann::json reanalyseRun(const std::filesystem::path& runDir) {
+Reanalysed reanalyseRun(const std::filesystem::path& runDir) {
   const std::filesystem::path resultFile = runDir / "result.json";
-  const nlohmann::json old = core::readJsonFile(resultFile, "result file");
-  if (!old.is_object()) throw std::runtime_error(fmt::format("{}: not a JSON object", resultFile.string()));
-  const core::Packing packing = core::readPacking(runDir / "packing.json");
-  const analysis::Analysis measured = analysis::analyze(packing, analysisOptions());
-  nlohmann::json r = analysis::toJson(measured);
+  Reanalysed r{core::readJsonFile(resultFile, "result file"), nlohmann::json()};
+  if (!r.before.is_object()) throw std::invalid_argument(fmt::format("{}: not a JSON object", resultFile.string()));
+  const analysis::Analysis measured = analysis::analyze(core::readPacking(runDir / "packing.json"), analysisOptions());
+  r.after = analysis::toJson(measured);
   for (std::string_view key : kCompactionKeys)
-    if (old.contains(key)) r[std::string(key)] = old[std::string(key)];
+    if (r.before.contains(key)) r.after[std::string(key)] = r.before[std::string(key)];
   analysis::writeProfiles(runDir, measured,
-                          {{"seed", old.value("seed", nlohmann::json())},
-                           {"backend", old.value("backend", nlohmann::json())},
-                           {"version", CONFPACK_VERSION}});
-  core::writeFileAtomically(resultFile, r.dump(2));
+                          profileMetadata(r.before.value("seed", nlohmann::json()), r.before.value("backend", "")));
+  core::writeFileAtomically(resultFile, r.after.dump(2));
   return r;
 }
 
@@ -444,8 +446,7 @@ nlohmann::json runAndWrite(const core::RunConfig& cfg, const std::filesystem::pa
                            const Checkpointing& checkpointing) {
   const FinishedRun run = runProtocol(cfg, outDir / "vtk", progress, shared, checkpointing);
   core::writePacking(run.packing, outDir / "packing.json");
-  analysis::writeProfiles(outDir, run.measured,
-                          {{"seed", cfg.seed}, {"backend", cfg.backend}, {"version", CONFPACK_VERSION}});
+  analysis::writeProfiles(outDir, run.measured, profileMetadata(cfg.seed, cfg.backend));
   core::writeFileAtomically(outDir / "result.json", run.result.dump(2));
   if (!checkpointing.file.empty()) {
     std::error_code ignored;  // a checkpoint left behind is ignored once the run is done

@@ -101,14 +101,20 @@ void checkRunCells(const core::RunConfig& cfg, double grains);
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
                           const analysis::Analysis& measured);
 
+/// A run's result.json before and after reanalyseRun.
+struct Reanalysed {
+  nlohmann::json before;
+  nlohmann::json after;
+};
+
 /// Measures a finished run's final packing again (`confpack sweep --reanalyse`), so that a study
 /// compacted over several versions is reported with one analysis: reads runDir/packing.json,
 /// analyses it, rewrites the profiles and then result.json, atomically each. result.json's
 /// measurements are replaced (a block this analysis no longer writes is dropped); what the
 /// compaction wrote beside them (backend, seed, n_grains, equilibrium, timing, deposit, config,
-/// confpack_version) is kept. Returns the new result.json. Throws std::runtime_error naming the
-/// file when packing.json or result.json cannot be read, before anything is written.
-nlohmann::json reanalyseRun(const std::filesystem::path& runDir);
+/// confpack_version) is kept. Throws std::invalid_argument naming the file when packing.json or
+/// result.json cannot be read, before anything is written.
+Reanalysed reanalyseRun(const std::filesystem::path& runDir);
 
 /// A run done in memory: the final packing, its measurements and result.json's content.
 struct FinishedRun {

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <stdexcept>
 
 namespace confpack::nscd {
@@ -46,24 +45,9 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
         .number("damping", &S::damping, Range::atLeast(0.0), "sqrt(g / d_L)", "damping rate of slow grains in contact")
         .numberOrNone("damping_speed", &S::dampingSpeed, Range::positive(), "sqrt(g d_L)",
                       "grains faster than this are not damped")
-        .field(
-            "fall_tolerance", "-", "> 0, or \"auto\"",
-            "stopping threshold of the quasi-static protocol's fall: auto = 1e-6 for pinacoids, tolerance for spheres",
-            [](const nlohmann::json& j, S& s) {
-              if (j == "auto") {
-                s.fallTolerance = 0.0;
-                return;
-              }
-              if (!j.is_number() || !(j.get<double>() > 0.0) || !std::isfinite(j.get<double>()))
-                throw std::invalid_argument(
-                    fmt::format("nscd.fall_tolerance: expected a positive number or \"auto\" (got {})", j.dump()));
-              s.fallTolerance = j.get<double>();
-            },
-            [](const S& s) { return s.fallTolerance > 0.0 ? nlohmann::json(s.fallTolerance) : nlohmann::json("auto"); },
-            [](const S& s) {
-              if (!(s.fallTolerance >= 0.0) || !std::isfinite(s.fallTolerance))
-                throw std::invalid_argument("nscd.fall_tolerance: must be positive or \"auto\"");
-            })
+        .numberOrAuto("fall_tolerance", &S::fallTolerance, Range::positive(), "-",
+                      "stopping threshold of the quasi-static protocol's fall: auto = 1e-6 for pinacoids, tolerance "
+                      "for spheres")
         .rule([](const S& s) {
           if (s.minIterations > s.maxIterations)
             throw std::invalid_argument(fmt::format("nscd.min_iterations: must be at most max_iterations ({}) (got {})",

@@ -124,8 +124,8 @@ struct NscdSettings {
   /// fall's last state with its own solves, so the fall need not be balanced to 1e-10. Measured
   /// (docs/performance.md, "The fall solved to 1e-6"): at 1e-6 a 235-pinacoid pile fell with 741k
   /// MPRGP iterations instead of 4.6 million and came to rest as before, a 1,064-pinacoid medium
-  /// pile fell about ten times faster; a 1,648-sphere pile crept longer (to t = 128 against 83)
-  /// and gained nothing, so sphere piles keep their tight solves.
+  /// pile with 2.07 million instead of 12.0; a 1,648-sphere pile crept longer (to t = 128
+  /// against 83) and gained nothing, so sphere piles keep their tight solves.
   double fallTolerance = 0.0;
   /// Throws std::invalid_argument naming the field if a value is out of range.
   void validate() const;

@@ -16,10 +16,13 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   core::SystemDef s = boxSystem(20.0, 10.0, false, 0.0);
   s.grains.push_back(sphere(1.0, Vec3(10.0, 5.0, 0.5)));
   const nlohmann::json resolved = nscd::makeNscdBackend(s, nlohmann::json::object())->settings();
-  for (const char* key : {"theta", "expansion", "preconditioner", "tolerance", "max_iterations", "min_iterations",
-                          "alert_distance", "gap_correction", "max_correction_velocity", "damping", "damping_speed", "finisher_solver"})
+  for (const char* key :
+       {"theta", "expansion", "preconditioner", "tolerance", "max_iterations", "min_iterations", "alert_distance",
+        "gap_correction", "max_correction_velocity", "damping", "damping_speed", "finisher_solver", "fall_tolerance"})
     CHECK(resolved.contains(key));
   CHECK(resolved["finisher_solver"] == "auto");
+  CHECK(resolved["fall_tolerance"] == "auto");
+  CHECK(nscd::makeNscdBackend(s, {{"fall_tolerance", 1e-6}})->settings()["fall_tolerance"] == 1e-6);
   CHECK(resolved["theta"] == 0.5);
   CHECK(resolved["tolerance"].get<double>() <= 1e-4);
   // The resolved settings round-trip: feeding them back gives the same settings.
@@ -31,6 +34,10 @@ TEST_CASE("nscd options: defaults resolved, unknown keys and bad values refused 
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping", -0.1}}), Catch::Contains("damping"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"damping_speed", 0.0}}), Catch::Contains("damping_speed"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"tolerance", "small"}}), Catch::Contains("tolerance"));
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"fall_tolerance", 0.0}}),
+                    Catch::Contains("fall_tolerance: must be > 0"));
+  CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"fall_tolerance", "loose"}}),
+                    Catch::Contains("fall_tolerance: must be a number or \"auto\""));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"expansion", "cg"}}), Catch::Contains("expansion"));
   CHECK_THROWS_WITH(nscd::makeNscdBackend(s, {{"preconditioner", "ic"}}), Catch::Contains("preconditioner"));
   // Gauss-Seidel cannot reach the finisher's accuracy: not offered for it.
