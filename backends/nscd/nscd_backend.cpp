@@ -140,7 +140,8 @@ class NscdBackend final : public core::ContactBackend {
             {"loaded", loaded_},
             {"metric_weights", metricWeight_},
             {"last_moves", std::move(lastMove)},
-            {"last_finisher_step_clipped", lastFinisherStepClipped_}};
+            {"last_finisher_step_clipped", lastFinisherStepClipped_},
+            {"finisher_fell_back", finisherFellBack_}};
   }
 
   void restoreState(const nlohmann::json& state) override {
@@ -157,6 +158,9 @@ class NscdBackend final : public core::ContactBackend {
     if (!loaded.is_array() || (!loaded.empty() && loaded.size() != static_cast<std::size_t>(n_))) throw bad("loaded");
     if (!state.value("last_finisher_step_clipped", nlohmann::json()).is_boolean())
       throw bad("last_finisher_step_clipped");
+    // Absent from the checkpoints of earlier versions, which had no fallback.
+    const nlohmann::json& fellBack = state.value("finisher_fell_back", nlohmann::json(false));
+    if (!fellBack.is_boolean()) throw bad("finisher_fell_back");
     cache_.fromJson(state.value("cache", nlohmann::json()), n_);
     // The poses again, although the SystemDef had them: the constructor wraps and normalises them,
     // which may change their last bits.
@@ -177,6 +181,7 @@ class NscdBackend final : public core::ContactBackend {
     }
     loaded_ = loaded.get<std::vector<char>>();
     lastFinisherStepClipped_ = state["last_finisher_step_clipped"].get<bool>();
+    if (fellBack.get<bool>()) fallBackToInteriorPoint();
     positionMid_ = position_;
     orientationMid_ = orientation_;
     writeStates();
@@ -209,6 +214,7 @@ class NscdBackend final : public core::ContactBackend {
     NscdSettings solve = finisherSettings_;
     if (lastFinisherStepClipped_) solve.tolerance = std::max(solve.tolerance, kRoughTolerance);
     solveContacts(h, finisherSettings_, solve, clock);
+    if (profile_.iterations >= solve.maxIterations) fallBackToInteriorPoint();
     // The trust radius caps the largest motion of a grain's surface in a step: when some grain
     // would move further, the whole step is scaled down to it. A scaled step stays inside the
     // linearised constraints (they are convex), so it leaves only the linearisation's overlaps.
@@ -237,6 +243,21 @@ class NscdBackend final : public core::ContactBackend {
     storeImpulses(h, 1.0);
     clock.charge(Phase::StoreImpulses);
     return move;
+  }
+
+  // "auto" finisher of a pinacoid pile: MPRGP, until a step's solve ends at its iteration cap.
+  // Such a step is inexact, and inexact steps zigzag: on a 1,064-pinacoid pile every step of
+  // MPRGP ended at its cap of 5,000 iterations (relative residual 1e-7 to 5e-6, 8,160 contact
+  // rows), the moves reversed step after step, the metric weights grew to 2.6e5 and the force
+  // ratio stayed at 3e-3 to 2e-2. The interior-point method, whose iteration count hardly depends
+  // on conditioning, solved the same steps to 1e-7 or better in 30 to 60 iterations and took the
+  // pile to rest (docs/performance.md, "The medium scale"). From the next step on, then, and for
+  // the rest of the run.
+  void fallBackToInteriorPoint() {
+    if (settings_.finisherSolver != FinisherSolverKind::Auto || finisherSettings_.solver != SolverKind::Mprgp) return;
+    finisherSettings_.solver = SolverKind::Ipm;
+    finisherSettings_.maxIterations = defaultsFor(SolverKind::Ipm).maxIterations;
+    finisherFellBack_ = true;
   }
 
   // The contact problem of a step from q_m and the free velocities: pairs, contact points, rows
@@ -407,6 +428,7 @@ class NscdBackend final : public core::ContactBackend {
   bool pinacoids_ = false;      // some grain is not a sphere
   NscdSettings finisherSettings_;
   bool lastFinisherStepClipped_ = false;
+  bool finisherFellBack_ = false;  // fallBackToInteriorPoint() switched the finisher's solver
   // The finisher's per-grain metric weights and each grain's last move (updateMetricWeight()).
   std::vector<double> metricWeight_;
   std::vector<BodyVelocity> lastMove_;

@@ -59,9 +59,10 @@ struct NscdSettings {
   /// reach the finisher's accuracy). Its iteration cap is that solver's default; its tolerance is
   /// `tolerance` (the same relative projected gradient for mprgp and ipm), or 1e-10 under nlgs.
   /// "auto" takes ipm for sphere piles, where its finisher was 0.85 to 0.52 times MPRGP's time,
-  /// and mprgp for pinacoid piles, where two of the quick study's walled piles (W = 3) did not
-  /// settle in 3,000 interior-point finisher steps but do with MPRGP (docs/performance.md,
-  /// "The interior-point finisher").
+  /// and mprgp for pinacoid piles until one of its solves ends at the iteration cap, ipm from the
+  /// next step on: MPRGP is the cheaper on small pinacoid piles, and on a 1,064-pinacoid pile it
+  /// ended every step at its cap, inexact, and the finisher never settled (docs/performance.md,
+  /// "The interior-point finisher" and "The finisher's solves at their cap").
   FinisherSolverKind finisherSolver = FinisherSolverKind::Auto;
   /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
   /// conjugate gradient step would make an impulse negative (mprgp_solver.cpp).

@@ -126,6 +126,49 @@ TEST_CASE("finisher: a tilted pinacoid falls flat on a trapezoid face, the floor
   CHECK(b->contacts()[0].normalForce() == Approx(s.grains[0].volume()).epsilon(1e-9));
 }
 
+TEST_CASE(
+    "finisher: a pinacoid pile whose MPRGP solves end at their cap falls back to the interior point and ends at rest",
+    "[nscd][finisher]") {
+  // Two pinacoids on the floor, a third across them, tilted. With MPRGP capped at 3 iterations
+  // its finisher steps are inexact once the grains touch; "auto" then hands the rest of the finisher to the
+  // interior-point method, and the pile must end at rest with the floor carrying its weight.
+  // An explicit "mprgp" keeps MPRGP whatever its solves reach.
+  const core::Quat flat(Eigen::AngleAxisd(std::numbers::pi / 4.0, Vec3::UnitX()));
+  const core::Quat tilted(Eigen::AngleAxisd(0.3, Vec3(1.0, 0.2, 0.0).normalized()));
+  core::SystemDef s = boxSystem(6.0, 6.0, false, 0.0);
+  s.grains.push_back(withBottomAt(pinacoid(1.0, {2.4, 3.0, 0.0}, flat), 0.005));
+  s.grains.push_back(withBottomAt(pinacoid(1.0, {3.6, 3.0, 0.0}, flat), 0.005));
+  s.grains.push_back(withBottomAt(pinacoid(1.0, {3.0, 3.1, 0.0}, tilted), 0.75));
+  const std::string solver = GENERATE("auto", "mprgp");
+  INFO("finisher_solver " << solver);
+  nlohmann::json options = kTight;
+  options["max_iterations"] = 3;
+  options["finisher_solver"] = solver;
+  auto b = nscd::makeNscdBackend(s, options);
+  core::CompactionDef def;
+  def.settleTolerance = 1e-12;
+  core::QuasiStaticFinisher f(def, 1.0, 1e-3);
+  // Until a solve ends at the cap (an inexact step), which it does once the grains touch.
+  while (f.steps() < 200 && b->profile().iterations < 3) f.step(*b);
+  REQUIRE(b->profile().iterations == 3);
+  const nlohmann::json capped = b->saveState();
+  CHECK(capped["finisher_fell_back"] == (solver == "auto"));
+  if (solver == "mprgp") return;
+  // A resumed run keeps the interior-point method.
+  auto resumed = nscd::makeNscdBackend(s, options);
+  resumed->restoreState(capped);
+  CHECK(resumed->saveState()["finisher_fell_back"] == true);
+  while (f.steps() < 2000 && !(f.steps() > 1 && f.settled())) f.step(*b);
+  INFO("steps " << f.steps());
+  REQUIRE(f.settled());
+  double floor = 0.0;
+  for (const core::Contact& c : b->contacts())
+    if (c.b == -1 || c.a == -1) floor += c.normalForce();
+  double weight = 0.0;
+  for (const core::Grain& g : s.grains) weight += g.volume();
+  CHECK(floor == Approx(weight).epsilon(1e-8));
+}
+
 TEST_CASE("finisher: a backend without a quasi-static step says so", "[bullet][finisher]") {
   core::SystemDef s = boxSystem(4.0, 4.0, false, 0.0);
   s.grains.push_back(sphere(1.0, Vec3(2.0, 2.0, 0.5)));
