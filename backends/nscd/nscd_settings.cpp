@@ -16,12 +16,13 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
         .choice("solver", &S::solver,
                 {{"mprgp", SolverKind::Mprgp}, {"nlgs", SolverKind::Nlgs}, {"ipm", SolverKind::Ipm}},
                 "contact solver; its choice sets the defaults of tolerance and max_iterations")
-        .choice("finisher_solver", &S::finisherSolver,
-                {{"auto", FinisherSolverKind::Auto},
-                 {"ipm", FinisherSolverKind::Ipm},
-                 {"mprgp", FinisherSolverKind::Mprgp}},
-                "solver of the finisher's steps: auto = ipm for spheres, mprgp for pinacoids until a solve ends at its "
-                "cap, then ipm (tolerance as for the steps)")
+        .choice(
+            "finisher_solver", &S::finisherSolver,
+            {{"auto", FinisherSolverKind::Auto},
+             {"ipm", FinisherSolverKind::Ipm},
+             {"mprgp", FinisherSolverKind::Mprgp}},
+            "solver of the finisher's steps: auto = ipm for spheres; for pinacoids mprgp, then ipm once a solve ends "
+            "at its cap (not between frictional walls); tolerance as for the steps")
         .choice("expansion", &S::expansion,
                 {{"projected_cg", ExpansionKind::ProjectedCg}, {"gradient", ExpansionKind::Gradient}},
                 "mprgp: the step taken when a conjugate gradient step would make an impulse negative")

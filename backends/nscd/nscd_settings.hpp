@@ -62,7 +62,9 @@ struct NscdSettings {
   /// and mprgp for pinacoid piles until one of its solves ends at the iteration cap, ipm from the
   /// next step on: MPRGP is the cheaper on small pinacoid piles, and on a 1,064-pinacoid pile it
   /// ended every step at its cap, inexact, and the finisher never settled (docs/performance.md,
-  /// "The interior-point finisher" and "The finisher's solves at their cap").
+  /// "The interior-point finisher" and "The finisher's solves at their cap"). Between frictional
+  /// walls pinacoid piles keep mprgp: there the interior point's steps were the worse
+  /// (docs/limitations.md).
   FinisherSolverKind finisherSolver = FinisherSolverKind::Auto;
   /// ["expansion"] (mprgp) "projected_cg" (default) or "gradient": the step taken when a
   /// conjugate gradient step would make an impulse negative (mprgp_solver.cpp).
