@@ -251,10 +251,10 @@ class NscdBackend final : public core::ContactBackend {
   // rows), the moves reversed step after step, the metric weights grew to 2.6e5 and the force
   // ratio stayed at 3e-3 to 2e-2. The interior-point method, whose iteration count hardly depends
   // on conditioning, solved the same steps to 1e-7 or better in 30 to 60 iterations and took the
-  // pile to rest (docs/performance.md, "The finisher's solves at their cap"). From the next step on, then, and for
-  // the rest of the run. Not against frictional walls: there both solvers reach their caps in the
-  // block iteration around the Coulomb law, and the interior point's steps were the worse
-  // (docs/limitations.md).
+  // pile to rest (docs/performance.md, "The finisher's solves at their cap"). From the next step
+  // on, then, and for the rest of the run. Not against frictional walls: there both solvers reach
+  // their caps in the block iteration around the Coulomb law, and the interior point's steps were
+  // the worse (docs/limitations.md).
   void fallBackToInteriorPoint() {
     if (settings_.finisherSolver != FinisherSolverKind::Auto || finisherSettings_.solver != SolverKind::Mprgp) return;
     if (walls_.friction > 0.0) return;

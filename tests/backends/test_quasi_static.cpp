@@ -130,8 +130,9 @@ TEST_CASE(
     "finisher: a pinacoid pile whose MPRGP solves end at their cap falls back to the interior point and ends at rest",
     "[nscd][finisher]") {
   // Two pinacoids on the floor, a third across them, tilted. With MPRGP capped at 3 iterations
-  // its finisher steps are inexact once the grains touch; "auto" then hands the rest of the finisher to the
-  // interior-point method, and the pile must end at rest with the floor carrying its weight.
+  // its finisher steps are inexact once the grains touch; "auto" then hands the rest of the
+  // finisher to the interior-point method, and the pile must end at rest with the floor carrying
+  // its weight.
   // An explicit "mprgp" keeps MPRGP whatever its solves reach, and so does "auto" between
   // frictional walls (there the interior point does worse).
   const core::Quat flat(Eigen::AngleAxisd(std::numbers::pi / 4.0, Vec3::UnitX()));
