@@ -128,6 +128,9 @@ class ContactBackend {
   /// finisher balances: a backend may then solve them less tightly (nscd's fall_tolerance).
   /// Called only on backends with hasQuasiStaticStep(), before their first step.
   virtual void startQuasiStaticFall() {}
+  /// How the finisher solved its steps, for result.json's timing.stages.quasi_static (nscd:
+  /// "solver", that of its last step, and "switched_from_mprgp"); an empty object by default.
+  virtual nlohmann::json finisherReport() const { return nlohmann::json::object(); }
 
   /// The state after the last step, for a run's checkpoint (docs/model.md, "Checkpoints"): every
   /// grain's pose and velocity (bodyStatesToJson), and whatever else the next step reads (nscd: the

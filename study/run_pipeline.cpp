@@ -364,6 +364,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                               {"wall_s", wall - c.dynamicWallSeconds},
                               {"last_step", finish->lastStepLength()},
                               {"last_displacement", finish->lastMove().maxDisplacement}};
+  if (handOver) stages["quasi_static"].update(backend->finisherReport());
   out.timing = {{"wall_s", wall},
                 {"compaction_s", wall},
                 {"protocol", core::toString(out.protocol)},

@@ -263,6 +263,11 @@ class NscdBackend final : public core::ContactBackend {
     finisherFellBack_ = true;
   }
 
+  nlohmann::json finisherReport() const override {
+    return {{"solver", finisherSettings_.solver == SolverKind::Ipm ? "ipm" : "mprgp"},
+            {"switched_from_mprgp", finisherFellBack_}};
+  }
+
   // The contact problem of a step from q_m and the free velocities: pairs, contact points, rows
   // (with `law`'s contact law), warm start, then the solve to `solve`'s tolerance, each phase
   // timed into profile_.

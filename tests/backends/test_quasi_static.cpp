@@ -157,6 +157,8 @@ TEST_CASE(
   const nlohmann::json capped = b->saveState();
   const bool fallsBack = solver == "auto" && wallFriction == 0.0;
   CHECK(capped["finisher_fell_back"] == fallsBack);
+  CHECK(b->finisherReport() ==
+        nlohmann::json{{"solver", fallsBack ? "ipm" : "mprgp"}, {"switched_from_mprgp", fallsBack}});
   if (!fallsBack) return;
   // A resumed run keeps the interior-point method.
   auto resumed = nscd::makeNscdBackend(s, options);

@@ -140,6 +140,9 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
   CHECK(stages["dynamic"]["simulated_time"].get<double>() < cfg.compaction.timeLimit);
   CHECK(stages["quasi_static"]["handed_over_at"] == "switch_kinetic_ratio");
   CHECK(stages["quasi_static"]["mean_kinetic_ratio_at_hand_over"].get<double>() < cfg.compaction.switchKineticRatio);
+  // A sphere pile's finisher solves with the interior point ("auto") from the start.
+  CHECK(stages["quasi_static"]["solver"] == "ipm");
+  CHECK(stages["quasi_static"]["switched_from_mprgp"] == false);
   // Frictionless side walls: the floor carries the whole weight (rho = g = 1). With friction the
   // walls may carry part of it, never more than all of it.
   const double weight = core::totalVolume(dep.grains);
