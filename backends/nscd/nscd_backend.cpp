@@ -83,12 +83,7 @@ class NscdBackend final : public core::ContactBackend {
     SolverKind finisher = settings_.finisherSolver == FinisherSolverKind::Mprgp ? SolverKind::Mprgp : SolverKind::Ipm;
     for (const core::Grain& g : system.grains) pinacoids_ = pinacoids_ || g.shape != core::ShapeKind::Sphere;
     if (settings_.finisherSolver == FinisherSolverKind::Auto && pinacoids_) finisher = SolverKind::Mprgp;
-    if (finisher != settings_.solver) {  // its own cap; the tolerance if it means the same
-      const NscdSettings own = defaultsFor(finisher);
-      finisherSettings_.solver = own.solver;
-      finisherSettings_.maxIterations = own.maxIterations;
-      if (settings_.solver == SolverKind::Nlgs) finisherSettings_.tolerance = own.tolerance;
-    }
+    useFinisherSolver(finisher);
     finisherSettings_.theta = 1.0;
     finisherSettings_.gapCorrection = 1.0;
     finisherSettings_.maxCorrectionVelocity = std::numeric_limits<double>::infinity();
@@ -258,14 +253,23 @@ class NscdBackend final : public core::ContactBackend {
   void fallBackToInteriorPoint() {
     if (settings_.finisherSolver != FinisherSolverKind::Auto || finisherSettings_.solver != SolverKind::Mprgp) return;
     if (walls_.friction > 0.0) return;
-    finisherSettings_.solver = SolverKind::Ipm;
-    finisherSettings_.maxIterations = defaultsFor(SolverKind::Ipm).maxIterations;
+    useFinisherSolver(SolverKind::Ipm);
     finisherFellBack_ = true;
   }
 
+  // `kind` solves the finisher's steps: with the run's max_iterations when it is also the steps'
+  // solver, else with its own default cap; with the steps' tolerance, unless they run NLGS, whose
+  // tolerance measures something else.
+  void useFinisherSolver(SolverKind kind) {
+    const NscdSettings own = kind == settings_.solver ? settings_ : defaultsFor(kind);
+    finisherSettings_.solver = kind;
+    finisherSettings_.maxIterations = own.maxIterations;
+    if (settings_.solver == SolverKind::Nlgs) finisherSettings_.tolerance = own.tolerance;
+  }
+
   nlohmann::json finisherReport() const override {
-    return {{"solver", finisherSettings_.solver == SolverKind::Ipm ? "ipm" : "mprgp"},
-            {"switched_from_mprgp", finisherFellBack_}};
+    // The solver's name as the settings table writes it.
+    return {{"solver", nlohmann::json(finisherSettings_).at("solver")}, {"switched_from_mprgp", finisherFellBack_}};
   }
 
   // The contact problem of a step from q_m and the free velocities: pairs, contact points, rows

@@ -56,8 +56,9 @@ struct NscdSettings {
   double tolerance = 1e-10;
   /// ["finisher_solver"] the solver of the quasi-static finisher's steps (docs/model.md,
   /// "Quasi-static compaction"): "auto" (default), "ipm" or "mprgp" ("nlgs" is refused: it cannot
-  /// reach the finisher's accuracy). Its iteration cap is that solver's default; its tolerance is
-  /// `tolerance` (the same relative projected gradient for mprgp and ipm), or 1e-10 under nlgs.
+  /// reach the finisher's accuracy). Its iteration cap is max_iterations when it is also `solver`,
+  /// else its own default; its tolerance is `tolerance` (the same relative projected gradient for
+  /// mprgp and ipm), or 1e-10 under nlgs.
   /// "auto" takes ipm for sphere piles, where its finisher was 0.85 to 0.52 times MPRGP's time,
   /// and mprgp for pinacoid piles until one of its solves ends at the iteration cap, ipm from the
   /// next step on: MPRGP is the cheaper on small pinacoid piles, and on a 1,064-pinacoid pile it

@@ -164,6 +164,7 @@ TEST_CASE(
   auto resumed = nscd::makeNscdBackend(s, options);
   resumed->restoreState(capped);
   CHECK(resumed->saveState()["finisher_fell_back"] == true);
+  CHECK(resumed->finisherReport()["solver"] == "ipm");
   while (f.steps() < 2000 && !(f.steps() > 1 && f.settled())) f.step(*b);
   INFO("steps " << f.steps());
   REQUIRE(f.settled());
