@@ -42,7 +42,14 @@ std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, con
   // Bounding spheres first: most broad-phase pairs end here.
   const double reach = a.shape->boundingRadius() + b.shape->boundingRadius() + alert;
   if ((b.position - a.position).squaredNorm() > reach * reach) return std::nullopt;
-  const WorldPolyhedron A(a), B(b);
+  return collideWorldPolyhedra(WorldPolyhedron(a), WorldPolyhedron(b), alert, angleTol);
+}
+
+std::optional<PolyhedronContact> collideWorldPolyhedra(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert,
+                                                       double angleTol) {
+  checkAlert(alert, "collideWorldPolyhedra");
+  if (A.shape == nullptr || B.shape == nullptr)
+    throw std::invalid_argument("collideWorldPolyhedra: a WorldPolyhedron has no shape");
   Vec3 normal;
   double gap;
   if (!pairNormal(A, B, alert, normal, gap)) return std::nullopt;

@@ -83,6 +83,13 @@ struct PolyhedronContact {
 std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,
                                                   double angleTol = kFeatureAngleTol);
 
+struct WorldPolyhedron;
+/// The same for two polyhedra already in world coordinates (world_polyhedron.hpp), without the
+/// bounding-sphere rejection collidePolyhedra starts with: for a caller that places each body once
+/// for all its pairs, and has rejected the distant pairs itself. Same result, bit for bit.
+std::optional<PolyhedronContact> collideWorldPolyhedra(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert,
+                                                       double angleTol = kFeatureAngleTol);
+
 /// Contact between a placed polyhedron a and a sphere (b), or nullopt if the gap exceeds alert.
 /// Exact: the closest point of the polyhedron to the centre (if the centre is inside, the nearest
 /// face plane). Always Simple, one point midway between the surfaces; featureA is the closest

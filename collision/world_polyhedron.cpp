@@ -5,8 +5,15 @@
 
 namespace confpack::collision {
 
-WorldPolyhedron::WorldPolyhedron(const PlacedPolyhedron& p, bool withTopology) : shape(p.shape) {
-  if (shape == nullptr) throw std::invalid_argument("PlacedPolyhedron.shape is null");
+void WorldPolyhedron::assign(const PlacedPolyhedron& p, bool withTopology) {
+  if (p.shape == nullptr) throw std::invalid_argument("PlacedPolyhedron.shape is null");
+  shape = p.shape;
+  v.clear();
+  n.clear();
+  off.clear();
+  edgeFaces.clear();
+  edgeArc.clear();
+  centre = Vec3::Zero();
   for (const Vec3& x : shape->vertices()) {
     v.push_back(p.toWorld(x));
     centre += v.back();

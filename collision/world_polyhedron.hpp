@@ -50,7 +50,11 @@ struct WorldPolyhedron {
   /// Vertices, face normals and offsets in world coordinates; with withTopology also each edge's
   /// two faces and its Gauss-map arc normal (the separating-axis test needs them, a plane or a
   /// sphere contact does not).
-  explicit WorldPolyhedron(const PlacedPolyhedron& p, bool withTopology = true);
+  explicit WorldPolyhedron(const PlacedPolyhedron& p, bool withTopology = true) { assign(p, withTopology); }
+  /// Empty (no shape), to be filled by assign: the nscd narrow phase keeps one per grain.
+  WorldPolyhedron() = default;
+  /// Refills this one for `p`, as the constructor does (no allocation for a pinacoid).
+  void assign(const PlacedPolyhedron& p, bool withTopology = true);
 
   int edgeIndex(int i, int j) const {
     const int lo = std::min(i, j), hi = std::max(i, j);

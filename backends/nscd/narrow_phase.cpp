@@ -88,6 +88,18 @@ double NarrowPhase::maxReach() const {
 void NarrowPhase::collidePair(const CandidatePair& pair, const std::vector<Vec3>& positions,
                               const std::vector<core::Quat>& orientations,
                               std::vector<ContactGeometry>& out) const {
+  collidePairIn(pair, positions, orientations, nullptr, out);
+}
+
+void NarrowPhase::placeGrain(int i, const std::vector<Vec3>& positions, const std::vector<core::Quat>& orientations) {
+  if (shape_[i] == core::ShapeKind::Sphere) return;
+  world_[i].assign({&poly_[i], positions[i], orientations[i].toRotationMatrix()});
+}
+
+void NarrowPhase::collidePairIn(const CandidatePair& pair, const std::vector<Vec3>& positions,
+                                const std::vector<core::Quat>& orientations,
+                                const std::vector<collision::WorldPolyhedron>* world,
+                                std::vector<ContactGeometry>& out) const {
   const int a = pair.a, b = pair.b;
   const Vec3 pb = positions[b] + Vec3(pair.shiftX * box_.lengthX, pair.shiftY * box_.width, 0.0);
   const double alert = alertFraction_ * std::min(size_[a], size_[b]);
@@ -107,7 +119,17 @@ void NarrowPhase::collidePair(const CandidatePair& pair, const std::vector<Vec3>
   };
   std::optional<collision::PolyhedronContact> pc;
   bool flip = false;
-  if (!sphereA && !sphereB) {
+  if (!sphereA && !sphereB && world != nullptr) {
+    // As collidePolyhedra: the bounding spheres first, then the placed bodies; an image across a
+    // periodic side is placed for the pair (placing it by shifting the grain's copy would round
+    // differently).
+    const double reach = poly_[a].boundingRadius() + poly_[b].boundingRadius() + alert;
+    if ((pb - positions[a]).squaredNorm() > reach * reach) return;
+    if (pair.shiftX == 0 && pair.shiftY == 0)
+      pc = collision::collideWorldPolyhedra((*world)[a], (*world)[b], alert);
+    else
+      pc = collision::collideWorldPolyhedra((*world)[a], collision::WorldPolyhedron(placed(b, pb)), alert);
+  } else if (!sphereA && !sphereB) {
     pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert);
   } else if (!sphereA) {
     pc = collision::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
@@ -158,6 +180,7 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
                              int threads) {
   out.clear();
   const std::size_t nPairs = pairs.size(), nGrains = shape_.size();
+  if (hasPolyhedra_ && world_.size() != nGrains) world_.resize(nGrains);
   const std::size_t useful = std::max<std::size_t>(1, nPairs / kMinPairsPerThread);
   const int wanted = hasPolyhedra_ ? static_cast<int>(std::min<std::size_t>(std::max(1, threads), useful)) : 1;
 #ifdef _OPENMP
@@ -183,8 +206,14 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
       ThreadContacts& mine = threadContacts_[t];
       std::vector<ContactGeometry>& pairOut = t == 0 ? out : mine.pairs;
       failure.capture([&] {
+        for (std::size_t i = chunk(nGrains, t, team); i < chunk(nGrains, t + 1, team); ++i)
+          placeGrain(static_cast<int>(i), positions, orientations);
+      });
+#pragma omp barrier
+      failure.capture([&] {
+        if (failure.failed()) return;
         for (std::size_t k = chunk(nPairs, t, team); k < chunk(nPairs, t + 1, team); ++k)
-          collidePair(pairs[k], positions, orientations, pairOut);
+          collidePairIn(pairs[k], positions, orientations, &world_, pairOut);
         for (std::size_t i = chunk(nGrains, t, team); i < chunk(nGrains, t + 1, team); ++i)
           collideWalls(static_cast<int>(i), positions, orientations, mine.walls);
       });
@@ -220,7 +249,9 @@ void NarrowPhase::collideAll(const std::vector<CandidatePair>& pairs, const std:
     return;
   }
 #endif
-  for (const CandidatePair& p : pairs) collidePair(p, positions, orientations, out);
+  if (hasPolyhedra_)
+    for (std::size_t i = 0; i < nGrains; ++i) placeGrain(static_cast<int>(i), positions, orientations);
+  for (const CandidatePair& p : pairs) collidePairIn(p, positions, orientations, &world_, out);
   for (std::size_t i = 0; i < nGrains; ++i) collideWalls(static_cast<int>(i), positions, orientations, out);
 #ifdef _OPENMP
   record();
