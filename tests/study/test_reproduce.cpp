@@ -62,8 +62,8 @@ TEST_CASE("reproduce: the medium scale is the paper's study in a box of 830 to 4
     CHECK(c.compaction.switchKineticRatio == 1e-8);
     CHECK(c.compaction.fallTimeLimit == 300.0);
     CHECK(c.compaction.timeLimit == 20.0);
-    // Its finisher stops at moves of 1e-5 d, ten times the default: the same packings in half the
-    // time on its pinacoid piles.
+    // Its finisher stops at moves of 1e-5 d, ten times the default: on its 1,064-pinacoid pile,
+    // the same packing in half the run's time.
     CHECK(c.compaction.settleTolerance == 1e-5);
     // Grains at the expected solid fraction: 830 (spheres, W = 5) to 4,300 (pinacoids, W = 20)
     // monodisperse, the small grains of x_S = 40 raising W = 20 to 12,500.

@@ -1,6 +1,7 @@
 // The nscd narrow phase (backends/nscd/narrow_phase.hpp): collideAll on a team of threads gives
-// the single-thread contacts, bit for bit and in the same order, and an out-of-memory in a thread
-// of the team comes out of it as std::bad_alloc.
+// the single-thread contacts, bit for bit and in the same order, and both (each pinacoid placed
+// once a step) those of collidePair (the pair's bodies placed for it); an out-of-memory in a
+// thread of the team comes out of collideAll as std::bad_alloc.
 #include <catch2/catch.hpp>
 #include <new>
 #include <set>
@@ -60,6 +61,9 @@ TEST_CASE("nscd narrow phase: collideAll on 2 threads returns the single-thread 
   std::set<int> pointCounts;
   for (const auto& c : plain) pointCounts.insert(c.pointCount);
   CHECK(pointCounts.size() >= 3);  // simple, double and triple contacts are all there
+  std::size_t images = 0;          // pairs across the periodic side, placed for the pair
+  for (const auto& c : plain) images += !core::isWall(c.b) && (c.shiftX != 0 || c.shiftY != 0);
+  CHECK(images > 0);
 
   REQUIRE(one.size() == plain.size());
   REQUIRE(two.size() == plain.size());
