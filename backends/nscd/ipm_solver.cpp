@@ -41,6 +41,21 @@ constexpr double kStepFraction = 0.995;  // of the step to the boundary of s, r 
 // active sets.
 constexpr double kPolishFrom = 1e-3;
 constexpr int kPolishRounds = 6;
+// The polish solves W_AA r_A = -b_A by proximal-point sweeps (solveFactorised), from zero or from
+// the interior point's impulses (the polish, below). A pinacoid's face contact carries up to 8
+// points for 3 constraints, so W_AA is singular there: sweeps from the interior point keep its
+// positive split of a face's load between the points, where the least impulses split it with
+// negative ones, which the active-set correction opened, round after round (on a 235-pinacoid
+// pile's finisher no polish converged before; now 49 of 51 solves end near 1e-14,
+// docs/performance.md, "The interior point's polish"). eps, the shift that makes the singular
+// W_AA factorisable, is 1e-10 of its largest diagonal entry: a sweep leaves a residual of eps
+// times its change.
+constexpr double kProximalWeight = 1e-10;
+constexpr int kProximalSweeps = 20;
+// A polish round that opens or closes more than 1 % of the closed contacts (at least this many)
+// started far from the solution's active set: the polish stops there (and starts again from the
+// interior point's impulses if it started from zero).
+constexpr std::ptrdiff_t kPolishFlips = 10;
 
 /// CHOLMOD's factorisations and solves call BLAS, and Debian's serial OpenBLAS (the one its
 /// SuiteSparse pulled in here) is not safe to call from two threads at once: with `sweep --jobs 2`
@@ -109,6 +124,7 @@ struct IpmSolver::Impl {
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> delassusCholesky;
   std::vector<int> position;  // row k -> its index among the closed ones, or -1
   std::vector<char> factorised;  // the closed set delassusCholesky holds (empty: none)
+  double proximal = 0.0;         // eps of solveFactorised, kProximalWeight of W_AA's largest diagonal entry
 
   // u_k restricted to local body `body` (6 entries; the angular ones unused when dof is 3).
   static Eigen::Matrix<double, 6, 1> rowOn(const IpmRow& row, bool onB) {
@@ -151,10 +167,8 @@ struct IpmSolver::Impl {
           if (k >= l) triplets.emplace_back(k, l, coupling(uk, ul, static_cast<int>(i)));
     delassus.resize(nA, nA);
     delassus.setFromTriplets(triplets.begin(), triplets.end());
-    // A shift of 1e-13 of the largest diagonal entry keeps a redundant set (W_AA singular)
-    // factorisable; the residual it leaves, 1e-13 of W r, is below any tolerance in use.
-    const double shift = 1e-13 * delassus.diagonal().maxCoeff();
-    for (int k = 0; k < nA; ++k) delassus.coeffRef(k, k) += shift;
+    proximal = kProximalWeight * delassus.diagonal().maxCoeff();
+    for (int k = 0; k < nA; ++k) delassus.coeffRef(k, k) += proximal;
     {
       const auto lock = blasLock();
       delassusCholesky.compute(delassus);
@@ -163,14 +177,26 @@ struct IpmSolver::Impl {
     factorised = active;
     return solveFactorised(b, r);
   }
+  // The proximal-point iteration r <- (W_AA + eps I)^-1 (-b_A + eps r) from the impulses `r` holds
+  // on entry: each sweep leaves W_AA r + b_A = -eps (r - r_previous), so it stops when a sweep
+  // changes r by less than 1e-14 of |b_A| / eps.
   bool solveFactorised(const Eigen::VectorXd& b, Eigen::VectorXd& r) {
-    Eigen::VectorXd rhs(delassus.rows());
+    const Eigen::Index nA = delassus.rows();
+    Eigen::VectorXd minusB(nA), closed(nA), next;
     for (std::size_t k = 0; k < rows.size(); ++k)
-      if (position[k] >= 0) rhs[position[k]] = -b[static_cast<Eigen::Index>(k)];
-    Eigen::VectorXd closed;
-    {
-      const auto lock = blasLock();
-      closed = delassusCholesky.solve(rhs);
+      if (position[k] >= 0) {
+        minusB[position[k]] = -b[static_cast<Eigen::Index>(k)];
+        closed[position[k]] = r[static_cast<Eigen::Index>(k)];
+      }
+    const double enough = 1e-14 * minusB.norm();
+    for (int sweep = 0; sweep < kProximalSweeps; ++sweep) {
+      {
+        const auto lock = blasLock();
+        next = delassusCholesky.solve(minusB + proximal * closed);
+      }
+      const double change = proximal * (next - closed).norm();
+      closed.swap(next);
+      if (change <= enough) break;
     }
     for (std::size_t k = 0; k < rows.size(); ++k)
       r[static_cast<Eigen::Index>(k)] = position[k] >= 0 ? closed[position[k]] : 0.0;
@@ -403,25 +429,31 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
       return bNorm > 0.0 ? std::sqrt(sum) / bNorm : 0.0;
     };
     // The polish: from the contacts closed in `imp`, the impulses that close exactly those,
-    // r_A = -W_AA^-1 b_A by a sparse Cholesky factorisation of the Delassus matrix of the closed
-    // contacts (backward stable: the residual W r + b it leaves is at round-off, however
-    // ill-conditioned W_AA is); then the active set corrected (negative impulses opened,
-    // penetrating open contacts closed) and again. Keeps in `imp` and returns the best residual
-    // it met.
-    auto polish = [&](Eigen::VectorXd& imp, double impResidual) {
-      lam = imp;
-      double best = impResidual;
+    // W_AA r_A = -b_A, by a sparse Cholesky factorisation of the Delassus matrix of the closed
+    // contacts and proximal-point sweeps (solveFactorised); then the active set corrected
+    // (negative impulses opened, penetrating open contacts closed) and again, until nothing
+    // changes. The sweeps start from zero, which gives the least impulses that close the set:
+    // no self-stress in a hyperstatic loop (two spheres between two walls carry nothing
+    // sideways). Where that wanders (a round changes more than 1 % of the set: pinacoid face
+    // contacts, whose points share a face's load in ways the least impulses make negative), the
+    // polish starts again with sweeps from `imp`, the interior point's positive split. Keeps in
+    // `imp` and returns the best residual it met.
+    auto polishRounds = [&](Eigen::VectorXd& imp, double best, bool fromImp, bool& wandered) {
       std::vector<char> active(static_cast<std::size_t>(M));
       for (Eigen::Index k = 0; k < M; ++k) active[static_cast<std::size_t>(k)] = imp[k] > 0.0;
+      lam = imp;
+      wandered = false;
       for (int round = 0; round < kPolishRounds && iterations < settings.maxIterations; ++round) {
         ++iterations;
+        if (!fromImp) lam.setZero(M);
         if (!s.solveClosed(active, b, lam)) break;
-        bool changed = false;
+        const auto closedBefore = std::count(active.begin(), active.end(), char{1});
+        std::ptrdiff_t flips = 0;
         for (Eigen::Index k = 0; k < M; ++k)
           if (active[static_cast<std::size_t>(k)] && lam[k] <= 0.0) {
             lam[k] = 0.0;
             active[static_cast<std::size_t>(k)] = false;
-            changed = true;
+            ++flips;
           }
         const double res = lawResidual(lam);
         if (res < best) {
@@ -432,10 +464,20 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
         for (Eigen::Index k = 0; k < M; ++k)
           if (!active[static_cast<std::size_t>(k)] && g[k] < 0.0) {
             active[static_cast<std::size_t>(k)] = true;
-            changed = true;
+            ++flips;
           }
-        if (!changed) break;
+        if (flips == 0) break;
+        if (flips > std::max<std::ptrdiff_t>(kPolishFlips, closedBefore / 100)) {
+          wandered = true;
+          break;
+        }
       }
+      return best;
+    };
+    auto polish = [&](Eigen::VectorXd& imp, double impResidual) {
+      bool wandered = false;
+      double best = polishRounds(imp, impResidual, false, wandered);
+      if (wandered && best >= innerTolerance) best = polishRounds(imp, best, true, wandered);
       return best;
     };
     double polishedAt = std::numeric_limits<double>::infinity();
