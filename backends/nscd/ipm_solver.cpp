@@ -38,7 +38,7 @@ namespace {
 
 constexpr double kStepFraction = 0.995;  // of the step to the boundary of s, r >= 0
 // The polish starts below this residual of the contact law and tries at most kPolishRounds
-// active sets.
+// active sets in each of its two starts (from zero, then from the interior point's impulses).
 constexpr double kPolishFrom = 1e-3;
 constexpr int kPolishRounds = 6;
 // The polish solves W_AA r_A = -b_A by proximal-point sweeps (solveFactorised), from zero or from
@@ -441,7 +441,7 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
     auto polishRounds = [&](Eigen::VectorXd& imp, double best, bool fromImp, bool& wandered) {
       std::vector<char> active(static_cast<std::size_t>(M));
       for (Eigen::Index k = 0; k < M; ++k) active[static_cast<std::size_t>(k)] = imp[k] > 0.0;
-      lam = imp;
+      if (fromImp) lam = imp;  // else each round starts its sweeps from zero
       wandered = false;
       for (int round = 0; round < kPolishRounds && iterations < settings.maxIterations; ++round) {
         ++iterations;

@@ -245,11 +245,11 @@ class NscdBackend final : public core::ContactBackend {
   // residual 1.2e-7 to 7.5e-6, median 9e-7; 8,160 contact rows), the moves reversed step after
   // step, the metric weights grew to 5.2e5 and the force ratio stayed at 3e-3 to 2e-2. The
   // interior-point method, whose iteration count hardly depends on conditioning, took 29 to 61
-  // iterations a step (median residual 5e-8 to 9e-8, though it too stopped above the tolerance
-  // asked on most steps) and brought the pile to rest (docs/performance.md, "The finisher's solves
-  // at their cap"). From the next step on, then, and for the rest of the run. Not against frictional walls: there both
-  // solvers reach their caps in the block iteration around the Coulomb law, and the interior point's steps were the
-  // worse (docs/limitations.md).
+  // iterations a step and brought the pile to rest (docs/performance.md, "The finisher's solves
+  // at their cap"; its solves have since been mended to end near round-off, "The interior point's
+  // polish"). From the next step on, then, and for the rest of the run. Not against frictional
+  // walls: there both solvers reach their caps in the block iteration around the Coulomb law, and
+  // the interior point's steps were the worse (docs/limitations.md).
   void fallBackToInteriorPoint() {
     if (settings_.finisherSolver != FinisherSolverKind::Auto || finisherSettings_.solver != SolverKind::Mprgp) return;
     if (walls_.friction > 0.0) return;
