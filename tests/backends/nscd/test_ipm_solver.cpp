@@ -110,6 +110,45 @@ TEST_CASE("nscd ipm: a pinacoid stack's face contacts, redundant points and all,
   CHECK(difference < 1e-6 * ColdStep::kDt);
 }
 
+TEST_CASE("nscd ipm: a brick wall of pinacoids, loaded off their faces' centres, ended exactly by the polish",
+          "[nscd]") {
+  // Eight courses of flat pinacoids, each course shifted half a brick along x and 0.3 across from
+  // the one below: every face contact carries 4 points for 3 constraints, loaded off the face's
+  // centre, so the least impulses that close the contacts make some points pull. The polish
+  // started from zero then opens too many contacts a round and starts again from the interior
+  // point's positive split (ipm_solver.cpp). With the interior point stopped after 8 iterations,
+  // the polish must end the solve; from zero only, it stopped near 5e-6.
+  const core::Quat flat(Eigen::AngleAxisd(std::numbers::pi / 4.0, Vec3::UnitX()));
+  constexpr int kCourses = 8;
+  constexpr int kBricks = 8;
+  core::SystemDef s = testing::boxSystem(1.05 * kBricks + 3.0, 4.0, false, 0.0);
+  double bottom = 0.0;
+  for (int course = 0; course < kCourses; ++course) {
+    const int shifted = course % 2;
+    double top = 0.0;
+    for (int k = 0; k < kBricks - shifted; ++k) {
+      const Vec3 centre{1.5 + 0.6 * shifted + 1.05 * k, 2.0 + 0.3 * shifted, 0.0};
+      s.grains.push_back(testing::withBottomAt(testing::pinacoid(1.0, centre, flat), bottom));
+      top = 2.0 * s.grains.back().position.z() - bottom;
+    }
+    bottom = top;
+  }
+  nscd::NscdSettings capped = ipm(1e-12);
+  capped.maxIterations = 8;
+  nscd::NscdSettings mprgp;
+  mprgp.tolerance = 1e-12;
+  const ColdStep a(s, capped), b(s, mprgp);
+  std::size_t faces = 0;
+  for (const nscd::ContactGeometry& g : a.contacts) faces += g.pointCount >= 4;
+  INFO("rows " << a.solver.rowCount() << ", contacts " << a.contacts.size() << ", of 4 points or more " << faces
+               << ", ipm iterations " << a.iterations << ", residual " << a.solver.residual());
+  REQUIRE(faces >= 100);
+  CHECK(a.solver.residual() < 1e-12);
+  const auto [largest, difference] = testing::compareVelocities(a, b);
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(difference < 1e-6 * ColdStep::kDt);
+}
+
 // CHOLMOD's factorisations call BLAS, and a serial OpenBLAS is not safe to call from two threads
 // at once: two runs of a sweep (`--jobs 2`) solving at the same time must each get the bits of a
 // solve alone.
