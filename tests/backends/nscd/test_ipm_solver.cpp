@@ -23,6 +23,24 @@ nscd::NscdSettings ipm(double tolerance = 1e-12) {
   return s;
 }
 
+/// A cold step of `s` with at least `minFaces` contacts of 4 points or more (pinacoid faces, each
+/// with more points than the 3 constraints it can carry): `settings`' interior point solves it to
+/// 1e-12 and reaches MPRGP's velocities.
+void checkFaceContactSolve(const core::SystemDef& s, const nscd::NscdSettings& settings, std::size_t minFaces) {
+  nscd::NscdSettings mprgp;
+  mprgp.tolerance = 1e-12;
+  const ColdStep a(s, settings), b(s, mprgp);
+  std::size_t faces = 0;
+  for (const nscd::ContactGeometry& g : a.contacts) faces += g.pointCount >= 4;
+  INFO("rows " << a.solver.rowCount() << ", contacts " << a.contacts.size() << ", of 4 points or more " << faces
+               << ", ipm iterations " << a.iterations << ", residual " << a.solver.residual());
+  REQUIRE(faces >= minFaces);
+  CHECK(a.solver.residual() < 1e-12);
+  const auto [largest, difference] = testing::compareVelocities(a, b);
+  INFO("largest velocity " << largest << ", largest difference " << difference);
+  CHECK(difference < 1e-6 * ColdStep::kDt);
+}
+
 }  // namespace
 
 TEST_CASE("nscd ipm: a column of touching beads is stopped dead, its k-th contact from the top carrying k m g dt",
@@ -96,18 +114,7 @@ TEST_CASE("nscd ipm: a pinacoid stack's face contacts, redundant points and all,
   const double top = s.grains[0].position.z() * 2.0;
   for (int k = 0; k < 3; ++k)
     s.grains.push_back(testing::withBottomAt(testing::pinacoid(1.0, {2.1 + 1.05 * k, 2.15, 0.0}, flat), top));
-  nscd::NscdSettings mprgp;
-  mprgp.tolerance = 1e-12;
-  const ColdStep a(s, ipm(1e-12)), b(s, mprgp);
-  std::size_t faces = 0;
-  for (const nscd::ContactGeometry& g : a.contacts) faces += g.pointCount >= 4;
-  INFO("rows " << a.solver.rowCount() << ", contacts " << a.contacts.size() << ", of 4 points or more " << faces
-               << ", ipm iterations " << a.iterations << ", residual " << a.solver.residual());
-  REQUIRE(faces >= 4);
-  CHECK(a.solver.residual() < 1e-12);
-  const auto [largest, difference] = testing::compareVelocities(a, b);
-  INFO("largest velocity " << largest << ", largest difference " << difference);
-  CHECK(difference < 1e-6 * ColdStep::kDt);
+  checkFaceContactSolve(s, ipm(1e-12), 4);
 }
 
 TEST_CASE("nscd ipm: a brick wall of pinacoids, loaded off their faces' centres, ended exactly by the polish",
@@ -135,18 +142,7 @@ TEST_CASE("nscd ipm: a brick wall of pinacoids, loaded off their faces' centres,
   }
   nscd::NscdSettings capped = ipm(1e-12);
   capped.maxIterations = 8;
-  nscd::NscdSettings mprgp;
-  mprgp.tolerance = 1e-12;
-  const ColdStep a(s, capped), b(s, mprgp);
-  std::size_t faces = 0;
-  for (const nscd::ContactGeometry& g : a.contacts) faces += g.pointCount >= 4;
-  INFO("rows " << a.solver.rowCount() << ", contacts " << a.contacts.size() << ", of 4 points or more " << faces
-               << ", ipm iterations " << a.iterations << ", residual " << a.solver.residual());
-  REQUIRE(faces >= 100);
-  CHECK(a.solver.residual() < 1e-12);
-  const auto [largest, difference] = testing::compareVelocities(a, b);
-  INFO("largest velocity " << largest << ", largest difference " << difference);
-  CHECK(difference < 1e-6 * ColdStep::kDt);
+  checkFaceContactSolve(s, capped, 100);
 }
 
 // CHOLMOD's factorisations call BLAS, and a serial OpenBLAS is not safe to call from two threads
