@@ -1,7 +1,8 @@
 // The interior-point solver (backends/nscd/ipm_solver.hpp) on one cold step's contact problem: a
 // resting column is stopped exactly with the weight above each contact, and on piles of spheres
 // and of pinacoids between rough walls it reaches the velocities of MPRGP, the other solver of
-// the same problem.
+// the same problem; on pinacoid face contacts (more points than constraints) its polish ends the
+// solve at round-off.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
