@@ -133,13 +133,11 @@ TEST_CASE("nscd ipm: a brick wall of pinacoids, loaded off their faces' centres,
   double bottom = 0.0;
   for (int course = 0; course < kCourses; ++course) {
     const int shifted = course % 2;
-    double top = 0.0;
     for (int k = 0; k < kBricks - shifted; ++k) {
       const Vec3 centre{1.5 + 0.6 * shifted + 1.05 * k, 2.0 + 0.3 * shifted, 0.0};
       s.grains.push_back(testing::withBottomAt(testing::pinacoid(1.0, centre, flat), bottom));
-      top = 2.0 * s.grains.back().position.z() - bottom;
     }
-    bottom = top;
+    bottom = 2.0 * s.grains.back().position.z() - bottom;  // the course's top
   }
   nscd::NscdSettings capped = ipm(1e-12);
   capped.maxIterations = 8;
