@@ -43,7 +43,7 @@ struct BenchDef {
 /// Names accepted in BenchDef::cases.
 const std::vector<std::string>& benchCaseNames();
 
-/// The speed targets the cases measure (docs/performance.md, "Where the equilibrium targets
+/// The speed targets the cases measure (docs/performance.md, "Where the speed targets
 /// stand"), each with the figure this bench run reached: an array of {"target", "figure", "met"},
 /// "met" null where the case did not run at the target's size (another --scale, --threads or
 /// rest size) and the figure cannot say. From `cases`, runBench's "cases" object.
