@@ -1,5 +1,6 @@
 #include "collision/contact_region.hpp"
 
+#include <algorithm>
 #include <utility>
 
 #include "collision/polyhedron_distance.hpp"
@@ -7,6 +8,10 @@
 namespace confpack::collision {
 
 namespace {
+
+// Faces tilted more than acos(0.1), about 84 degrees, from the contact plane give no points within
+// reach (reachFace).
+constexpr double kReachFaceMinCos = 0.1;
 
 double cross2(const Vec2& a, const Vec2& b) {
   return a.x() * b.y() - a.y() * b.x();
@@ -346,6 +351,70 @@ Region contactRegion(const WorldPolyhedron& A, const SupportSet& sa, const World
   return faceFaceRegion(fp);
 }
 
+// The face of w through its support vertex along dir (unit) with the most vertices within reach
+// of the support plane, ties to the face most aligned with dir: the face whose part near the
+// contact plane holds the points that can touch within reach. Faces steeper than about 84
+// degrees to the plane are left out (a lateral point's height on them is ill-conditioned); -1 if
+// no face is left.
+int reachFace(const WorldPolyhedron& w, const Vec3& dir, double reach) {
+  int top = 0;
+  for (int i = 1; i < static_cast<int>(w.v.size()); ++i)
+    if (dir.dot(w.v[i]) > dir.dot(w.v[top])) top = i;
+  const double floor = dir.dot(w.v[top]) - reach;
+  int best = -1, bestCount = 0;
+  double bestAlign = 0.0;
+  const auto& faces = w.shape->faces();
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
+    const double align = w.n[f].dot(dir);
+    if (align < kReachFaceMinCos || std::find(faces[f].begin(), faces[f].end(), top) == faces[f].end()) continue;
+    const auto count = std::count_if(faces[f].begin(), faces[f].end(), [&](int i) { return dir.dot(w.v[i]) >= floor; });
+    if (count > bestCount || (count == bestCount && align > bestAlign)) {
+      best = f;
+      bestCount = static_cast<int>(count);
+      bestAlign = align;
+    }
+  }
+  return best;
+}
+
+// Points within reach (contact_region.hpp): the vertices of the overlap of the two reach faces'
+// projections, those within `reach` of the deepest, each with the exact gap between the two face
+// planes. They replace c's points only if they hold its deepest one: otherwise the two faces do
+// not cover the contact (a vertex against an edge beside both faces, say) and c keeps its own.
+void pointsWithinReach(const WorldPolyhedron& A, const WorldPolyhedron& B, const Frame& fr, double reach,
+                       PolyhedronContact& c) {
+  const int fa = reachFace(A, fr.n, reach), fb = reachFace(B, -fr.n, reach);
+  if (fa < 0 || fb < 0 || c.pointGaps.empty()) return;
+  FeatureSurface surfA, surfB;
+  Polygon2 pa, pb;
+  projectFeature(A, SupportSet{{}, {FeatureKind::Face, fa}}, fr, true, surfA, pa);
+  projectFeature(B, SupportSet{{}, {FeatureKind::Face, fb}}, fr, false, surfB, pb);
+  const Polygon2 region = clipPolygon(pa, pb);
+  const double deepest = *std::min_element(c.pointGaps.begin(), c.pointGaps.end());
+  const double lenTol = kRelativeLengthTol * (A.radius + B.radius);
+  VertexArray<Vec3> points;
+  VertexArray<double> gaps;
+  Polygon2 lateral;
+  double reached = kInf;
+  for (const Vec2& x : region) {
+    const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
+    reached = std::min(reached, hb - ha);
+    if (hb - ha > deepest + reach) continue;
+    // Clipping repeats a vertex that lies on an edge of the clip polygon.
+    if (std::any_of(lateral.begin(), lateral.end(), [&](const Vec2& y) { return (x - y).norm() <= lenTol; })) continue;
+    lateral.push_back(x);
+    points.push_back(fr.world(x, 0.5 * (ha + hb)));
+    gaps.push_back(hb - ha);
+  }
+  if (points.empty() || reached > deepest + lenTol) return;
+  c.points.clear();
+  c.pointGaps.clear();
+  for (int i : keptPoints(lateral, gaps)) {
+    c.points.push_back(points[i]);
+    c.pointGaps.push_back(gaps[i]);
+  }
+}
+
 }  // namespace
 
 SupportSet supportSet(const WorldPolyhedron& w, const Vec3& dir, double eps) {
@@ -385,7 +454,7 @@ SmallVector<int, kMaxPolyhedronContactPoints> keptPoints(std::span<const Vec2> p
 }
 
 PolyhedronContact buildContact(const WorldPolyhedron& A, const WorldPolyhedron& B, const Vec3& normal, double gap,
-                               double angleTol) {
+                               double angleTol, double pointReach) {
   PolyhedronContact c;
   c.normal = normal;
   c.gap = gap;
@@ -402,19 +471,20 @@ PolyhedronContact buildContact(const WorldPolyhedron& A, const WorldPolyhedron& 
       c.points.push_back(0.5 * (onA + onB));
       c.pointGaps.push_back(normal.dot(onB - onA));
     }
-    return c;
+  } else {
+    VertexArray<Vec3> points;
+    VertexArray<double> gaps;
+    for (const Vec2& x : region.points) {
+      const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
+      points.push_back(fr.world(x, 0.5 * (ha + hb)));
+      gaps.push_back(hb - ha);
+    }
+    for (int i : keptPoints(region.points, gaps)) {
+      c.points.push_back(points[i]);
+      c.pointGaps.push_back(gaps[i]);
+    }
   }
-  VertexArray<Vec3> points;
-  VertexArray<double> gaps;
-  for (const Vec2& x : region.points) {
-    const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
-    points.push_back(fr.world(x, 0.5 * (ha + hb)));
-    gaps.push_back(hb - ha);
-  }
-  for (int i : keptPoints(region.points, gaps)) {
-    c.points.push_back(points[i]);
-    c.pointGaps.push_back(gaps[i]);
-  }
+  if (pointReach > 0.0) pointsWithinReach(A, B, fr, pointReach, c);
   return c;
 }
 

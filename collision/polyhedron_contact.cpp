@@ -35,25 +35,25 @@ Vec3 unitOrThrow(const Vec3& n, const char* who) {
 }  // namespace
 
 std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,
-                                                  double angleTol) {
+                                                  double angleTol, double pointReach) {
   checkAlert(alert, "collidePolyhedra");
   if (a.shape == nullptr || b.shape == nullptr)
     throw std::invalid_argument("collidePolyhedra: PlacedPolyhedron.shape is null");
   // Bounding spheres first: most broad-phase pairs end here.
   const double reach = a.shape->boundingRadius() + b.shape->boundingRadius() + alert;
   if ((b.position - a.position).squaredNorm() > reach * reach) return std::nullopt;
-  return collideWorldPolyhedra(WorldPolyhedron(a), WorldPolyhedron(b), alert, angleTol);
+  return collideWorldPolyhedra(WorldPolyhedron(a), WorldPolyhedron(b), alert, angleTol, pointReach);
 }
 
 std::optional<PolyhedronContact> collideWorldPolyhedra(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert,
-                                                       double angleTol) {
+                                                       double angleTol, double pointReach) {
   checkAlert(alert, "collideWorldPolyhedra");
   if (A.shape == nullptr || B.shape == nullptr)
     throw std::invalid_argument("collideWorldPolyhedra: a WorldPolyhedron has no shape");
   Vec3 normal;
   double gap;
   if (!pairNormal(A, B, alert, normal, gap)) return std::nullopt;
-  return buildContact(A, B, normal, gap, angleTol);
+  return buildContact(A, B, normal, gap, angleTol, pointReach);
 }
 
 std::optional<PolyhedronContact> collidePolyhedronSphere(const PlacedPolyhedron& a, const Vec3& centre, double radius,

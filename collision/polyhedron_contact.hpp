@@ -79,16 +79,19 @@ struct PolyhedronContact {
 };
 
 /// Contact between two placed polyhedra, or nullopt if their distance exceeds alert [d_L].
-/// angleTol [rad]: tolerance for a face/edge to count as lying in the contact plane.
+/// angleTol [rad]: tolerance for a face/edge to count as lying in the contact plane. pointReach
+/// [d_L] > 0: the points are every one that can touch within that distance, each with its gap
+/// (contact_region.hpp, "Points within reach"); type and features unchanged. 0: the features'
+/// own points (what the analysis reads).
 std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,
-                                                  double angleTol = kFeatureAngleTol);
+                                                  double angleTol = kFeatureAngleTol, double pointReach = 0.0);
 
 struct WorldPolyhedron;
 /// The same for two polyhedra already in world coordinates (world_polyhedron.hpp), without the
 /// bounding-sphere rejection collidePolyhedra starts with: for a caller that places each body once
 /// for all its pairs, and has rejected the distant pairs itself. Same result, bit for bit.
 std::optional<PolyhedronContact> collideWorldPolyhedra(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert,
-                                                       double angleTol = kFeatureAngleTol);
+                                                       double angleTol = kFeatureAngleTol, double pointReach = 0.0);
 
 /// Contact between a placed polyhedron a and a sphere (b), or nullopt if the gap exceeds alert.
 /// Exact: the closest point of the polyhedron to the centre (if the centre is inside, the nearest

@@ -113,7 +113,8 @@ void NarrowPhase::collidePairIn(const CandidatePair& pair, const std::vector<Vec
     if (collideSphereSphere(positions[a], radius_[a], pb, radius_[b], alert, c)) out.push_back(c);
     return;
   }
-  // Polyhedra: the exact SAT routines of collision/polyhedron_contact (shared with analysis).
+  // Polyhedra: the exact SAT routines of collision/polyhedron_contact (shared with analysis), with
+  // every point that can touch within the alert distance (contact_region.hpp, "Points within reach").
   auto placed = [&](int i, const Vec3& p) {
     return collision::PlacedPolyhedron{&poly_[i], p, orientations[i].toRotationMatrix()};
   };
@@ -126,11 +127,12 @@ void NarrowPhase::collidePairIn(const CandidatePair& pair, const std::vector<Vec
     const double reach = poly_[a].boundingRadius() + poly_[b].boundingRadius() + alert;
     if ((pb - positions[a]).squaredNorm() > reach * reach) return;
     if (pair.shiftX == 0 && pair.shiftY == 0)
-      pc = collision::collideWorldPolyhedra((*world)[a], (*world)[b], alert);
+      pc = collision::collideWorldPolyhedra((*world)[a], (*world)[b], alert, collision::kFeatureAngleTol, alert);
     else
-      pc = collision::collideWorldPolyhedra((*world)[a], collision::WorldPolyhedron(placed(b, pb)), alert);
+      pc = collision::collideWorldPolyhedra((*world)[a], collision::WorldPolyhedron(placed(b, pb)), alert,
+                                            collision::kFeatureAngleTol, alert);
   } else if (!sphereA && !sphereB) {
-    pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert);
+    pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert, collision::kFeatureAngleTol, alert);
   } else if (!sphereA) {
     pc = collision::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
   } else {

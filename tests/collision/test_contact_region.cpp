@@ -107,6 +107,50 @@ TEST_CASE("contact: a ridge lying on a face is Double with the clipped edge ends
   }
 }
 
+TEST_CASE("contact: a ridge 0.3 degrees off a face has both ends as points within reach, each with its own gap") {
+  const ConvexPolyhedron p = makePinacoid(1.0, kParams);
+  const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
+  // b's bottom ridge lies on a's top face (as above), then turns by 0.3 degrees about the face's
+  // normal-and-ridge cross axis, so that its end at +x rises off the face by 2 l sin(0.3 deg).
+  const Mat3 rx = Eigen::AngleAxisd(-M_PI / 4, Vec3::UnitX()).toRotationMatrix();
+  const Vec3 ridgeMid = rx * Vec3(0, 0, -0.5);
+  const Vec3 q(0.0, 0.25, 0.25);
+  const double tilt = 0.3 * std::numbers::pi / 180.0;
+  const Mat3 lift = Eigen::AngleAxisd(tilt, Vec3::UnitX().cross(kN1).normalized()).toRotationMatrix();
+  const double alert = 0.03;
+  for (double g : {0.002, 0.0, -0.003}) {
+    // The low end (x = -l) at height g above the face; the ridge turned about it.
+    const Vec3 lowEnd = q + Vec3(-kL, 0, 0) + g * kN1;
+    const Mat3 r = lift * rx;
+    const Vec3 centre = lowEnd - r * (Vec3(-kL, 0, 0) + Vec3(0, 0, -0.5));
+    const PlacedPolyhedron b{&p, centre, r};
+    std::vector<double> endGaps;
+    for (const Vec3& v : b.worldVertices())
+      if (kN1.dot(v) - kOff1 < g + alert) endGaps.push_back(kN1.dot(v) - kOff1);
+    REQUIRE(endGaps.size() == 2);  // the ridge's two ends, and no other vertex of b, within reach
+    std::sort(endGaps.begin(), endGaps.end());
+    CHECK(endGaps[0] == Approx(g).margin(1e-12));
+    CHECK(endGaps[1] - endGaps[0] == Approx(2.0 * kL * std::sin(tilt)).epsilon(1e-9));
+    // The type's tolerance (1e-3 rad) sees a vertex on the face: one point, at the low end.
+    const auto narrow = collidePolyhedra(a, b, alert);
+    REQUIRE(narrow);
+    CHECK(narrow->type == ContactType::Simple);
+    CHECK(narrow->points.size() == 1);
+    // Within reach of the alert distance: both ends, each with its own gap, on the face's normal.
+    const auto reach = collidePolyhedra(a, b, alert, kFeatureAngleTol, alert);
+    REQUIRE(reach);
+    CHECK(reach->type == ContactType::Simple);
+    CHECK((reach->normal - kN1).norm() < 1e-12);
+    REQUIRE(reach->points.size() == 2);
+    std::vector<double> gaps(reach->pointGaps.begin(), reach->pointGaps.end());
+    std::sort(gaps.begin(), gaps.end());
+    CHECK(gaps[0] == Approx(endGaps[0]).margin(1e-12));
+    CHECK(gaps[1] == Approx(endGaps[1]).margin(1e-12));
+    for (std::size_t i = 0; i < 2; ++i)  // midway between the face and the ridge end
+      CHECK(kN1.dot(reach->points[i]) - kOff1 == Approx(0.5 * reach->pointGaps[i]).margin(1e-12));
+  }
+}
+
 TEST_CASE("contact: trapezoid on trapezoid is Triple with every vertex of the hexagonal overlap as a point") {
   const ConvexPolyhedron p = makePinacoid(1.0, kParams);
   const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
