@@ -33,16 +33,16 @@
 // Points within reach (pointReach > 0, what a solver asks for). The features above are the
 // contact's geometric reading, at the type's tolerance; a solver needs instead every point that
 // can touch within a step. An edge 0.3 degrees off a face reads as a vertex on the face, one
-// point, and its other end, 2e-3 d higher, is unseen: in a 338-pinacoid pile such a pair was read
-// in turn as one point and as two, the free end sank up to 5.6e-3 d into the face, the grains
+// point, and its other end, 3.6e-3 d higher, is unseen: in a 338-pinacoid pile such a pair was
+// read in turn as one point and as two, the free end sank up to 5.6e-3 d into the face, the grains
 // rocked in 2-cycles and the pile never came to rest (docs/pinacoid-shape.md). So each body also
 // gets a reach face: through its support vertex, the face with the most vertices within pointReach
 // of its support plane. The points are then the vertices of the overlap of the two reach faces'
 // projections, those within pointReach of the deepest point, each with the exact gap between the
 // two face planes (both planes are exact there: a face whose normal points towards the other body
 // is that body's surface over its own projection). They replace the points above when they hold
-// the deepest of them, i.e. when the reach faces cover the contact; the type and the features
-// stay the geometric ones. With pointReach = the alert distance that pile comes to rest.
+// the deepest of them, i.e. when the reach faces cover the contact; the type and the features stay
+// the geometric ones. With pointReach = the alert distance that pile comes to rest.
 #include <span>
 
 #include "collision/world_polyhedron.hpp"
