@@ -110,10 +110,10 @@ TEST_CASE("contact: a ridge lying on a face is Double with the clipped edge ends
 TEST_CASE("contact: a ridge 0.3 degrees off a face has both ends as points within reach, each with its own gap") {
   const ConvexPolyhedron p = makePinacoid(1.0, kParams);
   const PlacedPolyhedron a{&p, Vec3::Zero(), Mat3::Identity()};
-  // b's bottom ridge lies on a's top face (as above), then turns by 0.3 degrees about the face's
-  // normal-and-ridge cross axis, so that its end at +x rises off the face by 2 l sin(0.3 deg).
+  // b's bottom ridge (body frame: x in [-l, l] at z = -1/2) lies on a's top face (as above), then
+  // turns by 0.3 degrees about x cross n1, so that its end at +x rises off the face by
+  // 2 l sin(0.3 deg).
   const Mat3 rx = Eigen::AngleAxisd(-M_PI / 4, Vec3::UnitX()).toRotationMatrix();
-  const Vec3 ridgeMid = rx * Vec3(0, 0, -0.5);
   const Vec3 q(0.0, 0.25, 0.25);
   const double tilt = 0.3 * std::numbers::pi / 180.0;
   const Mat3 lift = Eigen::AngleAxisd(tilt, Vec3::UnitX().cross(kN1).normalized()).toRotationMatrix();
