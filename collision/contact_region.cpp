@@ -351,6 +351,27 @@ Region contactRegion(const WorldPolyhedron& A, const SupportSet& sa, const World
   return faceFaceRegion(fp);
 }
 
+// Above lateral point x: the point midway between the two surfaces, and its gap (h_B - h_A).
+struct SurfacePoint {
+  Vec3 point;
+  double gap;
+};
+SurfacePoint pointAt(const FeatureSurface& surfA, const FeatureSurface& surfB, const Frame& fr, const Vec2& x) {
+  const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
+  return {fr.world(x, 0.5 * (ha + hb)), hb - ha};
+}
+
+// c's points: those of the candidates (lateral positions, points, gaps) that keptPoints keeps.
+void setKeptPoints(std::span<const Vec2> lateral, const VertexArray<Vec3>& points, const VertexArray<double>& gaps,
+                   PolyhedronContact& c) {
+  c.points.clear();
+  c.pointGaps.clear();
+  for (int i : keptPoints(lateral, gaps)) {
+    c.points.push_back(points[i]);
+    c.pointGaps.push_back(gaps[i]);
+  }
+}
+
 // The face of w through its support vertex along dir (unit) with the most vertices within reach
 // of the support plane, ties to the face most aligned with dir: the face whose part near the
 // contact plane holds the points that can touch within reach. Faces steeper than about 84
@@ -397,22 +418,19 @@ void pointsWithinReach(const WorldPolyhedron& A, const WorldPolyhedron& B, const
   Polygon2 lateral;
   double reached = kInf;
   for (const Vec2& x : region) {
-    const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
-    reached = std::min(reached, hb - ha);
-    if (hb - ha > deepest + reach) continue;
+    const SurfacePoint sp = pointAt(surfA, surfB, fr, x);
+    reached = std::min(reached, sp.gap);
+    if (sp.gap > deepest + reach) continue;
     // Clipping repeats a vertex that lies on an edge of the clip polygon.
     if (std::any_of(lateral.begin(), lateral.end(), [&](const Vec2& y) { return (x - y).norm() <= lenTol; })) continue;
     lateral.push_back(x);
-    points.push_back(fr.world(x, 0.5 * (ha + hb)));
-    gaps.push_back(hb - ha);
+    points.push_back(sp.point);
+    gaps.push_back(sp.gap);
   }
-  if (points.empty() || reached > deepest + lenTol) return;
-  c.points.clear();
-  c.pointGaps.clear();
-  for (int i : keptPoints(lateral, gaps)) {
-    c.points.push_back(points[i]);
-    c.pointGaps.push_back(gaps[i]);
-  }
+  // The deepest candidate is always kept (its gap is within reach, and a repeat only follows a
+  // kept copy), so reaching the deepest point means some points were kept.
+  if (reached > deepest + lenTol) return;
+  setKeptPoints(lateral, points, gaps, c);
 }
 
 }  // namespace
@@ -475,14 +493,11 @@ PolyhedronContact buildContact(const WorldPolyhedron& A, const WorldPolyhedron& 
     VertexArray<Vec3> points;
     VertexArray<double> gaps;
     for (const Vec2& x : region.points) {
-      const double ha = heightAt(surfA, fr, x), hb = heightAt(surfB, fr, x);
-      points.push_back(fr.world(x, 0.5 * (ha + hb)));
-      gaps.push_back(hb - ha);
+      const SurfacePoint sp = pointAt(surfA, surfB, fr, x);
+      points.push_back(sp.point);
+      gaps.push_back(sp.gap);
     }
-    for (int i : keptPoints(region.points, gaps)) {
-      c.points.push_back(points[i]);
-      c.pointGaps.push_back(gaps[i]);
-    }
+    setKeptPoints(region.points, points, gaps, c);
   }
   if (pointReach > 0.0) pointsWithinReach(A, B, fr, pointReach, c);
   return c;

@@ -90,8 +90,8 @@ TEST_CASE("run --from brings a packing's grains to rest: a bead column carries k
 TEST_CASE("run --from takes a pinacoid pile where a ridge lies 0.3 degrees off a face to rest") {
   // The last state of the shape study's pile that never came to rest (E/L = 0.5, alpha = 60,
   // seed 1; docs/pinacoid-shape.md): 338 pinacoids, two of which meet with a ridge 0.3 degrees
-  // off a face. With one point for that pair the finisher rocked for 600 steps (force ratio 0.35);
-  // with every point within reach it is at rest in about 40 (contact_region.hpp).
+  // off a face. With one point for that pair the finisher is not at rest after these 300 steps
+  // (force ratio 5.9e-3); with every point within reach it is at rest in 43 (contact_region.hpp).
   ConfpackSession s("cmd_run_ridge");
   const fs::path pile = fs::path(CONFPACK_SOURCE_DIR) / "tests" / "data" / "pinacoid-pile-ridge-off-face.json";
   const auto r = s.run("run --from '" + pile.string() +
