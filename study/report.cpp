@@ -22,8 +22,16 @@ using nlohmann::json;
 
 namespace {
 
-/// Standard error of a replica mean, std / sqrt(n); 0 below two replicas.
-double standardError(const ReplicaStat& st) { return st.n >= 2 ? st.std / std::sqrt(static_cast<double>(st.n)) : 0.0; }
+/// Standard error of a replica mean, std / sqrt(n); none below two replicas.
+std::optional<double> knownStandardError(const ReplicaStat& st) {
+  if (st.n < 2) return std::nullopt;
+  return st.std / std::sqrt(static_cast<double>(st.n));
+}
+
+/// The same as a fit's weight or a figure's error bar: 0 below two replicas (no weight, no bar).
+double standardError(const ReplicaStat& st) {
+  return knownStandardError(st).value_or(0.0);
+}
 
 }  // namespace
 
@@ -425,12 +433,19 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                                     options.gnuplot.string()));
 }
 
+// An unweighted line through two widths passes through both points: its parameters have no
+// standard error (a weighted one takes theirs from the replicas' errors).
+bool fitErrorsKnown(const analysis::ConfinementFit& f) {
+  return f.weighted || f.dof > 0;
+}
+
 // The fitted parameters as the fit section and the summary both print them, so the two agree.
 std::string bulkText(const analysis::ConfinementFit& f) {
-  return fmt::format("{:.4f} ± {:.2g}", f.bulk, f.bulkError);
+  return fitErrorsKnown(f) ? fmt::format("{:.4f} ± {:.2g}", f.bulk, f.bulkError)
+                           : fmt::format("{:.4f} (no SE)", f.bulk);
 }
 std::string cText(const analysis::ConfinementFit& f) {
-  return fmt::format("{:.3f} ± {:.2g}", f.c, f.cError);
+  return fitErrorsKnown(f) ? fmt::format("{:.3f} ± {:.2g}", f.c, f.cError) : fmt::format("{:.3f} (no SE)", f.c);
 }
 std::string chiText(const analysis::ConfinementFit& f) {
   return f.dof > 0 ? fmt::format("{:.3g}/{}", f.chiSquare, f.dof) : "exact (2 points)";
@@ -664,12 +679,21 @@ std::string familyName(const SeriesKey& s) {
                      num(s.mu), settingsText(s.settings, ", ", " = "));
 }
 
-// A number of the summary with its standard error (0 when it has none) as printed.
+// A number of the summary with its standard error (none from a single run or a line through two
+// points) as printed.
 struct Estimate {
   double value = 0.0;
-  double error = 0.0;
+  std::optional<double> error;
   std::string text;
 };
+
+// A mean over runs as the summary prints it, to `digits` significant digits: "mean ± SE", or
+// "mean (1 run)", which has no standard error.
+Estimate replicaEstimate(const ReplicaStat& st, int digits) {
+  const std::optional<double> se = knownStandardError(st);
+  return {st.mean, se,
+          se ? fmt::format("{:.{}g} ± {:.2g}", st.mean, digits, *se) : fmt::format("{:.{}g} (1 run)", st.mean, digits)};
+}
 
 // One quantity of the summary per (family, backend), with its short definition.
 struct SummaryQuantity {
@@ -696,8 +720,10 @@ void addFitQuantities(StudySummary& out, const std::vector<FitRow>& fits, const 
   SummaryQuantity bulk{bulkName, bulkDefinition, {}}, c{cName, cDefinition, {}};
   for (const FitRow& f : fits)
     if (f.fit) {
-      bulk.values[{f.series, f.backend}] = {f.fit->bulk, f.fit->bulkError, bulkText(*f.fit)};
-      c.values[{f.series, f.backend}] = {f.fit->c, f.fit->cError, cText(*f.fit)};
+      const bool known = fitErrorsKnown(*f.fit);
+      bulk.values[{f.series, f.backend}] = {f.fit->bulk, known ? std::optional(f.fit->bulkError) : std::nullopt,
+                                            bulkText(*f.fit)};
+      c.values[{f.series, f.backend}] = {f.fit->c, known ? std::optional(f.fit->cError) : std::nullopt, cText(*f.fit)};
     }
   if (bulk.values.empty()) return;
   out.quantities.push_back(std::move(bulk));
@@ -708,10 +734,14 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   StudySummary out;
   if (!fits.phi.empty()) {
     for (const FitRow& f : fits.phi)
-      out.phiFitQuality[{f.series, f.backend}] = !f.fit ? "no fit: " + f.why
-                                                 : f.fit->dof > 0
-                                                     ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit))
-                                                     : "exact through 2 widths: no standard errors";
+      out.phiFitQuality[{f.series, f.backend}] =
+          !f.fit            ? "no fit: " + f.why
+          : f.fit->dof > 0  ? (f.fit->weighted ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit))
+                                               : fmt::format("unweighted (a width without a standard error): "
+                                                              "residual sum of squares {:.3g}, {} dof",
+                                                             f.fit->chiSquare, f.fit->dof))
+          : f.fit->weighted ? "2 widths: the law is not tested (no degree of freedom)"
+                            : "exact through 2 widths: no standard errors";
     addFitQuantities(out, fits.phi, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
                      "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
   }
@@ -729,9 +759,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
     for (const std::string& b : study.backends) {
       const ConfKey* widest = study.sampleOf(sk, b, lambdaKey, false);
       if (!widest) continue;
-      const ReplicaStat st = study.statOf(*widest, b, lambdaKey);
-      const double se = standardError(st);
-      lambda.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
+      lambda.values[{sk, b}] = replicaEstimate(study.statOf(*widest, b, lambdaKey), 3);
     }
   if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
   // Measured on one sample of each family, the biperiodic one (or, without it, the widest confined
@@ -763,9 +791,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
         if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;
         const ConfKey* sample = study.sampleOf(sk, b, m.key, true);
         if (!sample) continue;
-        const ReplicaStat st = study.statOf(*sample, b, m.key);
-        const double se = standardError(st);
-        q.values[{sk, b}] = {st.mean, se, fmt::format("{:.4g} ± {:.2g}", st.mean, se)};
+        q.values[{sk, b}] = replicaEstimate(study.statOf(*sample, b, m.key), 4);
       }
     if (!q.values.empty()) out.quantities.push_back(std::move(q));
   }
@@ -792,9 +818,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
         }
       }
       if (v.empty()) continue;
-      const ReplicaStat st = replicaStat(v);
-      const double se = standardError(st);
-      interpenetration.values[{sk, b}] = {st.mean, se, fmt::format("{:.3g} ± {:.2g}", st.mean, se)};
+      interpenetration.values[{sk, b}] = replicaEstimate(replicaStat(v), 3);
     }
   if (!interpenetration.values.empty()) out.quantities.push_back(std::move(interpenetration));
   return out;
@@ -886,7 +910,10 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
     definitions.push_back(
         "QUANTITY reference: the published value of the reference file for the family (the entry for its x_S and "
         "mu_w when the file has one), ± its published uncertainty, [n] its source");
-  definitions.push_back("± values are standard errors; the fits' are from the least squares (docs/model.md).");
+  definitions.push_back(
+      "± values are standard errors; the fits' are from the least squares (docs/model.md). A value marked (1 run) "
+      "comes from a single run and one marked (no SE) from a line through two widths: neither has a standard "
+      "error, and the verdict does not judge them");
   doc.bullets(definitions);
 }
 
@@ -912,12 +939,14 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       const auto eb = q.values.find({sk, b});
       if (ea == q.values.end() || eb == q.values.end()) continue;
       const double diff = ea->second.value - eb->second.value;
-      const double se = std::hypot(ea->second.error, eb->second.error);
+      // A comparison needs both errors: one side's alone would judge the other side's number exact.
+      const bool bothErrors = ea->second.error && eb->second.error;
+      const double se = bothErrors ? std::hypot(*ea->second.error, *eb->second.error) : 0.0;
       const bool known = se > 0.0;
       const bool differ = known && std::abs(diff) > 2.0 * se;
       const std::string both = fmt::format("({} against {})", ea->second.text, eb->second.text);
       rows.push_back({familyName(sk), q.name, ea->second.text, eb->second.text, fmt::format("{:+.3g}", diff),
-                      fmt::format("{:.2g}", se),
+                      bothErrors ? fmt::format("{:.2g}", se) : "-",
                       known         ? (differ ? "yes: differ (*)" : "no: agree")
                       : diff == 0.0 ? "no: identical"
                                     : "no standard error"});
@@ -928,7 +957,7 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       else if (differ)
         text += fmt::format(
             " {} and {} differ on {} by {:+.3g} ± {:.2g}, {} standard errors {}.", a, b, q.name, diff, se,
-            std::abs(diff) > 100.0 * se ? "more than 100" : fmt::format("{:.2g}", std::abs(diff) / se), both);
+            std::abs(diff) > 100.0 * se ? "more than 100" : fmt::format("{:.1f}", std::abs(diff) / se), both);
       else
         text += fmt::format(" {} and {} agree on {} within 2 standard errors {}.", a, b, q.name, both);
     }

@@ -461,6 +461,49 @@ TEST_CASE("cross-solver verdict: agree on a shared law, differ on a shifted phi_
   }
 }
 
+TEST_CASE("a number without a standard error is shown as such and the verdict does not judge it") {
+  // Bullet keeps W = 10 (3 runs) and one run at W = 20: its phi(W) is an unweighted line through two
+  // widths, and lambda_L/d_avg of its widest sample comes from one run. nscd keeps everything.
+  // keep(width, seed) says which of bullet's confined runs stay done.
+  const auto reportWithout = [](const std::string& name, const auto& keep) {
+    const fs::path dir = makeStudy(name, false);
+    for (const auto& entry : fs::directory_iterator(dir / "runs")) {
+      const json cfg = json::parse(slurp(entry.path() / "config.json"));
+      if (cfg["backend"] == "bullet" && !cfg["box"]["periodic_y"].get<bool>() &&
+          !keep(cfg["box"]["width"].get<double>(), cfg["seed"].get<int>()))
+        fs::remove(entry.path() / study::kDoneMarker);
+    }
+    const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
+    fs::remove_all(dir);
+    return md;
+  };
+  // With every width but W = 20 at 3 runs, the fit is unweighted over 4 widths: no chi², its residuals.
+  const std::string unweighted = reportWithout("unweighted", [](double w, int seed) { return w != 20.0 || seed == 1; });
+  CHECK_THAT(rowCells(unweighted, "| MSP: spheres x_S = 0, mu_w = 0 | bullet |", unweighted.find("## Summary")).at(5),
+             Catch::StartsWith("unweighted (a width without a standard error): residual sum of squares "));
+  const std::string md =
+      reportWithout("no_error", [](double w, int seed) { return w == 10.0 || (w == 20.0 && seed == 1); });
+  const auto bullet = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | bullet |", md.find("## Summary"));
+  REQUIRE(bullet.size() == 10);
+  // The line through phi(10) = 0.63 - 0.4/10 (a mean on bullet's law) and phi(20) = 0.63 - 0.4/20 - 0.002
+  // (seed 1's offset): C = 0.018 / 0.05 = 0.36, phi_bulk = 0.59 + 0.036.
+  CHECK(bullet[3] == "0.6260 (no SE)");
+  CHECK(bullet[4] == "0.360 (no SE)");
+  CHECK(bullet[5] == "exact through 2 widths: no standard errors");
+  CHECK(bullet[8] == fmt::format("{:.3g} (1 run)", 1.5 + kDelta * (1.0 - 2.0)));  // seed 1's offset
+  // nscd's lambda_L/d_avg (1.25 ± 0.0012) is far from bullet's single run (1.498), but with no
+  // standard error on bullet's side there is nothing to judge the difference against.
+  const std::string verdict = verdictOf(md);
+  const auto lambda = rowCells(verdict, "| MSP: spheres x_S = 0, mu_w = 0 | lambda_L/d_avg |");
+  REQUIRE(lambda.size() == 7);
+  CHECK(lambda[5] == "-");
+  CHECK(lambda[6] == "no standard error");
+  CHECK(rowCells(verdict, "| MSP: spheres x_S = 0, mu_w = 0 | phi_bulk |").at(6) == "no standard error");
+  CHECK_THAT(verdict, Catch::Contains("nscd and bullet give lambda_L/d_avg (1.25 ± 0.0012 against 1.5 (1 run)) with "
+                                      "no standard error to compare them."));
+  CHECK_THAT(verdict, !Catch::Contains("differ on lambda_L/d_avg"));
+}
+
 TEST_CASE("summary and verdict say which runs were not at equilibrium or did not finish") {
   const fs::path dir = makeStudy("verdict_failures", true);
   const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
@@ -641,8 +684,8 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
   // phi and Z, and the pinacoids' contact types and nematic order, each with its definition.
   CHECK(md.find("| family | backend | runs at equilibrium / total | phi | Z | Z_s | Z_d | Z_t | S |\n", summaryAt) !=
         std::string::npos);
-  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | 0.575 ± 0 | 8.75 ± 0 | 5 ± 0 | "
-                "2.75 ± 0 | 1 ± 0 | 0.75 ± 0 |",
+  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | 0.575 (1 run) | 8.75 (1 run) | "
+                "5 (1 run) | 2.75 (1 run) | 1 (1 run) | 0.75 (1 run) |",
                 summaryAt) != std::string::npos);
   CHECK(md.find("- Z_t: pinacoids: triple contacts per grain (face-face), on the biperiodic sample") !=
         std::string::npos);
