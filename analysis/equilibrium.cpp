@@ -73,13 +73,15 @@ EquilibriumReport equilibrium(const core::Packing& packing, const std::vector<co
   const double scale = r.pressure > 0.0 ? 1.0 / r.pressure : inf;
   for (std::size_t i = 0; i < n; ++i) {
     const core::Grain& g = packing.grains[i];
-    double ek = 0.0;
+    double ek = 0.0, settling = 0.0;  // settling: without a sphere's spin
     if (!states.empty()) {
       const double m = density * g.volume();
       const core::Mat3 rot = g.orientation.toRotationMatrix();
       const core::Mat3 inertia = rot * g.bodyInertia(density) * rot.transpose();
       const core::Vec3& w = states[i].angularVelocity;
-      ek = 0.5 * m * states[i].velocity.squaredNorm() + 0.5 * w.dot(inertia * w);
+      const double translational = 0.5 * m * states[i].velocity.squaredNorm();
+      ek = translational + 0.5 * w.dot(inertia * w);
+      settling = g.shape == core::ShapeKind::Sphere ? translational : ek;
     }
     const double d = g.size;
     // 0 * inf would be NaN: an exactly balanced grain has ratio 0 even when P = 0.
@@ -94,6 +96,7 @@ EquilibriumReport equilibrium(const core::Packing& packing, const std::vector<co
     r.maxMomentRatio = std::max(r.maxMomentRatio, mr);
     r.maxKineticRatio = std::max(r.maxKineticRatio, kr);
     r.meanKineticRatio += kr / static_cast<double>(n);
+    r.meanSettlingKineticRatio += ratio(settling, d * d * d) / static_cast<double>(n);
   }
   r.reached = r.pressure > 0.0 && r.maxForceRatio < forceRatio && r.maxMomentRatio < momentRatio &&
               r.maxKineticRatio < kineticRatio;

@@ -35,6 +35,10 @@ struct EquilibriumReport {
   double maxMomentRatio = 0.0;   ///< max_i |sum M_i| / (d_i^3 P) [-]
   double maxKineticRatio = 0.0;  ///< max_i E_k,i / (d_i^3 P) [-]
   double meanKineticRatio = 0.0; ///< the mean over grains of E_k,i / (d_i^3 P) [-]
+  /// The same mean without the spin of spheres, the energy of the motion that can still change the
+  /// packing [-]: a sphere's spin leaves its boundary in place, and once a sphere spun by wall
+  /// friction leaves the wall, its frictionless contacts never stop it.
+  double meanSettlingKineticRatio = 0.0;
   double pressure = 0.0;         ///< P = tr(sigma)/3 [rho g d_L]
   int worstGrain = -1;           ///< grain with the largest force ratio (-1: no grains)
   bool pressureFromBulk = true;  ///< false: the fallback over the whole pile was used

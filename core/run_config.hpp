@@ -51,7 +51,8 @@ struct CompactionDef {
   /// check whose mean kinetic ratio E_k / (d^3 P) over the grains is below this [-]. 1e-4 is a
   /// grain of the bulk moving at about a hundredth of sqrt(g d): the fall is over, the pile
   /// creeps. The mean, not the largest: a lone grain sliding on the frictionless floor keeps the
-  /// largest ratio up for ever (docs/model.md).
+  /// largest ratio up for ever (docs/model.md). Spheres count without their spin, which moves no
+  /// boundary and which, once wall friction has spun a sphere, nothing stops.
   double switchKineticRatio = 1e-4;
   /// Quasi-static protocol: the largest motion of a grain's surface in one finisher step, as a
   /// fraction of the smallest grain's size [-]. A third of nscd's default alert distance (0.03):

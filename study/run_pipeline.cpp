@@ -65,16 +65,20 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 
 AdaptiveTimeStep::AdaptiveTimeStep(const std::vector<core::Grain>& grains, double gravity, double floor)
     : gravity_(gravity), floor_(floor) {
-  radius_.reserve(grains.size());
-  for (const core::Grain& g : grains) radius_.push_back(g.boundingRadius());
+  // A sphere's spin moves no part of its boundary: with wall friction a sphere spun at a wall keeps
+  // spinning once it leaves it (its other contacts are frictionless), and counting that spin held
+  // the step of a 1,648-sphere pile with mu_w = 0.5 at a third of its value without friction.
+  spinRadius_.reserve(grains.size());
+  for (const core::Grain& g : grains)
+    spinRadius_.push_back(g.shape == core::ShapeKind::Sphere ? 0.0 : g.boundingRadius());
   motion_ = 0.01 * core::smallestSize(grains);
 }
 
 double AdaptiveTimeStep::next(double previous, const std::vector<core::BodyState>& states) const {
-  if (radius_.empty()) return floor_;
+  if (spinRadius_.empty()) return floor_;
   double v = 0.0;
-  for (std::size_t i = 0; i < radius_.size(); ++i)
-    v = std::max(v, states[i].velocity.norm() + states[i].angularVelocity.norm() * radius_[i]);
+  for (std::size_t i = 0; i < spinRadius_.size(); ++i)
+    v = std::max(v, states[i].velocity.norm() + states[i].angularVelocity.norm() * spinRadius_[i]);
   // v dt + g dt^2 / 2 = s: the positive root, in the form that does not cancel when v^2 >> 2 g s.
   const double dt = 2.0 * motion_ / (v + std::sqrt(v * v + 2.0 * gravity_ * motion_));
   return std::max(floor_, std::min(dt, kAdaptiveGrowth * previous));
@@ -270,7 +274,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       check(now, std::min(1.0, c.simTime / timeLimit),
             fmt::format("t={:.1f}{}", c.simTime, adaptive ? fmt::format(" dt {:.1e}", c.dt) : ""));
       if (eq.reached) break;
-      if (finisher && eq.meanKineticRatio < def.switchKineticRatio) {
+      if (finisher && eq.meanSettlingKineticRatio < def.switchKineticRatio) {
         handOver = true;
         c.handOverAt = "switch_kinetic_ratio";
         break;
@@ -287,7 +291,7 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
       handOver = true;
       c.handOverAt = fallBounded ? "fall_time_limit" : "time_limit";
     }
-    c.handOverKineticRatio = haveEq ? eq.meanKineticRatio : 0.0;
+    c.handOverKineticRatio = haveEq ? eq.meanSettlingKineticRatio : 0.0;
     c.dynamicSteps = c.steps;
     c.dynamicIterations = c.iterations;
     c.dynamicWallSeconds = elapsed();

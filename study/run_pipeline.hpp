@@ -37,8 +37,9 @@ inline constexpr double kAdaptiveCheckSpacing = 0.5;
 /// The step of an adaptive compaction (compaction.adaptive_dt). No grain should move more than
 /// d_L/100 per step; the fixed step meets that at the worst speed of the compaction,
 /// sqrt(2 g dh), which the pile reaches only while it falls. This step meets it at the speeds the
-/// grains have now: the largest dt with v dt + g dt^2 / 2 <= s, where v is the fastest surface
-/// point of any grain (|v| + |omega| r_bound) and s is a hundredth of the smallest grain's size
+/// grains have now: the largest dt with v dt + g dt^2 / 2 <= s, where v is the fastest motion of
+/// any grain's boundary (|v| + |omega| r_bound; |v| for a sphere, whose spin leaves its boundary
+/// in place) and s is a hundredth of the smallest grain's size
 /// (d_L/100 for a monodisperse sample; smaller grains get a proportionally smaller bound, so that
 /// nscd's alert distance, a fraction of the smaller grain of a pair, still covers an approach).
 /// Clamped to [floor, kAdaptiveGrowth x previous]: never below the fixed step, and growing only
@@ -51,7 +52,7 @@ class AdaptiveTimeStep {
   double next(double previous, const std::vector<core::BodyState>& states) const;
 
  private:
-  std::vector<double> radius_;  ///< bounding radius of each grain [d_L]
+  std::vector<double> spinRadius_;  ///< bounding radius of each grain, 0 for a sphere [d_L]
   double motion_ = 0.0;         ///< s: the largest motion per step [d_L]
   double gravity_ = 0.0;        ///< |g|
   double floor_ = 0.0;          ///< the fixed step [t0]

@@ -7,6 +7,7 @@
 #include "analysis/bulk_region.hpp"
 #include "analysis/equilibrium.hpp"
 #include "tests/support/lattices.hpp"
+#include "tests/support/systems.hpp"
 
 using namespace confpack;
 using confpack::testing::column;
@@ -114,6 +115,40 @@ TEST_CASE("a single sphere resting on the floor is at equilibrium", "[analysis][
   // No contact list at all is refused.
   p.contacts.reset();
   CHECK_THROWS_AS(analysis::equilibrium(p, {}, core::Vec3(0, 0, -1), 1.0), std::invalid_argument);
+}
+
+TEST_CASE("a spinning sphere is not at rest, but its spin is no settling motion", "[analysis][equilibrium]") {
+  // One sphere on the floor, its weight carried (P = m g / (L_x W h) with the whole-pile fallback).
+  core::Packing p;
+  p.box.lengthX = 3;
+  p.box.width = 3;
+  p.grains = column(1, 1.0, 1.0, 1.0);
+  core::Contact c;
+  c.a = 0;
+  c.b = static_cast<int>(core::WallId::Floor);
+  c.normal = -core::Vec3::UnitZ();
+  c.points.push_back({core::Vec3(1.0, 1.0, 0.0), p.grains[0].volume()});
+  p.contacts = std::vector<core::Contact>{c};
+  const double m = p.grains[0].volume(), inertia = 0.1 * m;  // I = m d^2 / 10
+  core::BodyState s;
+  s.angularVelocity = core::Vec3(0.3, 0.0, 0.4);  // |omega| = 0.5
+  const auto spinning = analysis::equilibrium(p, {s}, core::Vec3(0, 0, -1), 1.0);
+  const double scale = 1.0 / spinning.pressure;  // d = 1
+  CHECK_FALSE(spinning.reached);
+  CHECK(spinning.maxKineticRatio == Approx(0.5 * inertia * 0.25 * scale).epsilon(1e-12));
+  CHECK(spinning.meanKineticRatio == Approx(0.5 * inertia * 0.25 * scale).epsilon(1e-12));
+  CHECK(spinning.meanSettlingKineticRatio == 0.0);
+  // Sliding as well: the settling motion is the translation alone.
+  s.velocity = core::Vec3(0.2, 0.0, 0.0);
+  const auto sliding = analysis::equilibrium(p, {s}, core::Vec3(0, 0, -1), 1.0);
+  CHECK(sliding.meanKineticRatio == Approx((0.5 * inertia * 0.25 + 0.5 * m * 0.04) * scale).epsilon(1e-12));
+  CHECK(sliding.meanSettlingKineticRatio == Approx(0.5 * m * 0.04 * scale).epsilon(1e-12));
+  // A pinacoid's spin moves its boundary: it counts.
+  p.grains[0] = testing::withBottomAt(testing::pinacoid(1.0, core::Vec3(1.0, 1.0, 0.0)), 0.0);
+  s.velocity = core::Vec3::Zero();
+  const auto pinacoid = analysis::equilibrium(p, {s}, core::Vec3(0, 0, -1), 1.0);
+  CHECK(pinacoid.meanSettlingKineticRatio > 0.0);
+  CHECK(pinacoid.meanSettlingKineticRatio == pinacoid.meanKineticRatio);
 }
 
 TEST_CASE("contact stress of a periodic pair uses the minimum image", "[analysis][equilibrium]") {
