@@ -40,6 +40,21 @@ core::Packing loadedColumn(int n, double d = 1.0) {
   p.contacts = contacts;
   return p;
 }
+
+// One sphere of diameter d on the floor of a 3 x 3 box, the floor carrying its weight.
+core::Packing sphereOnFloor(double d) {
+  core::Packing p;
+  p.box.lengthX = 3;
+  p.box.width = 3;
+  p.grains = column(1, 1.0, 1.0, d);
+  core::Contact c;
+  c.a = 0;
+  c.b = static_cast<int>(core::WallId::Floor);
+  c.normal = -core::Vec3::UnitZ();
+  c.points.push_back({core::Vec3(1.0, 1.0, 0.0), p.grains[0].volume()});
+  p.contacts = std::vector<core::Contact>{c};
+  return p;
+}
 }  // namespace
 
 TEST_CASE("equilibrium of a column with exact forces", "[analysis][equilibrium]") {
@@ -94,16 +109,7 @@ TEST_CASE("equilibrium of a column with exact forces", "[analysis][equilibrium]"
 }
 
 TEST_CASE("a single sphere resting on the floor is at equilibrium", "[analysis][equilibrium]") {
-  core::Packing p;
-  p.box.lengthX = 3;
-  p.box.width = 3;
-  p.grains = column(1, 1.0, 1.0, 1.2);
-  core::Contact c;
-  c.a = 0;
-  c.b = static_cast<int>(core::WallId::Floor);
-  c.normal = -core::Vec3::UnitZ();
-  c.points.push_back({core::Vec3(1.0, 1.0, 0.0), p.grains[0].volume()});
-  p.contacts = std::vector<core::Contact>{c};
+  core::Packing p = sphereOnFloor(1.2);
   CHECK(analysis::equilibrium(p, {}, core::Vec3(0, 0, -1), 1.0).reached);
   // A rattler (no contact) in the same box fails: gravity is unbalanced.
   core::Grain loose = p.grains[0];
@@ -118,17 +124,8 @@ TEST_CASE("a single sphere resting on the floor is at equilibrium", "[analysis][
 }
 
 TEST_CASE("a spinning sphere is not at rest, but its spin is no settling motion", "[analysis][equilibrium]") {
-  // One sphere on the floor, its weight carried (P = m g / (L_x W h) with the whole-pile fallback).
-  core::Packing p;
-  p.box.lengthX = 3;
-  p.box.width = 3;
-  p.grains = column(1, 1.0, 1.0, 1.0);
-  core::Contact c;
-  c.a = 0;
-  c.b = static_cast<int>(core::WallId::Floor);
-  c.normal = -core::Vec3::UnitZ();
-  c.points.push_back({core::Vec3(1.0, 1.0, 0.0), p.grains[0].volume()});
-  p.contacts = std::vector<core::Contact>{c};
+  // P = m g / (L_x W h) with the whole-pile fallback.
+  core::Packing p = sphereOnFloor(1.0);
   const double m = p.grains[0].volume(), inertia = 0.1 * m;  // I = m d^2 / 10
   core::BodyState s;
   s.angularVelocity = core::Vec3(0.3, 0.0, 0.4);  // |omega| = 0.5
