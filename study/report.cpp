@@ -595,11 +595,16 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
     for (const FitRow& a : fits) {
       if (a.backend != backends[0] || !a.fit) continue;
       for (const FitRow& b : fits)
-        if (b.backend == backends[1] && b.series == a.series && b.fit)
+        if (b.backend == backends[1] && b.series == a.series && b.fit) {
+          const bool known = fitErrorsKnown(*a.fit) && fitErrorsKnown(*b.fit);
+          const auto difference = [&](double va, double vb, double ea, double eb, int decimals) {
+            return known ? fmt::format("{:+.{}f} ± {:.2g}", va - vb, decimals, std::hypot(ea, eb))
+                         : fmt::format("{:+.{}f} (no SE)", va - vb, decimals);
+          };
           diffs.push_back({seriesText(a.series),
-                           fmt::format("{:+.4f} ± {:.2g}", a.fit->bulk - b.fit->bulk,
-                                       std::hypot(a.fit->bulkError, b.fit->bulkError)),
-                           fmt::format("{:+.3f} ± {:.2g}", a.fit->c - b.fit->c, std::hypot(a.fit->cError, b.fit->cError))});
+                           difference(a.fit->bulk, b.fit->bulk, a.fit->bulkError, b.fit->bulkError, 4),
+                           difference(a.fit->c, b.fit->c, a.fit->cError, b.fit->cError, 3)});
+        }
     }
     if (!diffs.empty()) {
       doc.paragraph(fmt::format("Backend differences of the fitted parameters ({} − {}, uncertainty from the two "

@@ -502,6 +502,13 @@ TEST_CASE("a number without a standard error is shown as such and the verdict do
   CHECK_THAT(verdict, Catch::Contains("nscd and bullet give lambda_L/d_avg (1.25 ± 0.0012 against 1.5 (1 run)) with "
                                       "no standard error to compare them."));
   CHECK_THAT(verdict, !Catch::Contains("differ on lambda_L/d_avg"));
+  // The fit section's backend differences say the same of the fitted parameters.
+  const std::size_t differencesAt = md.find("Backend differences of the fitted parameters");
+  REQUIRE(differencesAt != std::string::npos);
+  const auto difference = rowCells(md, "| MSP x_S=0 mu_w=0 |", differencesAt);
+  REQUIRE(difference.size() == 3);
+  CHECK(difference[1] == "+0.0140 (no SE)");  // 0.64 - 0.626
+  CHECK(difference[2] == "+0.140 (no SE)");   // 0.5 - 0.36
 }
 
 TEST_CASE("summary and verdict say which runs were not at equilibrium or did not finish") {
