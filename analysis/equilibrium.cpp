@@ -73,7 +73,7 @@ EquilibriumReport equilibrium(const core::Packing& packing, const std::vector<co
   const double scale = r.pressure > 0.0 ? 1.0 / r.pressure : inf;
   for (std::size_t i = 0; i < n; ++i) {
     const core::Grain& g = packing.grains[i];
-    double ek = 0.0, settling = 0.0;  // settling: without a sphere's spin
+    double ek = 0.0, settling = 0.0;  // settling: without a spin that moves no boundary
     if (!states.empty()) {
       const double m = density * g.volume();
       const core::Mat3 rot = g.orientation.toRotationMatrix();
@@ -81,7 +81,7 @@ EquilibriumReport equilibrium(const core::Packing& packing, const std::vector<co
       const core::Vec3& w = states[i].angularVelocity;
       const double translational = 0.5 * m * states[i].velocity.squaredNorm();
       ek = translational + 0.5 * w.dot(inertia * w);
-      settling = g.shape == core::ShapeKind::Sphere ? translational : ek;
+      settling = g.spinMovesBoundary() ? ek : translational;
     }
     const double d = g.size;
     // 0 * inf would be NaN: an exactly balanced grain has ratio 0 even when P = 0.

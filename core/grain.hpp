@@ -27,6 +27,10 @@ struct Grain {
   Mat3 bodyInertia(double density = 1.0) const;
   /// Radius of the smallest centred sphere enclosing the grain.
   double boundingRadius() const;
+  /// Whether a rotation about the centroid moves the grain's boundary: not a sphere's. With wall
+  /// friction a sphere leaves the wall spinning and keeps that spin for ever (its other contacts
+  /// are frictionless), so the spin must not count as motion that can change the packing.
+  bool spinMovesBoundary() const { return shape != ShapeKind::Sphere; }
   /// Body-frame polyhedron (pinacoids only).
   ConvexPolyhedron polyhedron() const;
   /// World-frame vertices of a pinacoid.

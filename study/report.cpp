@@ -725,28 +725,31 @@ void addFitQuantities(StudySummary& out, const std::vector<FitRow>& fits, const 
   SummaryQuantity bulk{bulkName, bulkDefinition, {}}, c{cName, cDefinition, {}};
   for (const FitRow& f : fits)
     if (f.fit) {
-      const bool known = fitErrorsKnown(*f.fit);
-      bulk.values[{f.series, f.backend}] = {f.fit->bulk, known ? std::optional(f.fit->bulkError) : std::nullopt,
-                                            bulkText(*f.fit)};
-      c.values[{f.series, f.backend}] = {f.fit->c, known ? std::optional(f.fit->cError) : std::nullopt, cText(*f.fit)};
+      const auto error = [&](double e) { return fitErrorsKnown(*f.fit) ? std::optional(e) : std::nullopt; };
+      bulk.values[{f.series, f.backend}] = {f.fit->bulk, error(f.fit->bulkError), bulkText(*f.fit)};
+      c.values[{f.series, f.backend}] = {f.fit->c, error(f.fit->cError), cText(*f.fit)};
     }
   if (bulk.values.empty()) return;
   out.quantities.push_back(std::move(bulk));
   out.quantities.push_back(std::move(c));
 }
 
+// What a fit of the summary is worth: chi²/dof and Q when weighted; the residuals when a width had
+// no standard error to weigh it; a line through two widths tests no law.
+std::string fitQualityText(const FitRow& f) {
+  if (!f.fit) return "no fit: " + f.why;
+  if (f.fit->dof > 0 && f.fit->weighted) return fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit));
+  if (f.fit->dof > 0)
+    return fmt::format("unweighted (a width without a standard error): residual sum of squares {:.3g}, {} dof",
+                       f.fit->chiSquare, f.fit->dof);
+  return f.fit->weighted ? "2 widths: the law is not tested (no degree of freedom)"
+                         : "exact through 2 widths: no standard errors";
+}
+
 StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   StudySummary out;
   if (!fits.phi.empty()) {
-    for (const FitRow& f : fits.phi)
-      out.phiFitQuality[{f.series, f.backend}] =
-          !f.fit            ? "no fit: " + f.why
-          : f.fit->dof > 0  ? (f.fit->weighted ? fmt::format("chi²/dof {}, Q {}", chiText(*f.fit), qText(*f.fit))
-                                               : fmt::format("unweighted (a width without a standard error): "
-                                                              "residual sum of squares {:.3g}, {} dof",
-                                                             f.fit->chiSquare, f.fit->dof))
-          : f.fit->weighted ? "2 widths: the law is not tested (no degree of freedom)"
-                            : "exact through 2 widths: no standard errors";
+    for (const FitRow& f : fits.phi) out.phiFitQuality[{f.series, f.backend}] = fitQualityText(f);
     addFitQuantities(out, fits.phi, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
                      "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
   }

@@ -65,12 +65,10 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 
 AdaptiveTimeStep::AdaptiveTimeStep(const std::vector<core::Grain>& grains, double gravity, double floor)
     : gravity_(gravity), floor_(floor) {
-  // A sphere's spin moves no part of its boundary: with wall friction a sphere spun at a wall keeps
-  // spinning once it leaves it (its other contacts are frictionless), and counting that spin held
-  // the step of a 1,648-sphere pile with mu_w = 0.5 at a third of its value without friction.
+  // Counting a sphere's spin held the step of a 1,648-sphere pile with mu_w = 0.5 at a third of
+  // its value without friction.
   spinRadius_.reserve(grains.size());
-  for (const core::Grain& g : grains)
-    spinRadius_.push_back(g.shape == core::ShapeKind::Sphere ? 0.0 : g.boundingRadius());
+  for (const core::Grain& g : grains) spinRadius_.push_back(g.spinMovesBoundary() ? g.boundingRadius() : 0.0);
   motion_ = 0.01 * core::smallestSize(grains);
 }
 

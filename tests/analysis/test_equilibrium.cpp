@@ -124,7 +124,7 @@ TEST_CASE("a single sphere resting on the floor is at equilibrium", "[analysis][
 }
 
 TEST_CASE("a spinning sphere is not at rest, but its spin is no settling motion", "[analysis][equilibrium]") {
-  // P = m g / (L_x W h) with the whole-pile fallback.
+  // P from the whole-pile fallback (the pile is too low for a bulk region).
   core::Packing p = sphereOnFloor(1.0);
   const double m = p.grains[0].volume(), inertia = 0.1 * m;  // I = m d^2 / 10
   core::BodyState s;
