@@ -74,7 +74,7 @@ class NscdBackend final : public core::ContactBackend {
       position_.push_back(box_.wrap(g.position));
       orientation_.push_back(g.orientation.normalized());
       reach_.push_back(narrow_.reach(static_cast<int>(reach_.size())));
-      radius_.push_back(g.boundingRadius());
+      spinLever_.push_back(g.spinMovesBoundary() ? g.boundingRadius() : 0.0);
     }
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
@@ -290,8 +290,12 @@ class NscdBackend final : public core::ContactBackend {
     clock.charge(Phase::Solve);
   }
 
-  // How far grain i's surface moves in a step of length h at its velocity: |v| h + |w| r_bound h.
-  double surfaceMove(int i, double h) const { return h * (velocity_[i].v.norm() + velocity_[i].w.norm() * radius_[i]); }
+  // How far grain i's surface moves in a step of length h at its velocity: |v| h + |w| r_bound h,
+  // with r_bound 0 for a sphere (Grain::spinMovesBoundary: a sphere rolling on a frictional wall
+  // must not cut the step or keep the pile from settling).
+  double surfaceMove(int i, double h) const {
+    return h * (velocity_[i].v.norm() + velocity_[i].w.norm() * spinLever_[i]);
+  }
 
   // Per-grain metric weights of the finisher (docs/model.md). The finisher's fixed point dq = 0 is
   // static equilibrium whatever the metric, so the weights change the path, not the packing.
@@ -308,7 +312,7 @@ class NscdBackend final : public core::ContactBackend {
   void updateMetricWeight(int i, double d, double trustRadius) {
     BodyVelocity& last = lastMove_[i];
     const BodyVelocity& now = velocity_[i];
-    const double r2 = radius_[i] * radius_[i];
+    const double r2 = spinLever_[i] * spinLever_[i];
     const double lastSize2 = last.v.squaredNorm() + r2 * last.w.squaredNorm();
     const double nowSize2 = now.v.squaredNorm() + r2 * now.w.squaredNorm();
     const bool reversed = last.v.dot(now.v) + r2 * last.w.dot(now.w) < 0.0 && d > 1e-4 * trustRadius &&
@@ -435,7 +439,7 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<double> invMass_;
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
   std::vector<double> reach_;
-  std::vector<double> radius_;  // bounding radius: a grain's surface moves at most |v| + |w| radius
+  std::vector<double> spinLever_;  // bounding radius, 0 for a sphere: its surface moves at most |v| + |w| lever
   NscdSettings stepSolve_;      // settings_, or the fall's looser tolerance (startQuasiStaticFall)
   bool pinacoids_ = false;      // some grain is not a sphere
   NscdSettings finisherSettings_;

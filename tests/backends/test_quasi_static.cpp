@@ -107,6 +107,28 @@ TEST_CASE("finisher: a sphere in the groove of two spheres against the walls", "
   }
 }
 
+TEST_CASE("finisher: a sphere rolling down a frictional wall moves only as far as its centre", "[nscd][finisher]") {
+  // Sphere B leans on the side wall y = 0 (mu_w = 0.5) and on sphere A, which stands on the
+  // frictionless floor 1/2 d further out: A's contact pushes B into the wall, A slides away and B
+  // comes down the wall, rolling, since friction holds its contact point. A step's move is the
+  // largest motion of a grain's surface, and a sphere's spin moves none of its surface: the move
+  // must be the largest centre displacement, not that plus B's |w| r.
+  core::SystemDef s = boxSystem(4.0, 4.0, false, 0.5);
+  s.grains.push_back(sphere(1.0, Vec3(2.0, 1.0, 0.5001)));
+  s.grains.push_back(sphere(1.0, Vec3(2.0, 0.5001, 0.5003 + std::sqrt(0.75))));
+  auto b = nscd::makeNscdBackend(s, kTight);
+  const Vec3 a0 = b->states()[0].position, b0 = b->states()[1].position;
+  const core::QuasiStaticMove move = b->quasiStaticStep(0.2, 100.0);  // a trust radius that cuts nothing
+  const Vec3 da = b->states()[0].position - a0, db = b->states()[1].position - b0;
+  const double turned = core::Quat(b->states()[1].orientation).angularDistance(core::Quat::Identity());
+  INFO("A moved " << da.transpose() << ", B moved " << db.transpose() << ", B turned " << turned);
+  REQUIRE(da.y() > 1e-4);                    // A slid away from the wall
+  REQUIRE(db.z() < -1e-4);                   // B came down
+  REQUIRE(turned > 0.5 * std::abs(db.z()));  // and rolled: its spin is of the order of its fall / r
+  CHECK_FALSE(move.clipped);
+  CHECK(move.maxDisplacement == Approx(std::max(da.norm(), db.norm())).epsilon(1e-12));
+}
+
 TEST_CASE("finisher: a tilted pinacoid falls flat on a trapezoid face, the floor carrying m g", "[nscd][finisher]") {
   // 45 degrees about x lays a unit pinacoid on a trapezoid face; its centroid then sits at
   // G E / (2 sqrt(G^2 + E^2)) = 1 / (2 sqrt 2). Started 5 degrees off and 0.01 d up, it must
