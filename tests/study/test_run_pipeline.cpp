@@ -10,10 +10,11 @@
 // falls with time steps, hands over to the finisher and ends in a static equilibrium whose floor
 // reaction is the weight; Bullet, which has no finisher, runs the dynamic protocol and says so.
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
-#include <catch2/catch.hpp>
 
 #include "core/box.hpp"
 #include "core/deposition.hpp"
@@ -32,6 +33,29 @@ core::BodyState moving(const core::Vec3& v, const core::Vec3& omega = core::Vec3
   s.velocity = v;
   s.angularVelocity = omega;
   return s;
+}
+
+core::RunConfig smallBox(const std::string& backend, double wallFriction) {
+  return testing::smallQuasiStaticRun(backend, wallFriction);
+}
+
+double floorReaction(const core::Packing& p) {
+  double f = 0.0;
+  for (const core::Contact& c : *p.contacts)
+    if (c.b == static_cast<int>(core::WallId::Floor)) f -= c.forceOnB().z();
+  return f;
+}
+
+/// cfg's deposit (of its own seed) and its compaction.
+struct Compacted {
+  core::Deposit deposit;
+  study::CompactionOutcome outcome;
+};
+
+Compacted depositAndCompact(const core::RunConfig& cfg) {
+  core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  study::CompactionOutcome out = study::compact(cfg, dep);
+  return {std::move(dep), std::move(out)};
 }
 
 }  // namespace
@@ -87,9 +111,8 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
   cfg.compaction.adaptiveDt = true;
   cfg.compaction.timeLimit = 150.0;
   cfg.compaction.checkInterval = 50;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const auto [dep, out] = depositAndCompact(cfg);
   REQUIRE(dep.grains.size() > 20);
-  const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.equilibrium.dump());
   // Bullet's sequential impulses do not meet the equilibrium test's force bound (README, Known
   // limitations): only its floor reaction is checked, to its own accuracy.
@@ -102,37 +125,16 @@ TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries t
     CHECK(out.history[k].time - out.history[k - 1].time <= study::kAdaptiveCheckSpacing + out.dtLargest);
   // Frictionless side walls: the floor carries the whole weight (rho = g = 1), through forces
   // computed from the impulses of a step of the last step's own length.
-  double weight = 0.0;
-  for (const core::Grain& g : dep.grains) weight += g.volume();
   REQUIRE(out.packing.contacts.has_value());
-  double floorForce = 0.0;
-  for (const core::Contact& c : *out.packing.contacts)
-    if (c.b == static_cast<int>(core::WallId::Floor)) floorForce -= c.forceOnB().z();
-  CHECK(floorForce == Approx(weight).epsilon(backend == "nscd" ? 1e-6 : 1e-2));
+  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(backend == "nscd" ? 1e-6 : 1e-2));
 }
-
-namespace {
-
-core::RunConfig smallBox(const std::string& backend, double wallFriction) {
-  return testing::smallQuasiStaticRun(backend, wallFriction);
-}
-
-double floorReaction(const core::Packing& p) {
-  double f = 0.0;
-  for (const core::Contact& c : *p.contacts)
-    if (c.b == static_cast<int>(core::WallId::Floor)) f -= c.forceOnB().z();
-  return f;
-}
-
-}  // namespace
 
 TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at rest, the floor carrying the weight") {
   const double mu = GENERATE(0.0, 0.5);
   INFO("mu_w " << mu);
   const core::RunConfig cfg = smallBox("nscd", mu);
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const auto [dep, out] = depositAndCompact(cfg);
   REQUIRE(dep.grains.size() > 20);
-  const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.timing["stages"].dump());
   REQUIRE(out.reached);
   CHECK(out.protocol == core::Protocol::QuasiStatic);
@@ -166,8 +168,7 @@ TEST_CASE("quasi-static protocol: spheres spun by wall friction do not hold the 
   cfg.compaction.fallTimeLimit = 30.0;
   cfg.compaction.checkInterval = 200;
   cfg.compaction.settleTolerance = 1e-6;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const study::CompactionOutcome out = study::compact(cfg, dep);
+  const auto [dep, out] = depositAndCompact(cfg);
   const auto& stages = out.timing["stages"];
   INFO(stages.dump());
   REQUIRE(stages.contains("quasi_static"));
@@ -180,8 +181,7 @@ TEST_CASE("quasi-static protocol: spheres spun by wall friction do not hold the 
 TEST_CASE("quasi-static protocol: at the time limit the finisher takes over and still ends at rest") {
   core::RunConfig cfg = smallBox("nscd", 0.0);
   cfg.compaction.timeLimit = 3.0;  // the grains are still falling onto the pile
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const study::CompactionOutcome out = study::compact(cfg, dep);
+  const auto [dep, out] = depositAndCompact(cfg);
   const auto& stages = out.timing["stages"];
   INFO(stages.dump());
   REQUIRE(stages.contains("quasi_static"));
@@ -230,8 +230,7 @@ TEST_CASE("quasi-static protocol: fall_time_limit bounds nscd's fall, time_limit
     core::RunConfig cfg = smallBox(backend, 0.0);
     cfg.compaction.timeLimit = 0.5;
     cfg.compaction.fallTimeLimit = 3.0;  // the grains are still falling onto the pile at 3 t0
-    const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-    const study::CompactionOutcome out = study::compact(cfg, dep);
+    const auto [dep, out] = depositAndCompact(cfg);
     const auto& stages = out.timing["stages"];
     INFO(stages.dump());
     const double fell = stages["dynamic"]["simulated_time"].get<double>();
@@ -256,9 +255,8 @@ TEST_CASE("quasi-static protocol: a pinacoid pile handed over early still ends a
   cfg.population.shape = core::ShapeKind::Pinacoid;
   cfg.seed = 1;
   cfg.compaction.switchKineticRatio = 1.0;  // hand over at the first check after the fall has begun
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const auto [dep, out] = depositAndCompact(cfg);
   REQUIRE(dep.grains.size() > 40);
-  const study::CompactionOutcome out = study::compact(cfg, dep);
   INFO(out.timing["stages"].dump());
   REQUIRE(out.timing["stages"].contains("quasi_static"));
   CHECK(out.timing["stages"]["quasi_static"]["clipped_steps"].get<long>() > 0);
@@ -275,8 +273,7 @@ TEST_CASE("quasi-static protocol: a pinacoid pile handed over early still ends a
 TEST_CASE("quasi-static protocol: Bullet has no finisher, runs dynamic and records it") {
   core::RunConfig cfg = smallBox("bullet", 0.0);
   cfg.compaction.timeLimit = 2.0;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const study::CompactionOutcome out = study::compact(cfg, dep);
+  const auto [dep, out] = depositAndCompact(cfg);
   CHECK(out.protocol == core::Protocol::Dynamic);
   CHECK(out.timing["protocol"] == "dynamic");
   CHECK_FALSE(out.timing["stages"].contains("quasi_static"));
