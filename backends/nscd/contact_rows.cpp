@@ -25,11 +25,11 @@ double gapBias(double gap, double dt, const NscdSettings& s) {
 
 // Tangential update of a side-wall friction point at its current normal impulse: one local
 // Gauss-Seidel step projected on the Coulomb disc ||r_t|| <= mu r_n. Returns the change (d1, d2).
-std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va) {
+std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va, double omega) {
   const double ut1 = -(row.t1.dot(va.v) + row.axt1.dot(va.w));
   const double ut2 = -(row.t2.dot(va.v) + row.axt2.dot(va.w));
-  double rt1 = row.rt1 - ut1 * row.invWt;
-  double rt2 = row.rt2 - ut2 * row.invWt;
+  double rt1 = row.rt1 - omega * ut1 * row.invWt;
+  double rt2 = row.rt2 - omega * ut2 * row.invWt;
   const double limit = row.mu * row.rn;
   const double norm = std::hypot(rt1, rt2);
   if (norm > limit) {

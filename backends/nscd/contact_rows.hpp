@@ -112,9 +112,10 @@ inline double normalVelocity(const FrictionRow& row, const BodyVelocity& va) {
 }
 
 /// Tangential update of a side-wall friction point at its current normal impulse: one local
-/// Gauss-Seidel step projected on the Coulomb disc ||r_t|| <= mu r_n (nlgs_solver.hpp states it),
-/// applied to the velocity of its grain `va`. Returns the change (d1, d2). Used by both solvers.
-std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va);
+/// Gauss-Seidel step, over-relaxed by `omega`, projected on the Coulomb disc ||r_t|| <= mu r_n
+/// (nlgs_solver.hpp states it), applied to the velocity of its grain `va`. Returns the change
+/// (d1, d2). Used by every solver.
+std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va, double omega = 1.0);
 
 /// The rows of one step's contact points, shared by the two solvers.
 /// Owns the rows (frictionless ones in sweep order, side-wall friction ones in contact order), the

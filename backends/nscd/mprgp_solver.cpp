@@ -253,14 +253,14 @@ double MprgpSolver::scaledOperatorBound(std::size_t bodyCount) {
   return m > 0 ? *std::max_element(rowSum_.begin(), rowSum_.end()) : 0.0;
 }
 
-double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& vel) {
+double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& vel, double omega) {
   double sumDelta2 = 0.0, sumR2 = 0.0;
   const std::size_t nN = rows.normalRows().size();
   const std::span<FrictionRow> frictionRows = rows.frictionRows();
   for (std::size_t f = 0; f < frictionRows.size(); ++f) {
     FrictionRow& row = frictionRows[f];
     row.rn = scale_[nN + f] * y_[nN + f];
-    const auto [d1, d2] = updateTangent(row, vel[row.a]);
+    const auto [d1, d2] = updateTangent(row, vel[row.a], omega);
     sumDelta2 += d1 * d1 + d2 * d2;
     sumR2 += row.rn * row.rn + row.rt1 * row.rt1 + row.rt2 * row.rt2;
   }
@@ -640,7 +640,7 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
     // normal impulses), until a pass changes them by less than the tolerance after a normal solve
     // to the tolerance.
     const bool normalsConverged = innerTolerance <= settings.tolerance;
-    tangentChange = frictionTangentPass(rows, vel);
+    tangentChange = frictionTangentPass(rows, vel, settings.frictionRelaxation);
     ++iterations;
     if ((tangentChange < settings.tolerance && normalsConverged) || iterations >= settings.maxIterations) break;
     innerTolerance = std::max(settings.tolerance, std::min(innerTolerance, 0.1 * tangentChange));

@@ -13,7 +13,8 @@
 // share no grain (contact_rows.hpp).
 // Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
 // every normal impulse with the tangential ones fixed, then one projected pass over the
-// tangential impulses, until both have converged.
+// tangential impulses, over-relaxed by NscdSettings::frictionRelaxation, until both have
+// converged.
 #include <cstddef>
 #include <optional>
 #include <vector>
@@ -80,7 +81,7 @@ class MprgpSolver {
   double precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
                       std::optional<double> alphaCg = std::nullopt);
   double dvAlongRow(std::size_t k) const;
-  double frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& velocities);
+  double frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& velocities, double omega);
 
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
   std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_;

@@ -37,6 +37,8 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
         .integer("min_iterations", &S::minIterations, Range::atLeast(1), "-",
                  "nlgs: sweeps done before testing convergence")
         .number("relaxation", &S::relaxation, Range::open(0.0, 2.0), "-", "nlgs: over-relaxation factor omega")
+        .number("friction_relaxation", &S::frictionRelaxation, Range::open(0.0, 2.0), "-",
+                "mprgp: over-relaxation factor of the tangential passes around side-wall friction")
         .number("alert_distance", &S::alertDistance, Range::atLeast(0.0), "d",
                 "a pair closer than this (fraction of the smaller size) becomes a contact row")
         .number("gap_correction", &S::gapCorrection, Range::leftOpen(0.0, 1.0), "-",
