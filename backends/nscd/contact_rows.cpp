@@ -24,7 +24,8 @@ double gapBias(double gap, double dt, const NscdSettings& s) {
 }  // namespace
 
 // Tangential update of a side-wall friction point at its current normal impulse: one local
-// Gauss-Seidel step projected on the Coulomb disc ||r_t|| <= mu r_n. Returns the change (d1, d2).
+// Gauss-Seidel step, over-relaxed by omega, projected on the Coulomb disc ||r_t|| <= mu r_n.
+// Returns the change (d1, d2).
 std::pair<double, double> updateTangent(FrictionRow& row, BodyVelocity& va, double omega) {
   const double ut1 = -(row.t1.dot(va.v) + row.axt1.dot(va.w));
   const double ut2 = -(row.t2.dot(va.v) + row.axt2.dot(va.w));
