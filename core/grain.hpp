@@ -31,6 +31,9 @@ struct Grain {
   /// friction a sphere leaves the wall spinning and keeps that spin for ever (its other contacts
   /// are frictionless), so the spin must not count as motion that can change the packing.
   bool spinMovesBoundary() const { return shape != ShapeKind::Sphere; }
+  /// How far the boundary moves per radian of rotation at most: the bounding radius, 0 for a sphere
+  /// (spinMovesBoundary). A grain's surface moves at most |v| + |omega| spinLever().
+  double spinLever() const { return spinMovesBoundary() ? boundingRadius() : 0.0; }
   /// Body-frame polyhedron (pinacoids only).
   ConvexPolyhedron polyhedron() const;
   /// World-frame vertices of a pinacoid.

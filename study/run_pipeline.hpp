@@ -52,7 +52,7 @@ class AdaptiveTimeStep {
   double next(double previous, const std::vector<core::BodyState>& states) const;
 
  private:
-  std::vector<double> spinRadius_;  ///< bounding radius of each grain, 0 for a sphere [d_L]
+  std::vector<double> spinLever_;  ///< Grain::spinLever of each grain [d_L]
   double motion_ = 0.0;         ///< s: the largest motion per step [d_L]
   double gravity_ = 0.0;        ///< |g|
   double floor_ = 0.0;          ///< the fixed step [t0]

@@ -74,7 +74,7 @@ class NscdBackend final : public core::ContactBackend {
       position_.push_back(box_.wrap(g.position));
       orientation_.push_back(g.orientation.normalized());
       reach_.push_back(narrow_.reach(static_cast<int>(reach_.size())));
-      spinLever_.push_back(g.spinMovesBoundary() ? g.boundingRadius() : 0.0);
+      spinLever_.push_back(g.spinLever());
     }
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
     // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
@@ -290,9 +290,9 @@ class NscdBackend final : public core::ContactBackend {
     clock.charge(Phase::Solve);
   }
 
-  // How far grain i's surface moves in a step of length h at its velocity: |v| h + |w| r_bound h,
-  // with r_bound 0 for a sphere (Grain::spinMovesBoundary: a sphere rolling on a frictional wall
-  // must not cut the step or keep the pile from settling).
+  // How far grain i's surface moves in a step of length h at its velocity: |v| h + |w| lever h
+  // (Grain::spinLever, 0 for a sphere: a sphere rolling on a frictional wall must not cut the step
+  // or keep the pile from settling).
   double surfaceMove(int i, double h) const {
     return h * (velocity_[i].v.norm() + velocity_[i].w.norm() * spinLever_[i]);
   }
@@ -439,7 +439,7 @@ class NscdBackend final : public core::ContactBackend {
   std::vector<double> invMass_;
   std::vector<Mat3> inertiaBody_, invInertiaBody_;
   std::vector<double> reach_;
-  std::vector<double> spinLever_;  // bounding radius, 0 for a sphere: its surface moves at most |v| + |w| lever
+  std::vector<double> spinLever_;  // Grain::spinLever of each grain
   NscdSettings stepSolve_;      // settings_, or the fall's looser tolerance (startQuasiStaticFall)
   bool pinacoids_ = false;      // some grain is not a sphere
   NscdSettings finisherSettings_;
