@@ -21,6 +21,7 @@ struct ReportState {
   std::filesystem::path gnuplot = "gnuplot";
   std::filesystem::path reference;
   bool noFigures = false;
+  bool noRunLinks = false;
 };
 
 void runReportCommand(const ReportState& st) {
@@ -37,6 +38,7 @@ void runReportCommand(const ReportState& st) {
     study::ReportOptions o;
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
     o.reference = std::move(reference);
+    o.runLinks = !st.noRunLinks;
     const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
     step.next("moving the report into place");
     output.commit();
@@ -66,6 +68,9 @@ void registerReport(CLI::App& app) {
                   "Published values to show beside the study's (JSON, format confpack-reference; "
                   "docs/reference-values.md)");
   sub->add_flag("--no-figures", st->noFigures, "Write the figure data and scripts but do not run gnuplot");
+  sub->add_flag("--no-run-links", st->noRunLinks,
+                "Name the runs without links to their folders and the sweep folder by its name alone: a report to "
+                "publish without the run folders");
   sub->callback([st] { runReportCommand(*st); });
 }
 

@@ -397,6 +397,11 @@ ReportSummary countRuns(const StudyView& study) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The sweep folder's own name (its last path component, "." and ".." resolved).
+std::string sweepName(const StudyView& study) {
+  return fs::weakly_canonical(fs::absolute(study.sweepDir)).filename().string();
+}
+
 // The sections (writeReport calls them in the order of the page: the introduction, the summary and
 // the verdict, the figures with their fits, the profiles, the runs, the tables, the cost, the method)
 
@@ -408,10 +413,13 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
   std::tm tm{};
   gmtime_r(&t, &tm);
   std::strftime(when, sizeof when, "%Y-%m-%d %H:%M UTC", &tm);
-  doc.paragraph(fmt::format("Sweep folder: {}. Written {} by confpack {}. {} runs: {} done, {} failed, {} missing "
-                            "(not run or interrupted), {} done but not equilibrated.",
-                            fs::absolute(study.sweepDir).string(), when, CONFPACK_VERSION, summary.runs, summary.done,
-                            summary.failed, summary.missing, summary.unequilibrated));
+  const std::string folder = options.runLinks ? fs::absolute(study.sweepDir).string()
+                                              : sweepName(study) + " (its run folders are not part of this report)";
+  doc.paragraph(
+      fmt::format("Sweep folder: {}. Written {} by confpack {}. {} runs: {} done, {} failed, {} missing "
+                  "(not run or interrupted), {} done but not equilibrated.",
+                  folder, when, CONFPACK_VERSION, summary.runs, summary.done, summary.failed, summary.missing,
+                  summary.unequilibrated));
   if (!study.settings.empty()) {
     std::string varied;
     for (std::size_t i = 0; i < study.settings.size(); ++i)
@@ -1163,8 +1171,8 @@ std::string relativeLink(const fs::path& target, const fs::path& reportDir) {
 }
 
 // Every run once, the ones missing, failed or not at rest first with why, each name a link to its
-// folder in the sweep relative to the report.
-void addRunsSection(Document& doc, const StudyView& study, const fs::path& reportDir) {
+// folder in the sweep relative to the report (unless `runLinks` is off).
+void addRunsSection(Document& doc, const StudyView& study, const fs::path& reportDir, bool runLinks) {
   doc.heading(2, "Runs");
   std::vector<std::vector<std::string>> problems;
   std::vector<std::vector<std::string>> others;
@@ -1186,7 +1194,7 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
                  : "stopped at the time limit";
     }
     if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";
-    std::vector<std::string> row = {link(r.run.name, relativeLink(study.runDir(r), reportDir)),
+    std::vector<std::string> row = {runLinks ? link(r.run.name, relativeLink(study.runDir(r), reportDir)) : r.run.name,
                                     r.run.label(study.settings),
                                     status,
                                     value("solid_fraction", "{:.4f}"),
@@ -1194,14 +1202,15 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
                                     note};
     (r.status != RunStatus::Done || !note.empty() ? problems : others).push_back(std::move(row));
   }
+  const char* names =
+      runLinks ? "Each name links to the run's folder." : "The run folders are not part of this report.";
   if (problems.empty())
-    doc.paragraph("Every run finished and reached equilibrium. Each name links to the run's folder.");
+    doc.paragraph(fmt::format("Every run finished and reached equilibrium. {}", names));
   else
     doc.paragraph(fmt::format(
         "{} runs are missing, failed or did not reach equilibrium: they come first, with why. Missing and failed "
-        "runs are absent from the fits and tables; unequilibrated runs are included. Each name links to the "
-        "run's folder.",
-        problems.size()));
+        "runs are absent from the fits and tables; unequilibrated runs are included. {}",
+        problems.size(), names));
   problems.insert(problems.end(), std::make_move_iterator(others.begin()), std::make_move_iterator(others.end()));
   doc.table({"run", "configuration", "status", "phi", "wall [s]", "note"}, problems);
 }
@@ -1319,10 +1328,11 @@ void addCostSection(Document& doc, const StudyView& study) {
             rows);
 }
 
-void addMethodSection(Document& doc, const StudyView& study) {
+void addMethodSection(Document& doc, const StudyView& study, bool runLinks) {
   doc.heading(2, "Method");
   doc.bullets({
-      "The study is defined in " + (study.sweepDir / "sweep.json").string() +
+      "The study is defined in " +
+          (runLinks ? (study.sweepDir / "sweep.json").string() : "sweep.json of the sweep folder " + sweepName(study)) +
           "; each run's resolved configuration and result are in its folder (config.json, result.json).",
       "Means and standard deviations are over the replicas (seeds) that finished; missing and failed runs are "
       "excluded, unequilibrated ones included and flagged in the run table.",
@@ -1330,7 +1340,8 @@ void addMethodSection(Document& doc, const StudyView& study) {
       "weighted by the replicas' standard errors of the mean when every width has two or more differing replicas, "
       "unweighted otherwise; the biperiodic value is a check of the fitted bulk value.",
       "Backend differences are first minus second backend; (*) marks a difference larger than twice its "
-      "uncertainty. Both backends of one (configuration, seed) compact the same deposit. Units: lengths in large-grain diameters d_L, times in sqrt(d_L/g), wall time in seconds.",
+      "uncertainty. Both backends of one (configuration, seed) compact the same deposit. Units: lengths in large-grain "
+      "diameters d_L, times in sqrt(d_L/g), wall time in seconds.",
   });
 }
 
@@ -1354,10 +1365,10 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   addFitFigureSections(doc, study, figures, fits, references);
   addSettingSections(doc, study, figures);
   addProfileSections(doc, study, figures);
-  addRunsSection(doc, study, outDir);
+  addRunsSection(doc, study, outDir, options.runLinks);
   addQuantityTables(doc, study, outDir);
   addCostSection(doc, study);
-  addMethodSection(doc, study);
+  addMethodSection(doc, study, options.runLinks);
 
   summary.figures = figures.count();
   summary.figureErrors = figures.errors();

@@ -79,6 +79,10 @@ struct ReportOptions {
   /// it, and marks at d_L/W = 0 (the law as a dotted line when C is given too) on the phi(W) and
   /// Z(W) figures. None: the report has no reference column.
   std::optional<ReferenceValues> reference;
+  /// Each run's name links to its folder, and the sweep folder is named by its path. Off
+  /// (`--no-run-links`): names without links and the sweep folder by its name alone, for a report
+  /// published without the run folders (the medium study's in docs/).
+  bool runLinks = true;
 };
 
 struct ReportSummary {
@@ -90,7 +94,8 @@ struct ReportSummary {
 };
 
 /// Writes report.html, report.md, figures/ (CSV, .gp, .svg) and tables/ (CSV) into outDir. The
-/// run links are relative to outDir: a staging folder must sit beside the report's final place.
+/// run links (options.runLinks) are relative to outDir: a staging folder must sit beside the
+/// report's final place.
 ReportSummary writeReport(const std::filesystem::path& sweepDir, const std::filesystem::path& outDir,
                           const ReportOptions& options = {});
 

@@ -121,6 +121,12 @@ TEST_CASE("report: the links to the run folders and the tables hold once the rep
     staging += report.filename().string() + ".partial-";
     CHECK(entriesStartingWith(report.parent_path(), staging).empty());
   }
+  // --no-run-links: the same run table with plain names, for a report published on its own.
+  REQUIRE(s.run("report sw --no-figures --no-run-links --out published").code == 0);
+  const std::string md = slurp(s.dir / "published" / "report.md");
+  CHECK(md.find("| [r") == std::string::npos);
+  CHECK(md.find("| r0000 |") != std::string::npos);
+  CHECK(md.find("Sweep folder: sw (its run folders are not part of this report)") != std::string::npos);
 }
 
 TEST_CASE("report: SIGTERM or SIGKILL while gnuplot hangs leaves the previous report whole") {

@@ -551,6 +551,33 @@ TEST_CASE("the run table appears once, each run name a link to its folder relati
   fs::remove_all(dir);
 }
 
+TEST_CASE("a report without run links names every run and the sweep folder, and points into neither") {
+  const fs::path dir = makeStudy("nolinks", true);
+  const fs::path out = dir.parent_path() / (dir.filename().string() + "_published");
+  study::ReportOptions options;
+  options.gnuplot.clear();
+  options.runLinks = false;
+  const std::string md = slurp(study::writeReport(dir, out, options).markdown);
+  const std::string html = slurp(out / "report.html");
+  CHECK(runLinks(md).empty());
+  const std::string table = md.substr(md.find("| run | configuration |"));
+  for (int i = 0; i < 30; ++i) {
+    const std::string name = fmt::format("r{:04d}", i);
+    INFO(name);
+    CHECK(table.find("| " + name + " |") != std::string::npos);
+    CHECK(md.find("runs/" + name) == std::string::npos);
+    CHECK(html.find("runs/" + name) == std::string::npos);
+  }
+  // The sweep folder by its name, not by a path of the machine that wrote the report.
+  CHECK(md.find(dir.parent_path().string()) == std::string::npos);
+  CHECK(html.find(dir.parent_path().string()) == std::string::npos);
+  CHECK(md.find("Sweep folder: " + dir.filename().string() + " (its run folders are not part of this report)") !=
+        std::string::npos);
+  CHECK(md.find("The run folders are not part of this report.") != std::string::npos);
+  fs::remove_all(out);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json") {
   const fs::path dir = makeStudy("tables", true);
   const fs::path report = dir / "report";
