@@ -717,7 +717,7 @@ struct SummaryQuantity {
 
 // Runs of a family and backend: at equilibrium (done, equilibrium/reached true) and in total.
 struct RunCount {
-  std::size_t equilibrated = 0, unequilibrated = 0, done = 0, total = 0;
+  std::size_t equilibrated = 0, unequilibrated = 0, done = 0, failed = 0, total = 0;
 };
 
 // What the summary and the verdict show, from the same fits as the fit sections.
@@ -824,6 +824,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
         if (seriesOf(k) != sk || !byBackend.count(b)) continue;
         for (const RunRecord* r : byBackend.at(b)) {
           ++count.total;
+          if (r->status == RunStatus::Failed) ++count.failed;
           if (r->status != RunStatus::Done) continue;
           ++count.done;
           const auto reached = r->values.find("equilibrium/reached");
@@ -987,8 +988,17 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
             " {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
             "unequilibrated piles.",
             n.unequilibrated, backend, n.done);
-      if (n.done < n.total)
-        text += fmt::format(" {} of {}'s {} runs did not finish.", n.total - n.done, backend, n.total);
+      // Failed runs said apart from missing ones, which a study still running has many of.
+      const std::size_t missing = n.total - n.done - n.failed;
+      const auto are = [](std::size_t k) { return k == 1 ? "is" : "are"; };
+      if (n.failed > 0 && missing > 0)
+        text += fmt::format(" {} of {}'s {} runs did not finish: {} failed, {} {} missing (not run or interrupted).",
+                            n.total - n.done, backend, n.total, n.failed, missing, are(missing));
+      else if (n.failed > 0)
+        text += fmt::format(" {} of {}'s {} runs failed.", n.failed, backend, n.total);
+      else if (missing > 0)
+        text += fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, backend, n.total,
+                            are(missing));
     }
     if (!text.empty()) sentences.push_back(fmt::format("For {}:{}", familyName(sk), text));
   }

@@ -511,7 +511,7 @@ TEST_CASE("a number without a standard error is shown as such and the verdict do
   CHECK(difference[2] == "+0.140 (no SE)");   // 0.5 - 0.36
 }
 
-TEST_CASE("summary and verdict say which runs were not at equilibrium or did not finish") {
+TEST_CASE("summary and verdict say which runs were not at equilibrium, failed or are missing") {
   const fs::path dir = makeStudy("verdict_failures", true);
   const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
   // nscd: r0000 interrupted, seed 3 at W = 10 not at rest; bullet: W = 20 failed, seed 3 at W = 10 not at rest.
@@ -521,7 +521,13 @@ TEST_CASE("summary and verdict say which runs were not at equilibrium or did not
   CHECK_THAT(verdict, Catch::Contains("1 of nscd's 14 finished runs did not reach equilibrium: the comparison is "
                                       "partly of unequilibrated piles."));
   CHECK_THAT(verdict, Catch::Contains("1 of bullet's 12 finished runs did not reach equilibrium"));
-  CHECK_THAT(verdict, Catch::Contains("3 of bullet's 15 runs did not finish."));
+  CHECK_THAT(verdict, Catch::Contains("3 of bullet's 15 runs failed."));
+  CHECK_THAT(verdict, Catch::Contains("1 of nscd's 15 runs is missing (not run or interrupted)."));
+  // A bullet run interrupted too (r0001: W = 4, seed 1): failed and missing runs are counted apart.
+  fs::remove(dir / "runs" / "r0001" / study::kDoneMarker);
+  const std::string again = verdictOf(slurp(study::writeReport(dir, dir / "report").markdown));
+  CHECK_THAT(again, Catch::Contains("4 of bullet's 15 runs did not finish: 3 failed, 1 is missing (not run or "
+                                    "interrupted)."));
   fs::remove_all(dir);
 }
 
