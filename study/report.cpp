@@ -396,12 +396,12 @@ ReportSummary countRuns(const StudyView& study) {
   return s;
 }
 
-// ---------------------------------------------------------------------------------------------
 // The sweep folder's own name (its last path component, "." and ".." resolved).
 std::string sweepName(const StudyView& study) {
   return fs::weakly_canonical(fs::absolute(study.sweepDir)).filename().string();
 }
 
+// ---------------------------------------------------------------------------------------------
 // The sections (writeReport calls them in the order of the page: the introduction, the summary and
 // the verdict, the figures with their fits, the profiles, the runs, the tables, the cost, the method)
 
