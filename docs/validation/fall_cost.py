@@ -2,8 +2,9 @@
 """Where the falls of a sweep's nscd runs spend their solver iterations (docs/performance.md,
 "What sets a medium run's cost").
 
-Usage, after a sweep (or `confpack reproduce`) into SWEEP_DIR:
-    python3 docs/validation/fall_cost.py SWEEP_DIR [--after T]
+Usage, after a sweep (or `confpack reproduce`) into SWEEP_DIR and a build with the Python module
+(README, "Build and test"):
+    PYTHONPATH=build/python python3 docs/validation/fall_cost.py SWEEP_DIR [--after T]
 
 For every finished nscd run on the quasi-static protocol it reads result.json's timing history (one
 entry per equilibrium check) and splits the fall at simulated time T (default 20 t0, by when a
@@ -12,10 +13,9 @@ configuration (family and width; the median over its seeds): grains, the fall's 
 iterations, and for the creep the steps per t0, the iterations per step and per t0.
 """
 import argparse
-import json
 import statistics
-import sys
-from pathlib import Path
+
+import confpack.study
 
 
 def creep_of(result, after):
@@ -25,8 +25,7 @@ def creep_of(result, after):
     history = timing.get("history") or []
     if not fall or not history:
         return None
-    inside = [e for e in history if e["steps"] <= fall["steps"]]
-    creep = [e for e in inside if e["time"] >= after]
+    creep = [e for e in history if e["steps"] <= fall["steps"] and e["time"] >= after]
     if len(creep) < 2:
         return None
     first, last = creep[0], creep[-1]
@@ -41,27 +40,25 @@ def creep_of(result, after):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("sweep_dir", type=Path)
+    parser.add_argument("sweep_dir")
     parser.add_argument("--after", type=float, default=20.0, help="start of the creep [t0] (default 20)")
     args = parser.parse_args()
-    runs = args.sweep_dir / "runs"
-    if not runs.is_dir():
-        sys.exit(f"fall_cost.py: {runs} is not a folder: give a sweep folder (made by confpack sweep)")
+    try:
+        runs = confpack.study.load(args.sweep_dir, details=True)
+    except ValueError as e:  # not a sweep folder, or a run table that no longer holds
+        raise SystemExit(f"fall_cost.py: {e}")
     groups = {}
-    for done in sorted(runs.glob("*/done.json")):
-        label = json.loads(done.read_text()).get("label", "")
-        result_file = done.parent / "result.json"
-        if not label.endswith(" nscd") or not result_file.exists():
+    for run in runs:
+        if run["backend"] != "nscd" or run["status"] != "done":
             continue
-        result = json.loads(result_file.read_text())
-        row = creep_of(result, args.after)
+        row = creep_of(run["result"], args.after)
         if row is None:
             continue
-        # "MSP xS=0 W=10 mu=0 s2 nscd" -> configuration "MSP xS=0 W=10 mu=0"
-        configuration = " ".join(label.split()[:-2])
-        groups.setdefault(configuration, []).append((result["n_grains"],) + row)
+        width = f"bi{run['W']:g}" if run["biperiodic"] else f"{run['W']:g}"
+        configuration = f"{run['family']} x_S={run['x_S']:g} W={width} mu_w={run['mu_w']:g}"
+        groups.setdefault(configuration, []).append((run["result"]["n_grains"],) + row)
     if not groups:
-        sys.exit(f"fall_cost.py: no finished nscd run with a fall in {runs}")
+        raise SystemExit(f"fall_cost.py: no finished nscd run with a fall in {args.sweep_dir}")
     print(f"| configuration | runs | grains | fall ends at t | fall steps | fall iterations "
           f"| after t = {args.after:g}: steps per t0 | iterations per step | iterations per t0 |")
     print("|---|---|---|---|---|---|---|---|---|")
