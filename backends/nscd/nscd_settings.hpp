@@ -100,8 +100,9 @@ struct NscdSettings {
   /// solve is followed by one such pass until both have converged (mprgp_solver.hpp), to the
   /// same tolerance whatever omega_t. Default 1.2: 2.8 times fewer iterations on a cold step
   /// (the test), 9 to 13 % fewer a fall step on 18 medium piles between frictional walls and
-  /// 1.17 times less time in all; 1.1, 1.3 and 1.5 did no better than 1.2 on r0122's first 25 t0
-  /// (docs/performance.md, "Over-relaxed friction passes").
+  /// 1.17 times less time in all. Against 1.1 it took 229 iterations a step to 221 on r0122's
+  /// first 25 t0 (mu_w = 0.5) but 350 to 419 on r0128's (mu_w = 1); 1.3 and 1.5 did no better
+  /// on r0122 (docs/performance.md, "Over-relaxed friction passes").
   double frictionRelaxation = 1.2;
   /// ["alert_distance"] a pair becomes a contact row when its gap in the predicted configuration
   /// is below alert_distance x (the smaller size of the pair, or the grain size for a wall)
