@@ -20,6 +20,7 @@
 #include "analysis/plausibility.hpp"
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "core/build_info.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::app {
@@ -72,10 +73,14 @@ void runAnalyze(AnalyzeState& st) {
     j["source"] = std::filesystem::absolute(st.file).string();
     j["backend"] = nullptr;
     j["seed"] = nullptr;
-    j["version"] = CONFPACK_VERSION;
+    j["version"] = core::version();
+    j["revision"] = core::sourceRevision();
     j["analysis_options"] = optionsJson(st.options);
-    const nlohmann::json metadata = {
-        {"source", st.file.string()}, {"seed", nullptr}, {"backend", nullptr}, {"version", CONFPACK_VERSION}};
+    const nlohmann::json metadata = {{"source", st.file.string()},
+                                     {"seed", nullptr},
+                                     {"backend", nullptr},
+                                     {"version", core::version()},
+                                     {"revision", core::sourceRevision()}};
     analysis::writeProfiles(output.dir(), result, metadata);
     writeJson(output.dir() / "result.json", j);
     output.commit();

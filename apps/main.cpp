@@ -6,6 +6,7 @@
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
+#include "core/build_info.hpp"
 
 int main(int argc, char** argv) {
   using namespace confpack::app;
@@ -16,6 +17,8 @@ int main(int argc, char** argv) {
   // Set before the subcommands are added: they copy the root's failure message.
   app.failure_message(oneLineFailure);
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("confpack ") + confpack::core::version() + " (revision " +
+                                        confpack::core::sourceRevision() + ")");
   registerDeposit(app);
   registerRun(app);
   registerAnalyze(app);

@@ -14,6 +14,7 @@
 
 #include "analysis/bulk_region.hpp"
 #include "analysis/interpenetration.hpp"
+#include "core/build_info.hpp"
 #include "core/deposition.hpp"
 #include "study/run_pipeline.hpp"
 
@@ -66,7 +67,8 @@ nlohmann::json machineInfo() {
   return {{"cpu", model},
           {"hardware_threads", std::thread::hardware_concurrency()},
           {"compiler", __VERSION__},
-          {"confpack_version", CONFPACK_VERSION},
+          {"confpack_version", core::version()},
+          {"confpack_revision", core::sourceRevision()},
           {"transparent_hugepage", thp.empty() ? nlohmann::json() : nlohmann::json(thp)},
           {"glibc_tunables", tunables ? nlohmann::json(tunables) : nlohmann::json()}};
 }

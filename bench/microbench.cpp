@@ -23,8 +23,9 @@
 #include "backends/nscd/contact_solver.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
-#include "core/deposition.hpp"
 #include "collision/polyhedron_contact.hpp"
+#include "core/build_info.hpp"
+#include "core/deposition.hpp"
 #include "core/population.hpp"
 #include "core/random.hpp"
 
@@ -529,7 +530,8 @@ void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
     benchmark::RegisterBenchmark(e.name.c_str(), [run = e.run, seed = def.seed](benchmark::State& s) {
       run(s, seed);
     })->Unit(benchmark::kMicrosecond);
-  benchmark::AddCustomContext("confpack_version", CONFPACK_VERSION);
+  benchmark::AddCustomContext("confpack_version", core::version());
+  benchmark::AddCustomContext("confpack_revision", core::sourceRevision());
   benchmark::AddCustomContext("confpack_seed", std::to_string(def.seed));
 
   // Google Benchmark writes its report itself: into a temporary file next to `out`, renamed once

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "analysis/geometric_model.hpp"
+#include "core/build_info.hpp"
 #include "core/packing_io.hpp"
 #include "study/csv_table.hpp"
 #include "study/report_document.hpp"
@@ -416,10 +417,10 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
   const std::string folder = options.runLinks ? fs::absolute(study.sweepDir).string()
                                               : sweepName(study) + " (its run folders are not part of this report)";
   doc.paragraph(
-      fmt::format("Sweep folder: {}. Written {} by confpack {}. {} runs: {} done, {} failed, {} missing "
+      fmt::format("Sweep folder: {}. Written {} by confpack {} (revision {}). {} runs: {} done, {} failed, {} missing "
                   "(not run or interrupted), {} done but not equilibrated.",
-                  folder, when, CONFPACK_VERSION, summary.runs, summary.done, summary.failed, summary.missing,
-                  summary.unequilibrated));
+                  folder, when, core::version(), core::sourceRevision(), summary.runs, summary.done, summary.failed,
+                  summary.missing, summary.unequilibrated));
   if (!study.settings.empty()) {
     std::string varied;
     for (std::size_t i = 0; i < study.settings.size(); ++i)
@@ -1338,9 +1339,37 @@ void addCostSection(Document& doc, const StudyView& study) {
             rows);
 }
 
+// "confpack 0.1.0 at revision abc (12 runs); ..." over the finished runs, in the order first met
+// (results written before confpack recorded its revision say "revision not recorded").
+std::string runBuilds(const StudyView& study) {
+  std::vector<std::pair<std::string, std::size_t>> builds;
+  for (const RunRecord& r : study.records) {
+    if (r.status != RunStatus::Done) continue;
+    const std::string version = r.result.value("confpack_version", std::string());
+    const std::string revision = r.result.value("confpack_revision", std::string());
+    const std::string build = version.empty()    ? "a build that recorded no version"
+                              : revision.empty() ? fmt::format("confpack {} (revision not recorded)", version)
+                                                 : fmt::format("confpack {} at revision {}", version, revision);
+    auto it = std::find_if(builds.begin(), builds.end(), [&](const auto& b) { return b.first == build; });
+    if (it == builds.end())
+      builds.emplace_back(build, 1);
+    else
+      ++it->second;
+  }
+  std::string out;
+  for (std::size_t i = 0; i < builds.size(); ++i)
+    out += fmt::format("{}{} ({} run{})", i == 0 ? "" : "; ", builds[i].first, builds[i].second,
+                       builds[i].second == 1 ? "" : "s");
+  return out;
+}
+
 void addMethodSection(Document& doc, const StudyView& study, bool runLinks) {
   doc.heading(2, "Method");
+  const std::string builds = runBuilds(study);
   doc.bullets({
+      "The finished runs were computed by " +
+          (builds.empty() ? std::string("no build yet (no run finished)") : builds) +
+          ". A run resumed from a checkpoint records the build that finished it.",
       "The study is defined in " +
           (runLinks ? (study.sweepDir / "sweep.json").string() : "sweep.json of the sweep folder " + sweepName(study)) +
           "; each run's resolved configuration and result are in its folder (config.json, result.json).",

@@ -16,6 +16,7 @@
 #include "analysis/equilibrium.hpp"
 #include "analysis/interpenetration.hpp"
 #include "backends/backend_factory.hpp"
+#include "core/build_info.hpp"
 #include "core/interrupt.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
@@ -391,12 +392,13 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
 namespace {
 // The metadata lines of a run's profiles (analysis::writeProfiles).
 nlohmann::json profileMetadata(const nlohmann::json& seed, const std::string& backend) {
-  return {{"seed", seed}, {"backend", backend}, {"version", CONFPACK_VERSION}};
+  return {{"seed", seed}, {"backend", backend}, {"version", core::version()}, {"revision", core::sourceRevision()}};
 }
 
 // The keys of result.json that makeResult writes beside the analysis blocks: the compaction's.
-constexpr std::array<std::string_view, 8> kCompactionKeys = {"backend", "seed",    "n_grains", "equilibrium",
-                                                             "timing",  "deposit", "config",   "confpack_version"};
+constexpr std::array<std::string_view, 9> kCompactionKeys = {
+    "backend", "seed",   "n_grains",         "equilibrium",      "timing",
+    "deposit", "config", "confpack_version", "confpack_revision"};
 }  // namespace
 
 nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& deposit, const CompactionOutcome& out,
@@ -417,7 +419,8 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const core::Deposit& depos
   r["config"] = cfg;
   r["config"]["backend_settings"] = out.backendSettings;
   r["config"]["compaction"]["dt"] = out.dt;
-  r["confpack_version"] = CONFPACK_VERSION;
+  r["confpack_version"] = core::version();
+  r["confpack_revision"] = core::sourceRevision();
   return r;
 }
 

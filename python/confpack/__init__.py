@@ -15,10 +15,11 @@ is ever written but by Packing.write. Ctrl-C stops a run at its next progress po
 import json
 
 from . import _confpack
-from ._confpack import Box, Contacts, Packing, read_packing, __version__
+from ._confpack import Box, Contacts, Packing, read_packing, __version__, __revision__
 
 __all__ = ["Box", "Contacts", "Packing", "read_packing", "default_config", "resolve_config", "deposit",
-           "run", "analyze", "study", "__version__"]
+           "run", "analyze", "study", "__version__",
+           "__revision__"]
 
 
 def _config_text(config):

@@ -49,6 +49,8 @@ def test_run_equals_the_cli(cli_run, tmp_path):
             assert result[key] == cli_result[key], key
     assert result["timing"]["steps"] == cli_result["timing"]["steps"]
     assert result["config"]["backend"] == backend
+    # Both record the build: the module is the same library as the command line.
+    assert (result["confpack_version"], result["confpack_revision"]) == (confpack.__version__, confpack.__revision__)
     assert calls and all(0.0 <= f <= 1.0 and isinstance(s, str) for f, s in calls)
 
 

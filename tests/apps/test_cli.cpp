@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -65,6 +66,18 @@ TEST_CASE("every subcommand has --help") {
   for (const char* flag : {"--shape", "--length-x", "--width", "--periodic-y", "--height", "--small-fraction",
                            "--wall-friction", "--backend", "--seed", "--out", "--threads", "--quiet", "-v"})
     CHECK(deposit.out.find(flag) != std::string::npos);
+  CHECK(s.entries().empty());
+}
+
+TEST_CASE("confpack --version names the version and the git revision the binary was built from") {
+  ConfpackSession s("cli_version");
+  const CommandResult r = s.run("--version");
+  CHECK(r.code == 0);
+  CHECK(r.err.empty());
+  INFO(r.out);
+  // A commit (12 hex digits), "-dirty" if tracked files differed from it; "unknown" outside git.
+  CHECK(
+      std::regex_match(r.out, std::regex(R"(confpack \d+\.\d+\.\d+ \(revision ([0-9a-f]{12}(-dirty)?|unknown)\)\n)")));
   CHECK(s.entries().empty());
 }
 

@@ -66,6 +66,11 @@ TEST_CASE("run --from brings a packing's grains to rest: a bead column carries k
   CHECK(result["n_grains"].get<int>() == 3);
   CHECK(result["deposit"]["from"].get<std::string>() == "column.json");
   CHECK(result["config"]["box"]["width"].get<double>() == 3.0);
+  // The result records the build that computed it, as `confpack --version` names it.
+  const auto version = s.run("--version");
+  CHECK(version.code == 0);
+  CHECK(version.out == "confpack " + result["confpack_version"].get<std::string>() + " (revision " +
+                           result["confpack_revision"].get<std::string>() + ")\n");
 
   // Centres at d/2, 3d/2, 5d/2 above the floor, and the contact under the k-th bead from the top
   // carries the weight of k beads, m = pi/6 (rho = g = d = 1).

@@ -2,9 +2,10 @@
 // with known phi_bulk and C, missing/failed runs shown as such, the summary and cross-solver
 // verdict that lead the report, the figures before the run table, the run table once with links to
 // the run folders, and the per-configuration tables in tables/*.csv, read back.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
-#include <fmt/format.h>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include <tuple>
 #include <vector>
 
+#include "core/build_info.hpp"
 #include "study/csv_table.hpp"
 #include "study/report.hpp"
 #include "study/sweep.hpp"
@@ -299,6 +301,28 @@ TEST_CASE("report shows failed and missing runs as such") {
   CHECK(tableValue(phi, "solid_fraction", 4, false, "nscd_std") == Approx(kDelta / std::sqrt(2.0)));
   // The fits still run on the widths that have data (bullet: 3 widths).
   CHECK(md.find("| MSP x_S=0 mu_w=0 | bullet | 3 | 0.6300 ± ") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("the report names the build that wrote it and counts the runs each build computed") {
+  const fs::path dir = makeStudy("builds", false);
+  // Ten runs per build: two revisions, and results that recorded no version (the synthetic ones).
+  for (int i = 0; i < 20; ++i) {
+    const fs::path file = dir / "runs" / fmt::format("r{:04d}", i) / "result.json";
+    json r = json::parse(slurp(file));
+    r["confpack_version"] = "0.1.0";
+    r["confpack_revision"] = i < 10 ? "0123456789ab" : "ba9876543210-dirty";
+    std::ofstream(file) << r.dump();
+  }
+  study::ReportOptions o;
+  o.gnuplot.clear();  // figures are not the point here
+  const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
+  const std::string md = slurp(s.markdown);
+  CHECK(md.find(fmt::format("by confpack {} (revision {})", core::version(), core::sourceRevision())) !=
+        std::string::npos);
+  CHECK(md.find("The finished runs were computed by confpack 0.1.0 at revision 0123456789ab (10 runs); confpack "
+                "0.1.0 at revision ba9876543210-dirty (10 runs); a build that recorded no version (10 runs).") !=
+        std::string::npos);
   fs::remove_all(dir);
 }
 
