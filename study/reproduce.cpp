@@ -79,16 +79,12 @@ json reproductionSweep(std::string_view scale) {
     // about 6 d_L thick, some 410 grains at W = 5.
     // The piles fall on the adaptive step until they are all but at rest (mean kinetic ratio
     // 1e-8), the fall bounded at 300 t0, and the finisher only ends it (a last rattler, the last
-    // balance of forces): a 1,648-sphere pile at W = 10 is at rest in 131 s this way, a
-    // 1,968-sphere biperiodic one in 320 s, which the dynamic protocol alone had not brought to
-    // rest in 300 t0, and a flat, sharp pinacoid pile of the shape study in 326 s, which the quick
-    // study's way (a fixed-step fall handed over at 1e-4) had not in 3,000 finisher steps
-    // (docs/performance.md, "The medium scale").
-    // The finisher stops once a step moves no grain more than 1e-5 d (the default, 1e-6, is for
-    // the small piles the protocol was validated on): a move of 1e-5 d in a step of 1 t0 is still
-    // a force imbalance tens of times below the equilibrium bound, and the 1,064-pinacoid pile
-    // at W = 5 then stops 358 finisher steps earlier, in half the run's time, with the same packing
-    // to six digits of phi (docs/performance.md, "The medium scale's settle tolerance").
+    // balance of forces): the finisher cannot do the creep of a large pile, and the dynamic
+    // protocol alone leaves some piles not at rest at 300 t0 (docs/performance.md, "The medium
+    // scale"). The finisher stops once a step moves no grain more than 1e-5 d instead of the
+    // default 1e-6: still a force imbalance tens of times below the equilibrium bound, and half
+    // a pinacoid pile's run time for the same packing (docs/performance.md, "The medium scale's
+    // settle tolerance").
     // Bullet, which has no finisher, stops at 20 t0 and is reported as not at rest.
     return studySweep(
         "medium", "the confinement study in a 12 x W x 12 box, meant to run overnight on 2 cores", 12.0, 12.0,

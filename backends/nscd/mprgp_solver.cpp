@@ -222,16 +222,11 @@ double MprgpSolver::applyOperator(const std::vector<double>& x, std::vector<doub
 // dotted with row k's velocity change per unit y_k on b (a scatter entry); |A_kj| is bounded by
 // the sum over b of the absolute terms. Each body's entries pair up: sum_b |rows on b|^2 products,
 // about 50 per grain for spheres (a few percent of a solve).
-// This replaced a Cauchy-Schwarz bound (|A_kj| <= s_k s_j sqrt(w_kb w_jb), which ignores the angle
-// between the normals). On the 493-sphere biperiodic pile (6 x 6, h = 12) over its first 12 t0,
-// against the power-iteration norm (about 3.2): that bound was up to 3.1 times ||A||, this one 1.5
-// to 1.8 times. A fifth of MPRGP's iterations there are expansion steps, whose projected gradient
-// step alpha_bar = 1.95 / bound is that much longer now. Iterations per step over those 12 t0,
-// seeds 1 to 4: 206 / 220 / 205 / 224 before, 210 / 206 / 190 / 220 after (3.4% fewer on average;
-// one trajectory per seed, so each figure also carries the spread between trajectories). Those
-// figures are for Dostal's expansion (`"expansion": "gradient"`). With the default projected CG
-// expansion, alpha_bar only serves when that step is refused: less than 0.05 times per step on
-// the same pile.
+// Why not the Cauchy-Schwarz bound |A_kj| <= s_k s_j sqrt(w_kb w_jb): it ignores the angle between
+// the normals and was up to 3.1 times ||A|| on a 493-sphere pile, this one 1.5 to 1.8 times, and
+// Dostal's expansion step alpha_bar = 1.95 / bound is that much longer. With the default
+// projected CG expansion alpha_bar serves only when that step is refused (rarely: under 0.05
+// times a step there).
 double MprgpSolver::scaledOperatorBound(std::size_t bodyCount) {
   const std::size_t m = gatherRows_.size();
   rowSum_.assign(m, 0.0);
@@ -489,10 +484,9 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
     }
   };
   // Whether the step y - alpha p stays in y >= 0, tested on the very update the step makes. A
-  // separate pass, and no division: the largest feasible step (min y_k / p_k) used to be taken
-  // in measure(), where the division per row was the hottest instruction of the pass (perf); the
-  // 493-sphere pile's first 5 t0 took 2.21 s of solve without it against 2.45 s (one run each,
-  // same bits). Dostal's expansion, the only user of that step length, computes it itself.
+  // separate pass, and no division: the largest feasible step (min y_k / p_k), taken per row in
+  // measure(), was the hottest instruction of that pass and about a tenth of the solve time.
+  // Dostal's expansion, the only user of that step length, computes it itself.
   auto fitsBounds = [&](double alpha) {
     const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
     int outside = 0;

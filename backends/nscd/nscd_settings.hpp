@@ -98,11 +98,9 @@ struct NscdSettings {
   /// ["friction_relaxation"] (mprgp) over-relaxation factor omega_t in (0, 2) of the tangential
   /// passes around side-wall friction, r_t <- proj_disc(r_t - omega_t u_t / W_tt) [-]. Each normal
   /// solve is followed by one such pass until both have converged (mprgp_solver.hpp), to the
-  /// same tolerance whatever omega_t. Default 1.2: 2.8 times fewer iterations on a cold step
-  /// (the test), 9 to 13 % fewer a fall step on 18 medium piles between frictional walls and
-  /// 1.17 times less time in all. Against 1.1 it took 229 iterations a step to 221 on r0122's
-  /// first 25 t0 (mu_w = 0.5) but 350 to 419 on r0128's (mu_w = 1); 1.3 and 1.5 did no better
-  /// on r0122 (docs/performance.md, "Over-relaxed friction passes").
+  /// same tolerance whatever omega_t. Default 1.2: 1.17 times less time than 1 on 18 medium
+  /// piles between frictional walls, and no value from 1.1 to 1.5 better on both mu_w = 0.5
+  /// and 1 (docs/performance.md, "Over-relaxed friction passes").
   double frictionRelaxation = 1.2;
   /// ["alert_distance"] a pair becomes a contact row when its gap in the predicted configuration
   /// is below alert_distance x (the smaller size of the pair, or the grain size for a wall)
@@ -134,11 +132,9 @@ struct NscdSettings {
   /// ["fall_tolerance"] stopping threshold of the solves of the quasi-static protocol's fall
   /// (ContactBackend::startQuasiStaticFall), in `tolerance`'s measure, > 0, or "auto" (0 here):
   /// 1e-6 for a pile with pinacoids, `tolerance` for a sphere pile. The finisher balances the
-  /// fall's last state with its own solves, so the fall need not be balanced to 1e-10. Measured
-  /// (docs/performance.md, "The fall solved to 1e-6"): at 1e-6 a 235-pinacoid pile fell with 741k
-  /// MPRGP iterations instead of 4.6 million and came to rest as before, a 1,064-pinacoid medium
-  /// pile with 2.07 million instead of 12.0; a 1,648-sphere pile crept longer (to t = 128
-  /// against 83) and gained nothing, so sphere piles keep their tight solves.
+  /// fall's last state with its own solves, so the fall need not be balanced to 1e-10: pinacoid
+  /// falls take about 6 times fewer iterations so, while a sphere pile crept longer for the same
+  /// iterations (docs/performance.md, "The fall solved to 1e-6").
   double fallTolerance = 0.0;
   /// Throws std::invalid_argument naming the field if a value is out of range.
   void validate() const;
