@@ -382,7 +382,10 @@ CompactionOutcome compact(const core::RunConfig& cfg, const core::Deposit& depos
                 {"history", history}};
   // Only where the run was given a checkpoint file, so that other runs' result.json is unchanged.
   if (!checkpointing.file.empty()) {
-    out.timing["checkpoint"] = {{"resumes", c.resumes}, {"exact", backend->exactRestore()}};
+    // earlier_s: the wall time of the invocations this one resumed, up to their last checkpoint.
+    out.timing["checkpoint"] = {{"resumes", c.resumes},
+                                {"exact", backend->exactRestore()},
+                                {"earlier_s", resumed ? resumed->counters.elapsedSeconds : 0.0}};
     if (!ignoredWhy.empty()) out.timing["checkpoint"]["ignored"] = ignoredWhy;
   }
   out.backendSettings = backend->settings();

@@ -981,11 +981,23 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
       const std::size_t n = finishedCount.fetch_add(1) + 1;
       const std::string w = r.config.box.periodicY ? "bi" + trimNumber(r.config.box.width)
                                                    : trimNumber(r.config.box.width);
+      // A run resumed from a checkpoint has run before: the marker and the log line give its
+      // whole wall time, the earlier invocations' (up to their last checkpoint) and this one's.
+      static const json::json_pointer kEarlier("/timing/checkpoint/earlier_s");
+      const double earlier = result.is_object() && result.contains(kEarlier) && result.at(kEarlier).is_number()
+                                 ? result.at(kEarlier).get<double>()
+                                 : 0.0;
+      const bool resumed = earlier > 0.0;
+      const double runSeconds = seconds + earlier;
       if (error.empty()) {
         // The marker is the last thing written, atomically: its presence means result.json and
         // everything else of the run is complete.
-        json done = {{"name", r.name},      {"status", "done"},       {"wall_s", seconds},
-                     {"finished", utcTimestamp()}, {"label", r.label(varied)}};
+        json done = {{"name", r.name},
+                     {"status", "done"},
+                     {"wall_s", runSeconds},
+                     {"finished", utcTimestamp()},
+                     {"label", r.label(varied)}};
+        if (resumed) done["wall_s_since_resume"] = seconds;
         if (result.contains("solid_fraction")) done["solid_fraction"] = result.at("solid_fraction");
         if (result.contains("equilibrium") && result.at("equilibrium").contains("reached"))
           done["equilibrium_reached"] = result.at("equilibrium").at("reached");
@@ -1001,8 +1013,9 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
           phi = fmt::format("phi={:.3f}", result.at("solid_fraction").get<double>());
         const bool unequilibrated = result.contains("equilibrium") && result.at("equilibrium").is_object() &&
                                     result.at("equilibrium").value("reached", true) == false;
-        printer.finished(fmt::format("[{}/{}] {} {} W={} {} {:.0f} s{}", n, total, r.name, r.config.backend, w,
-                                     phi, seconds, unequilibrated ? " (NOT equilibrated)" : ""));
+        printer.finished(fmt::format("[{}/{}] {} {} W={} {} {:.0f} s{}{}", n, total, r.name, r.config.backend, w, phi,
+                                     runSeconds, resumed ? fmt::format(" ({:.0f} s since its resume)", seconds) : "",
+                                     unequilibrated ? " (NOT equilibrated)" : ""));
       } else {
         failedCount.fetch_add(1);
         try {

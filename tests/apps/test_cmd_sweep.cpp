@@ -102,6 +102,13 @@ TEST_CASE("a sweep stopped by SIGTERM mid-run resumes that run from its checkpoi
   CHECK(result["timing"]["checkpoint"]["resumes"] == 1);
   CHECK(result["equilibrium"]["reached"] == true);
   CHECK(!fs::exists(state));
+  // The marker gives the run's whole wall time, both invocations, and this one's share of it.
+  const nlohmann::json done = nlohmann::json::parse(slurp(dir / "sw" / "runs" / "r0000" / "done.json"));
+  const double earlier = result["timing"]["checkpoint"]["earlier_s"].get<double>();
+  CHECK(earlier > 0.0);
+  CHECK(done["wall_s"].get<double>() == Approx(done["wall_s_since_resume"].get<double>() + earlier));
+  // What the run measured of itself, compaction and deposit, is part of that.
+  CHECK(result["timing"]["wall_s"].get<double>() <= done["wall_s"].get<double>());
 }
 
 TEST_CASE("confpack sweep refuses a sweep file listing more runs than --max-runs: one line, exit 2") {
