@@ -92,6 +92,7 @@ Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
   const std::vector<CountedContact> counted =
       forceCarryingContacts(packing, contacts, a.geometricContacts, options.coordination.forceThreshold);
   a.coordination = coordination(packing, a.region, counted, a.geometricContacts, options.coordination);
+  a.rigidity = sphereRigidity(packing, counted, &a.rigidityWhyNot);
   a.fabric = fabric(packing, a.region, counted, options.fabric);
   a.nematic = nematic(packing, a.region, options.boundaryDistance);
   a.homogeneity = homogeneity(packing, a.region, options.homogeneity);
@@ -145,6 +146,15 @@ nlohmann::json toJson(const Analysis& a) {
                        {"hyperstaticity", orNull(c.hyperstaticity)},
                        {"geometric_contacts", a.geometricContacts},
                        {"mean_normal_force", c.meanNormalForce}};
+
+  if (a.rigidity)
+    j["rigidity"] = {{"contacts", a.rigidity->contacts},
+                     {"degrees_of_freedom", a.rigidity->degreesOfFreedom},
+                     {"rank", a.rigidity->rank},
+                     {"self_stresses", a.rigidity->selfStresses},
+                     {"mechanisms", a.rigidity->mechanisms}};
+  else
+    j["rigidity"] = nullptr;
 
   const Interpenetration& ip = a.interpenetration;
   j["interpenetration_percent"] = {

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "analysis/bulk_region.hpp"
@@ -27,6 +28,7 @@
 #include "analysis/interpenetration.hpp"
 #include "analysis/nematic.hpp"
 #include "analysis/profile_fit.hpp"
+#include "analysis/rigidity.hpp"
 #include "analysis/solid_fraction.hpp"
 #include "analysis/voronoi.hpp"
 
@@ -72,6 +74,8 @@ struct Analysis {
   Interpenetration interpenetration;
   bool geometricContacts = false;
   Coordination coordination;
+  std::optional<Rigidity> rigidity;  ///< frictionless sphere packings (rigidity.hpp)
+  std::string rigidityWhyNot;        ///< why `rigidity` is absent
   Fabric fabric;
   Nematic nematic;
   Homogeneity homogeneity;
@@ -99,7 +103,7 @@ void checkCells(const core::BoxDef& box, double grains, const AnalysisOptions& o
 Analysis analyze(const core::Packing& packing, const AnalysisOptions& options = {});
 
 /// The result.json blocks (docs/model.md, "Results"): n_grains, free_surface, bulk_region,
-/// solid_fraction, coordination, interpenetration_percent, anisotropy, fabric, nematic,
+/// solid_fraction, coordination, rigidity, interpenetration_percent, anisotropy, fabric, nematic,
 /// profile_fit, equilibrium (null when not evaluated). Quantities that do not apply are null, not
 /// absent.
 nlohmann::json toJson(const Analysis& a);

@@ -282,8 +282,8 @@ const std::vector<TableGroup>& tableGroups() {
        {"solid_fraction", "bulk_region", "free_surface"}},
       {"profile_fit", "fit of the profile phi(y)", {"profile_fit"}},
       {"coordination",
-       "coordination, hyperstaticity, wall contacts",
-       {"coordination", "hyperstaticity", "wall_contacts"}},
+       "coordination, hyperstaticity, wall contacts, rigidity (self-stresses, mechanisms)",
+       {"coordination", "hyperstaticity", "wall_contacts", "rigidity"}},
       {"interpenetration", "interpenetration, % by volume", {"interpenetration"}},
       {"homogeneity", "homogeneity", {"homogeneity"}},
       {"order", "anisotropy, fabric, nematic order, orientations", {"anisotropy", "fabric", "nematic", "orientation"}},
@@ -936,6 +936,37 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
 }
 
 // nscd against Bullet (the first two backends) for every family and summary quantity.
+// What the finished runs of (series, backend) say of their contact networks' rigidity
+// (docs/model.md, "Isostaticity"), as a sentence of the verdict: how many have no self-stress,
+// and the share of free motions (mechanisms k / 3N). Empty when none has the block (pinacoids,
+// frictional walls, results from before the block existed).
+std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const std::string& backend) {
+  int runs = 0, unstressed = 0;
+  double freeShare = 0.0;
+  for (const auto& [k, byBackend] : study.groups) {
+    if (seriesOf(k) != sk || !byBackend.count(backend)) continue;
+    for (const RunRecord* r : byBackend.at(backend)) {
+      if (r->status != RunStatus::Done) continue;
+      const auto value = [&](const char* key) {
+        const auto it = r->values.find(key);
+        return it == r->values.end() ? std::optional<double>() : it->second;
+      };
+      const auto h = value("rigidity/self_stresses"), k3 = value("rigidity/mechanisms"),
+                 dof = value("rigidity/degrees_of_freedom");
+      if (!h || !k3 || !dof || !(*dof > 0.0)) continue;
+      ++runs;
+      unstressed += *h == 0.0;
+      freeShare += *k3 / *dof;
+    }
+  }
+  if (runs == 0) return "";
+  const std::string share = fmt::format("{:.2g} % of their motions free (mechanisms, mean)", 100.0 * freeShare / runs);
+  if (unstressed == runs)
+    return fmt::format(" {}'s {} packing{}: no self-stress (isostatic: the geometry fixes the contact forces), {}.",
+                       backend, runs, runs == 1 ? "" : "s", share);
+  return fmt::format(" {}'s {} packings: {} without self-stress, {}.", backend, runs, unstressed, share);
+}
+
 void addVerdictSection(Document& doc, const StudyView& study, const StudySummary& summary) {
   doc.heading(2, "Cross-solver verdict");
   if (!study.pair()) {
@@ -989,6 +1020,7 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
             " {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
             "unequilibrated piles.",
             n.unequilibrated, backend, n.done);
+      text += rigiditySentence(study, sk, backend);
       // Failed runs said apart from missing ones, which a study still running has many of.
       const std::size_t missing = n.total - n.done - n.failed;
       const auto are = [](std::size_t k) { return k == 1 ? "is" : "are"; };

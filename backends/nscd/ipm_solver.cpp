@@ -5,12 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <span>
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+
+#include "core/blas_lock.hpp"
 
 namespace confpack::nscd {
 
@@ -57,15 +58,8 @@ constexpr int kProximalSweeps = 20;
 // interior point's impulses if it started from zero).
 constexpr std::ptrdiff_t kPolishFlips = 10;
 
-/// CHOLMOD's factorisations and solves call BLAS, and Debian's serial OpenBLAS (the one its
-/// SuiteSparse pulled in here) is not safe to call from two threads at once: with `sweep --jobs 2`
-/// the finishers of two W = 10 piles (1,637 and 1,648 spheres, at rest in 27 and 20 steps alone)
-/// ran side by side and crept for 600 steps and more. One lock for the process serialises them
-/// (uncontended in one run).
-std::unique_lock<std::mutex> blasLock() {
-  static std::mutex m;
-  return std::unique_lock<std::mutex>(m);
-}
+// CHOLMOD's factorisations and solves call BLAS: each holds core::blasLock() (core/blas_lock.hpp).
+using core::blasLock;
 
 /// CHOLMOD's supernodal factorisation (SuiteSparse 5) opens OpenMP teams of a fixed 4 threads
 /// for copy loops of a few hundred flops each: on the 2-core machine they made 7.5 million futex

@@ -54,6 +54,12 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
       {"interpenetration_percent", {{"exact", nscd ? 0.01 : 0.2}, {"lattice_min", nullptr}, {"lattice_max", nullptr}}},
       {"equilibrium",
        {{"reached", true}, {"max_force_ratio", 1e-5}, {"max_moment_ratio", 1e-5}, {"max_kinetic_ratio", 1e-9}}},
+      // nscd's networks isostatic, Bullet's with one self-stress in ten contacts.
+      {"rigidity",
+       {{"contacts", 300},
+        {"degrees_of_freedom", 300},
+        {"self_stresses", nscd ? 0 : 30},
+        {"mechanisms", nscd ? 3 : 30}}},
       {"anisotropy", 0.1},
       {"nematic", {{"bulk", nullptr}, {"boundary", nullptr}}},
       {"profile_fit",
@@ -483,6 +489,20 @@ TEST_CASE("cross-solver verdict: agree on a shared law, differ on a shifted phi_
     CHECK_THAT(verdict, Catch::Contains("nscd and bullet agree on Z_bulk within 2 standard errors (6.0000 ± "));
     fs::remove_all(dir);
   }
+}
+
+TEST_CASE("the verdict says whose contact networks carry self-stresses and how many motions are free") {
+  const fs::path dir = makeStudy("rigidity", false);
+  study::ReportOptions o;
+  o.gnuplot.clear();
+  const std::string md = slurp(study::writeReport(dir, dir / "report", o).markdown);
+  CHECK(md.find("nscd's 15 packings: no self-stress (isostatic: the geometry fixes the contact forces), 1 % of "
+                "their motions free (mechanisms, mean).") != std::string::npos);
+  CHECK(md.find("bullet's 15 packings: 0 without self-stress, 10 % of their motions free (mechanisms, mean).") !=
+        std::string::npos);
+  // Each run's numbers are in the coordination table.
+  CHECK(tableKeys(readTable(dir / "report", "coordination.csv")).count("rigidity/self_stresses") == 1);
+  fs::remove_all(dir);
 }
 
 TEST_CASE("a number without a standard error is shown as such and the verdict does not judge it") {

@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "analysis/coordination.hpp"
+#include "analysis/rigidity.hpp"
 #include "core/box.hpp"
 #include "core/deposition.hpp"
 #include "core/grain.hpp"
@@ -157,6 +159,15 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
     CHECK(floorReaction(out.packing) == Approx(weight).epsilon(1e-8));
   else
     CHECK(floorReaction(out.packing) <= weight * (1.0 + 1e-8));
+  // Rigid, frictionless and at rest: the contact network is isostatic, no self-stress (Roux,
+  // PRE 61, 6802, 2000), whatever the pile's local coordination.
+  if (mu == 0.0) {
+    const auto rigidity = analysis::sphereRigidity(
+        out.packing, analysis::forceCarryingContacts(out.packing, *out.packing.contacts, false));
+    REQUIRE(rigidity.has_value());
+    CHECK(rigidity->contacts > 2 * static_cast<int>(dep.grains.size()));
+    CHECK(rigidity->selfStresses == 0);
+  }
 }
 
 TEST_CASE("quasi-static protocol: spheres spun by wall friction do not hold the fall back") {
