@@ -74,7 +74,7 @@ struct Analysis {
   Interpenetration interpenetration;
   bool geometricContacts = false;
   Coordination coordination;
-  std::optional<Rigidity> rigidity;  ///< frictionless sphere packings (rigidity.hpp)
+  std::optional<Rigidity> rigidity;  ///< between frictionless walls (rigidity.hpp)
   std::string rigidityWhyNot;        ///< why `rigidity` is absent
   Fabric fabric;
   Nematic nematic;

@@ -46,6 +46,10 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
         m.branch = packing.box.minimumImage(packing.grains[b].position - packing.grains[a].position);
     }
     m.normalForce += c.normalForce();
+    for (const core::ContactPoint& point : c.points) {
+      m.points.push_back(point.position);
+      m.pointForces.push_back(point.normalForce);
+    }
   }
   double sum = 0.0;
   int count = 0;
@@ -58,6 +62,14 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
   std::vector<CountedContact> out;
   for (auto& [key, m] : merged) {
     if (!geometric && !(m.normalForce > forceThreshold * mean && m.normalForce > 0.0)) continue;
+    if (!geometric) {
+      // A point within the alert distance but open carries no force at rest: not a constraint.
+      std::vector<core::Vec3> carrying;
+      for (std::size_t i = 0; i < m.points.size(); ++i)
+        if (m.pointForces[i] > forceThreshold * mean) carrying.push_back(m.points[i]);
+      m.points = std::move(carrying);
+    }
+    m.pointForces.clear();
     const core::Grain& ga = packing.grains[m.a];
     if (ga.shape == core::ShapeKind::Pinacoid) {
       const PlacedGrain pa(ga);

@@ -937,12 +937,13 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
 
 // nscd against Bullet (the first two backends) for every family and summary quantity.
 // What the finished runs of (series, backend) say of their contact networks' rigidity
-// (docs/model.md, "Isostaticity"), as a sentence of the verdict: how many have no self-stress,
-// and the share of free motions (mechanisms k / 3N). Empty when none has the block (pinacoids,
-// frictional walls, results from before the block existed).
+// (docs/model.md, "Isostaticity"), as a sentence of the verdict: how many carry self-stresses,
+// whether any lies between grains rather than through the floor and walls, and the share of free
+// motions (mechanisms k / n_dof). Empty when none has the block (frictional walls, results from
+// before the block existed).
 std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const std::string& backend) {
-  int runs = 0, unstressed = 0;
-  double freeShare = 0.0;
+  int runs = 0, stressed = 0, stressedBetweenGrains = 0;
+  double perConstraint = 0.0, freeShare = 0.0;
   for (const auto& [k, byBackend] : study.groups) {
     if (seriesOf(k) != sk || !byBackend.count(backend)) continue;
     for (const RunRecord* r : byBackend.at(backend)) {
@@ -951,20 +952,28 @@ std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const 
         const auto it = r->values.find(key);
         return it == r->values.end() ? std::optional<double>() : it->second;
       };
-      const auto h = value("rigidity/self_stresses"), k3 = value("rigidity/mechanisms"),
+      const auto h = value("rigidity/self_stresses"), hGrains = value("rigidity/self_stresses_between_grains"),
+                 m = value("rigidity/constraints"), k3 = value("rigidity/mechanisms"),
                  dof = value("rigidity/degrees_of_freedom");
-      if (!h || !k3 || !dof || !(*dof > 0.0)) continue;
+      if (!h || !hGrains || !m || !k3 || !dof || !(*dof > 0.0)) continue;
       ++runs;
-      unstressed += *h == 0.0;
+      stressed += *h > 0.0;
+      stressedBetweenGrains += *hGrains > 0.0;
+      perConstraint += *m > 0.0 ? *h / *m : 0.0;
       freeShare += *k3 / *dof;
     }
   }
   if (runs == 0) return "";
-  const std::string share = fmt::format("{:.2g} % of their motions free (mechanisms, mean)", 100.0 * freeShare / runs);
-  if (unstressed == runs)
+  const std::string free = fmt::format("{:.2g} % of their motions free (mechanisms, mean)", 100.0 * freeShare / runs);
+  if (stressed == 0)
     return fmt::format(" {}'s {} packing{}: no self-stress (isostatic: the geometry fixes the contact forces), {}.",
-                       backend, runs, runs == 1 ? "" : "s", share);
-  return fmt::format(" {}'s {} packings: {} without self-stress, {}.", backend, runs, unstressed, share);
+                       backend, runs, runs == 1 ? "" : "s", free);
+  return fmt::format(" {}'s {} packings: {} with self-stresses, {:.2g} per constraint (mean), {}; {}.", backend, runs,
+                     stressed, perConstraint / runs,
+                     stressedBetweenGrains == 0
+                         ? std::string("all through the floor or the walls, none between grains alone")
+                         : fmt::format("{} with some between grains", stressedBetweenGrains),
+                     free);
 }
 
 void addVerdictSection(Document& doc, const StudyView& study, const StudySummary& summary) {

@@ -14,7 +14,7 @@ using confpack::testing::sphere;
 
 namespace {
 std::optional<analysis::Rigidity> geometricRigidity(const core::Packing& p, std::string* whyNot = nullptr) {
-  return analysis::sphereRigidity(p, analysis::forceCarryingContacts(p, analysis::geometricContacts(p), true), whyNot);
+  return analysis::contactRigidity(p, analysis::forceCarryingContacts(p, analysis::geometricContacts(p), true), whyNot);
 }
 }  // namespace
 
@@ -32,6 +32,8 @@ TEST_CASE("a simple cubic crystal on the floor: one self-stress and one mechanis
   CHECK(r->degreesOfFreedom == 3 * nx * ny * nz);
   CHECK(r->selfStresses == nz * (nx + ny));
   CHECK(r->mechanisms == nz * (nx + ny));
+  // The rings are all between grains; the floor only holds the columns up.
+  CHECK(r->selfStressesBetweenGrains == nz * (nx + ny));
   CHECK(r->rank == r->contacts - r->selfStresses);
 }
 
@@ -61,16 +63,95 @@ TEST_CASE("two beads wedged between the side walls carry one self-stress", "[ana
   CHECK(r->contacts == 5);
   CHECK(r->selfStresses == 1);
   CHECK(r->mechanisms == 2);
+  // It runs through the walls: between the grains alone, no self-stress.
+  CHECK(r->selfStressesBetweenGrains == 0);
 }
 
-TEST_CASE("rigidity is not defined for pinacoids nor between frictional walls, and says why", "[analysis][rigidity]") {
+TEST_CASE("rigidity is not defined between frictional walls, and says why", "[analysis][rigidity]") {
   core::Packing p = simpleCubic(4, 4, 2);
   std::string why;
   p.walls.friction = 0.5;
   CHECK_FALSE(geometricRigidity(p, &why).has_value());
   CHECK(why == "defined between frictionless walls only");
-  p.walls.friction = 0.0;
-  p.grains.push_back(confpack::testing::pinacoid(1.0, core::Vec3(2.0, 2.0, 3.0)));
-  CHECK_FALSE(analysis::sphereRigidity(p, {}, &why).has_value());
-  CHECK(why == "defined for sphere packings only");
+}
+
+namespace {
+// A face contact as a backend reports it: four points of a square in the contact plane (only the
+// points and the grain's centroid enter the count, not the grain's shape).
+core::Contact faceContact(int a, int b, const core::Vec3& normal, const core::Vec3& centre, const core::Vec3& u,
+                          const core::Vec3& v) {
+  core::Contact c;
+  c.a = a;
+  c.b = b;
+  c.type = core::ContactType::Triple;
+  c.normal = normal;
+  for (const double su : {-0.4, 0.4})
+    for (const double sv : {-0.4, 0.4}) {
+      core::ContactPoint point;
+      point.position = centre + su * u + sv * v;
+      point.normalForce = 1.0;
+      c.points.push_back(point);
+    }
+  return c;
+}
+}  // namespace
+
+TEST_CASE(
+    "a pinacoid's face contact of four points is three constraints: a block on the floor, wedged "
+    "between the walls",
+    "[analysis][rigidity]") {
+  // A grain at the floor's centre, its contact a square of four points: 3 constraints (z and the
+  // two tilts), not 4, so no self-stress; free: x, y and the turn about z.
+  core::Packing p;
+  p.box.lengthX = 4.0;
+  p.box.width = 1.0;
+  p.grains = {confpack::testing::pinacoid(1.0, core::Vec3(2.0, 0.5, 0.5))};
+  const core::Vec3 x = core::Vec3::UnitX(), y = core::Vec3::UnitY(), z = core::Vec3::UnitZ();
+  const int floor = static_cast<int>(core::WallId::Floor);
+  std::vector<core::Contact> contacts = {faceContact(0, floor, -z, core::Vec3(2.0, 0.5, 0.0), x, y)};
+  auto r = analysis::contactRigidity(p, analysis::forceCarryingContacts(p, contacts, false));
+  REQUIRE(r.has_value());
+  CHECK(r->contacts == 1);
+  CHECK(r->constraints == 3);
+  CHECK(r->degreesOfFreedom == 6);
+  CHECK(r->selfStresses == 0);
+  CHECK(r->mechanisms == 3);
+  // Faces on both side walls too (W = its width): each wall fixes y and the two tilts out of its
+  // plane (about x and z). With the floor that is y, z and all three turns: rank 5 of 9
+  // constraints, h = 4 (the grain squeezed between the walls, and twisted against them), k = 1
+  // (sliding along x).
+  contacts.push_back(faceContact(0, static_cast<int>(core::WallId::SideLow), -y, core::Vec3(2.0, 0.0, 0.5), x, z));
+  contacts.push_back(faceContact(0, static_cast<int>(core::WallId::SideHigh), y, core::Vec3(2.0, 1.0, 0.5), x, z));
+  r = analysis::contactRigidity(p, analysis::forceCarryingContacts(p, contacts, false));
+  REQUIRE(r.has_value());
+  CHECK(r->constraints == 9);
+  CHECK(r->rank == 5);
+  CHECK(r->selfStresses == 4);
+  CHECK(r->mechanisms == 1);
+}
+
+TEST_CASE("a pinacoid's edge contact is two constraints and a vertex contact one", "[analysis][rigidity]") {
+  core::Packing p;
+  p.box.lengthX = 4.0;
+  p.box.width = 4.0;
+  p.grains = {confpack::testing::pinacoid(1.0, core::Vec3(2.0, 2.0, 0.5))};
+  const int floor = static_cast<int>(core::WallId::Floor);
+  core::Contact edge;
+  edge.a = 0;
+  edge.b = floor;
+  edge.normal = -core::Vec3::UnitZ();
+  // An edge on the floor, reported as three collinear points: two constraints (z, the tilt across it).
+  for (const double s : {-0.4, 0.0, 0.4})
+    edge.points.push_back({core::Vec3(2.0 + s, 2.0, 0.0), 1.0, core::Vec3::Zero(), 0.0});
+  auto r = analysis::contactRigidity(p, analysis::forceCarryingContacts(p, {edge}, false));
+  REQUIRE(r.has_value());
+  CHECK(r->constraints == 2);
+  CHECK(r->selfStresses == 0);
+  CHECK(r->mechanisms == 4);
+  core::Contact vertex = edge;
+  vertex.points.resize(1);
+  r = analysis::contactRigidity(p, analysis::forceCarryingContacts(p, {vertex}, false));
+  REQUIRE(r.has_value());
+  CHECK(r->constraints == 1);
+  CHECK(r->mechanisms == 5);
 }

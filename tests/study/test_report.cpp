@@ -57,8 +57,10 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
       // nscd's networks isostatic, Bullet's with one self-stress in ten contacts.
       {"rigidity",
        {{"contacts", 300},
+        {"constraints", 300},
         {"degrees_of_freedom", 300},
         {"self_stresses", nscd ? 0 : 30},
+        {"self_stresses_between_grains", nscd ? 0 : 20},
         {"mechanisms", nscd ? 3 : 30}}},
       {"anisotropy", 0.1},
       {"nematic", {{"bulk", nullptr}, {"boundary", nullptr}}},
@@ -491,15 +493,15 @@ TEST_CASE("cross-solver verdict: agree on a shared law, differ on a shifted phi_
   }
 }
 
-TEST_CASE("the verdict says whose contact networks carry self-stresses and how many motions are free") {
+TEST_CASE("the verdict says whose contact networks carry self-stresses, where, and how many motions are free") {
   const fs::path dir = makeStudy("rigidity", false);
   study::ReportOptions o;
   o.gnuplot.clear();
   const std::string md = slurp(study::writeReport(dir, dir / "report", o).markdown);
   CHECK(md.find("nscd's 15 packings: no self-stress (isostatic: the geometry fixes the contact forces), 1 % of "
                 "their motions free (mechanisms, mean).") != std::string::npos);
-  CHECK(md.find("bullet's 15 packings: 0 without self-stress, 10 % of their motions free (mechanisms, mean).") !=
-        std::string::npos);
+  CHECK(md.find("bullet's 15 packings: 15 with self-stresses, 0.1 per constraint (mean), 15 with some between "
+                "grains; 10 % of their motions free (mechanisms, mean).") != std::string::npos);
   // Each run's numbers are in the coordination table.
   CHECK(tableKeys(readTable(dir / "report", "coordination.csv")).count("rigidity/self_stresses") == 1);
   fs::remove_all(dir);

@@ -162,7 +162,7 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
   // Rigid, frictionless and at rest: the contact network is isostatic, no self-stress (Roux,
   // PRE 61, 6802, 2000), whatever the pile's local coordination.
   if (mu == 0.0) {
-    const auto rigidity = analysis::sphereRigidity(
+    const auto rigidity = analysis::contactRigidity(
         out.packing, analysis::forceCarryingContacts(out.packing, *out.packing.contacts, false));
     REQUIRE(rigidity.has_value());
     CHECK(rigidity->contacts > 2 * static_cast<int>(dep.grains.size()));
