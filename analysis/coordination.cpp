@@ -64,10 +64,11 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
     if (!geometric && !(m.normalForce > forceThreshold * mean && m.normalForce > 0.0)) continue;
     if (!geometric) {
       // A point within the alert distance but open carries no force at rest: not a constraint.
+      // (A contact whose force is spread over points each below the threshold keeps them all.)
       std::vector<core::Vec3> carrying;
       for (std::size_t i = 0; i < m.points.size(); ++i)
         if (m.pointForces[i] > forceThreshold * mean) carrying.push_back(m.points[i]);
-      m.points = std::move(carrying);
+      if (!carrying.empty()) m.points = std::move(carrying);
     }
     m.pointForces.clear();
     const core::Grain& ga = packing.grains[m.a];

@@ -109,8 +109,8 @@ std::optional<Rigidity> contactRigidity(const core::Packing& packing, const std:
     Eigen::SparseMatrix<double> g(rows, r.degreesOfFreedom);
     g.setFromTriplets(kept.begin(), kept.end());
     g.makeCompressed();
+    const auto lock = core::blasLock();  // before the factor, which its destructor frees
     Eigen::SPQR<Eigen::SparseMatrix<double>> qr;
-    const auto lock = core::blasLock();
     qr.compute(g);
     return qr.info() == Eigen::Success ? static_cast<long>(qr.rank()) : -1;
   };
