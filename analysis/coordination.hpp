@@ -47,7 +47,7 @@ struct CountedContact {
   core::Vec3 branch = core::Vec3::Zero();   ///< minimum-image x_b - x_a (grain pairs) [d_L]
   double normalForce = 0.0;                 ///< summed over merged contacts and points
   /// World positions of the merged contacts' force-carrying points (each point's own force above
-  /// the same threshold; every point of a geometric contact) [d_L].
+  /// the same threshold, or every point if none is; every point of a geometric contact) [d_L].
   std::vector<core::Vec3> points;
   std::vector<double> pointForces;  ///< the points' normal forces, while merging (emptied after)
 };

@@ -87,9 +87,14 @@ void runAnalyze(AnalyzeState& st) {
     if (!st.quiet) {
       const auto& phi = j["solid_fraction"];
       const auto& z = j["coordination"]["Z"];
-      fmt::print("analyze: {} grains, phi = {}, Z = {}{} -> {}\n", result.grains,
+      // The network's self-stresses and mechanisms, where defined (docs/model.md, "Isostaticity").
+      const std::string rigidity = result.rigidity
+                                       ? fmt::format(", {} self-stresses, {} mechanisms", result.rigidity->selfStresses,
+                                                     result.rigidity->mechanisms)
+                                       : "";
+      fmt::print("analyze: {} grains, phi = {}, Z = {}{}{} -> {}\n", result.grains,
                  phi.is_number() ? fmt::format("{:.5f}", phi.get<double>()) : "n/a",
-                 z.is_number() ? fmt::format("{:.3f}", z.get<double>()) : "n/a",
+                 z.is_number() ? fmt::format("{:.3f}", z.get<double>()) : "n/a", rigidity,
                  result.geometricContacts ? " (geometric contacts)" : "", output.target().string());
     }
   });
