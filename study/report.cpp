@@ -966,8 +966,8 @@ std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const 
   if (runs == 0) return "";
   const std::string free = fmt::format("{:.2g} % of their motions free (mechanisms, mean)", 100.0 * freeShare / runs);
   if (stressed == 0)
-    return fmt::format(" {}'s {} packing{}: no self-stress (isostatic: the geometry fixes the contact forces), {}.",
-                       backend, runs, runs == 1 ? "" : "s", free);
+    return fmt::format(" {}'s {} packing{}: no self-stress (the geometry fixes the contact forces), {}.", backend, runs,
+                       runs == 1 ? "" : "s", free);
   return fmt::format(" {}'s {} packings: {} with self-stresses, {:.2g} per constraint (mean), {}; {}.", backend, runs,
                      stressed, perConstraint / runs,
                      stressedBetweenGrains == 0

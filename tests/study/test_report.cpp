@@ -498,8 +498,8 @@ TEST_CASE("the verdict says whose contact networks carry self-stresses, where, a
   study::ReportOptions o;
   o.gnuplot.clear();
   const std::string md = slurp(study::writeReport(dir, dir / "report", o).markdown);
-  CHECK(md.find("nscd's 15 packings: no self-stress (isostatic: the geometry fixes the contact forces), 1 % of "
-                "their motions free (mechanisms, mean).") != std::string::npos);
+  CHECK(md.find("nscd's 15 packings: no self-stress (the geometry fixes the contact forces), 1 % of their "
+                "motions free (mechanisms, mean).") != std::string::npos);
   CHECK(md.find("bullet's 15 packings: 15 with self-stresses, 0.1 per constraint (mean), 15 with some between "
                 "grains; 10 % of their motions free (mechanisms, mean).") != std::string::npos);
   // Each run's numbers are in the coordination table.
