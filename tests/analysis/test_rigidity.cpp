@@ -1,6 +1,7 @@
 // Rigidity of frictionless sphere networks (analysis/rigidity.hpp; docs/model.md, "Isostaticity"):
 // self-stress states and mechanisms counted exactly on networks whose rank is known by hand.
 #include <catch2/catch.hpp>
+#include <vector>
 
 #include "analysis/coordination.hpp"
 #include "analysis/geometric_contacts.hpp"
@@ -13,6 +14,15 @@ using confpack::testing::simpleCubic;
 using confpack::testing::sphere;
 
 namespace {
+// A box 4 d_L long (periodic along x) and `width` wide, between frictionless walls, holding `grains`.
+core::Packing packingOf(double width, std::vector<core::Grain> grains) {
+  core::Packing p;
+  p.box.lengthX = 4.0;
+  p.box.width = width;
+  p.grains = std::move(grains);
+  return p;
+}
+
 std::optional<analysis::Rigidity> geometricRigidity(const core::Packing& p, std::string* whyNot = nullptr) {
   return analysis::contactRigidity(p, analysis::forceCarryingContacts(p, analysis::geometricContacts(p), true), whyNot);
 }
@@ -40,10 +50,9 @@ TEST_CASE("a simple cubic crystal on the floor: one self-stress and one mechanis
 TEST_CASE("a bead column is isostatic, each bead free to glide sideways", "[analysis][rigidity]") {
   // Five beads on the floor, each on the one below: 5 vertical contacts fix the 5 heights, and
   // nothing holds the 10 horizontal motions on frictionless contacts.
-  core::Packing p;
-  p.box.lengthX = 4.0;
-  p.box.width = 4.0;
-  for (int k = 0; k < 5; ++k) p.grains.push_back(sphere(1.0, core::Vec3(2.0, 2.0, 0.5 + k)));
+  std::vector<core::Grain> column;
+  for (int k = 0; k < 5; ++k) column.push_back(sphere(1.0, core::Vec3(2.0, 2.0, 0.5 + k)));
+  const core::Packing p = packingOf(4.0, column);
   const auto r = geometricRigidity(p);
   REQUIRE(r.has_value());
   CHECK(r->contacts == 5);
@@ -54,10 +63,8 @@ TEST_CASE("a bead column is isostatic, each bead free to glide sideways", "[anal
 TEST_CASE("two beads wedged between the side walls carry one self-stress", "[analysis][rigidity]") {
   // W = 2 d: wall, bead, bead, wall touch along y, three contacts on two motions; both beads on the
   // floor. Rank 4 of 5 contacts and 6 motions: h = 1 (the row squeezed), k = 2 (gliding along x).
-  core::Packing p;
-  p.box.lengthX = 4.0;
-  p.box.width = 2.0;
-  p.grains = {sphere(1.0, core::Vec3(2.0, 0.5, 0.5)), sphere(1.0, core::Vec3(2.0, 1.5, 0.5))};
+  const core::Packing p =
+      packingOf(2.0, {sphere(1.0, core::Vec3(2.0, 0.5, 0.5)), sphere(1.0, core::Vec3(2.0, 1.5, 0.5))});
   const auto r = geometricRigidity(p);
   REQUIRE(r.has_value());
   CHECK(r->contacts == 5);
@@ -102,10 +109,7 @@ TEST_CASE(
     "[analysis][rigidity]") {
   // A grain at the floor's centre, its contact a square of four points: 3 constraints (z and the
   // two tilts), not 4, so no self-stress; free: x, y and the turn about z.
-  core::Packing p;
-  p.box.lengthX = 4.0;
-  p.box.width = 1.0;
-  p.grains = {confpack::testing::pinacoid(1.0, core::Vec3(2.0, 0.5, 0.5))};
+  const core::Packing p = packingOf(1.0, {confpack::testing::pinacoid(1.0, core::Vec3(2.0, 0.5, 0.5))});
   const core::Vec3 x = core::Vec3::UnitX(), y = core::Vec3::UnitY(), z = core::Vec3::UnitZ();
   const int floor = static_cast<int>(core::WallId::Floor);
   std::vector<core::Contact> contacts = {faceContact(0, floor, -z, core::Vec3(2.0, 0.5, 0.0), x, y)};
@@ -131,10 +135,7 @@ TEST_CASE(
 }
 
 TEST_CASE("a pinacoid's edge contact is two constraints and a vertex contact one", "[analysis][rigidity]") {
-  core::Packing p;
-  p.box.lengthX = 4.0;
-  p.box.width = 4.0;
-  p.grains = {confpack::testing::pinacoid(1.0, core::Vec3(2.0, 2.0, 0.5))};
+  const core::Packing p = packingOf(4.0, {confpack::testing::pinacoid(1.0, core::Vec3(2.0, 2.0, 0.5))});
   const int floor = static_cast<int>(core::WallId::Floor);
   core::Contact edge;
   edge.a = 0;
