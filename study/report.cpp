@@ -935,7 +935,6 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
   doc.bullets(definitions);
 }
 
-// nscd against Bullet (the first two backends) for every family and summary quantity.
 // What the finished runs of (series, backend) say of their contact networks' rigidity
 // (docs/model.md, "Isostaticity"), as a sentence of the verdict: how many carry self-stresses,
 // whether any lies between grains rather than through the floor and walls, and the share of free
@@ -976,6 +975,7 @@ std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const 
                      free);
 }
 
+// nscd against Bullet (the first two backends) for every family and summary quantity.
 void addVerdictSection(Document& doc, const StudyView& study, const StudySummary& summary) {
   doc.heading(2, "Cross-solver verdict");
   if (!study.pair()) {
@@ -1386,8 +1386,12 @@ std::string runBuilds(const StudyView& study) {
   std::vector<std::pair<std::string, std::size_t>> builds;
   for (const RunRecord& r : study.records) {
     if (r.status != RunStatus::Done) continue;
-    const std::string version = r.result.value("confpack_version", std::string());
-    const std::string revision = r.result.value("confpack_revision", std::string());
+    const auto text = [&](const char* key) {  // a hand-edited result may hold anything there
+      const auto it = r.result.is_object() ? r.result.find(key) : r.result.end();
+      return it != r.result.end() && it->is_string() ? it->get<std::string>() : std::string();
+    };
+    const std::string version = text("confpack_version");
+    const std::string revision = text("confpack_revision");
     const std::string build = version.empty()    ? "a build that recorded no version"
                               : revision.empty() ? fmt::format("confpack {} (revision not recorded)", version)
                                                  : fmt::format("confpack {} at revision {}", version, revision);
