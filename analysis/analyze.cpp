@@ -92,7 +92,7 @@ Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
   const std::vector<CountedContact> counted =
       forceCarryingContacts(packing, contacts, a.geometricContacts, options.coordination.forceThreshold);
   a.coordination = coordination(packing, a.region, counted, a.geometricContacts, options.coordination);
-  a.rigidity = contactRigidity(packing, counted, &a.rigidityWhyNot);
+  a.rigidity = contactRigidity(packing, counted);
   a.fabric = fabric(packing, a.region, counted, options.fabric);
   a.nematic = nematic(packing, a.region, options.boundaryDistance);
   a.homogeneity = homogeneity(packing, a.region, options.homogeneity);
@@ -152,9 +152,9 @@ nlohmann::json toJson(const Analysis& a) {
                      {"constraints", a.rigidity->constraints},
                      {"degrees_of_freedom", a.rigidity->degreesOfFreedom},
                      {"rank", a.rigidity->rank},
-                     {"self_stresses", a.rigidity->selfStresses},
-                     {"self_stresses_between_grains", a.rigidity->selfStressesBetweenGrains},
-                     {"mechanisms", a.rigidity->mechanisms}};
+                     {"self_stresses", a.rigidity->selfStresses()},
+                     {"self_stresses_between_grains", a.rigidity->selfStressesBetweenGrains()},
+                     {"mechanisms", a.rigidity->mechanisms()}};
   else
     j["rigidity"] = nullptr;
 

@@ -15,7 +15,6 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <string>
 #include <string_view>
 
 #include "analysis/bulk_region.hpp"
@@ -75,7 +74,6 @@ struct Analysis {
   bool geometricContacts = false;
   Coordination coordination;
   std::optional<Rigidity> rigidity;  ///< between frictionless walls (rigidity.hpp)
-  std::string rigidityWhyNot;        ///< why `rigidity` is absent
   Fabric fabric;
   Nematic nematic;
   Homogeneity homogeneity;

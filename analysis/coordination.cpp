@@ -27,6 +27,7 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
   const int n = static_cast<int>(packing.grains.size());
   // Merge by unordered pair; the normal is kept oriented from the smaller index.
   std::map<std::pair<int, int>, CountedContact> merged;
+  std::map<std::pair<int, int>, std::vector<double>> pointForces;  // of merged's points, in order
   for (const core::Contact& c : contacts) {
     if (c.a < 0 || c.a >= n || c.b >= n || c.a == c.b || (core::isWall(c.b) && c.b < -3))
       throw std::invalid_argument(fmt::format("contacts: invalid pair ({}, {})", c.a, c.b));
@@ -46,9 +47,10 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
         m.branch = packing.box.minimumImage(packing.grains[b].position - packing.grains[a].position);
     }
     m.normalForce += c.normalForce();
+    std::vector<double>& forces = pointForces[{a, b}];
     for (const core::ContactPoint& point : c.points) {
       m.points.push_back(point.position);
-      m.pointForces.push_back(point.normalForce);
+      forces.push_back(point.normalForce);
     }
   }
   double sum = 0.0;
@@ -65,12 +67,12 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
     if (!geometric) {
       // A point within the alert distance but open carries no force at rest: not a constraint.
       // (A contact whose force is spread over points each below the threshold keeps them all.)
+      const std::vector<double>& forces = pointForces.at(key);
       std::vector<core::Vec3> carrying;
       for (std::size_t i = 0; i < m.points.size(); ++i)
-        if (m.pointForces[i] > forceThreshold * mean) carrying.push_back(m.points[i]);
+        if (forces[i] > forceThreshold * mean) carrying.push_back(m.points[i]);
       if (!carrying.empty()) m.points = std::move(carrying);
     }
-    m.pointForces.clear();
     const core::Grain& ga = packing.grains[m.a];
     if (ga.shape == core::ShapeKind::Pinacoid) {
       const PlacedGrain pa(ga);

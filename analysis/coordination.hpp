@@ -49,7 +49,6 @@ struct CountedContact {
   /// World positions of the merged contacts' force-carrying points (each point's own force above
   /// the same threshold, or every point if none is; every point of a geometric contact) [d_L].
   std::vector<core::Vec3> points;
-  std::vector<double> pointForces;  ///< the points' normal forces, while merging (emptied after)
 };
 
 /// The force-carrying contacts (definition above), merged by pair and classified.

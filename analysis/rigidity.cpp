@@ -88,10 +88,8 @@ std::optional<Rigidity> contactRigidity(const core::Packing& packing, const std:
     }
   }
   r.constraints = row;
-  if (row == 0 || n == 0) {
-    r.mechanisms = r.degreesOfFreedom;
-    return r;
-  }
+  r.grainConstraints = static_cast<int>(std::count(wallRow.begin(), wallRow.end(), 0));
+  if (row == 0) return r;
   // The rank of the rows `keep` selects, or -1 if the factorisation failed. SuiteSparseQR: a
   // multifrontal rank-revealing QR (its default tolerance, 20 (m + n_dof) eps times the largest
   // column norm; on a 1,064-pinacoid pile the singular values of G jump from 5e-16 to 1.9e-3, so
@@ -118,10 +116,7 @@ std::optional<Rigidity> contactRigidity(const core::Packing& packing, const std:
   const long betweenGrains = rankOf([&](int i) { return !wallRow[static_cast<std::size_t>(i)]; });
   if (all < 0 || betweenGrains < 0) return fail("the QR factorisation failed");
   r.rank = static_cast<int>(all);
-  r.selfStresses = r.constraints - r.rank;
-  r.mechanisms = r.degreesOfFreedom - r.rank;
-  const int grainRows = static_cast<int>(std::count(wallRow.begin(), wallRow.end(), 0));
-  r.selfStressesBetweenGrains = grainRows - static_cast<int>(betweenGrains);
+  r.grainRank = static_cast<int>(betweenGrains);
   return r;
 }
 

@@ -34,12 +34,15 @@ struct Rigidity {
   int constraints = 0;       ///< m: one per sphere contact; 1, 2 or 3 per pinacoid contact
   int degreesOfFreedom = 0;  ///< n_dof: 3 per sphere, 6 per pinacoid
   int rank = 0;              ///< rank of G, from SuiteSparseQR's rank-revealing QR
-  int selfStresses = 0;      ///< h = m - rank
-  int mechanisms = 0;        ///< k = n_dof - rank
-  /// h of the grain-grain contacts alone: the self-stresses that the floor and the side walls take
-  /// no part in (a grain lying flat on the floor and touching a neighbour's face has one more
+  int grainConstraints = 0;  ///< the constraints between two grains (floor and side walls left out)
+  int grainRank = 0;         ///< the rank of their rows of G
+
+  int selfStresses() const { return constraints - rank; }     ///< h = m - rank
+  int mechanisms() const { return degreesOfFreedom - rank; }  ///< k = n_dof - rank
+  /// h of the grain-grain constraints alone: the self-stresses that the floor and the side walls
+  /// take no part in (a grain lying flat on the floor and touching a neighbour's face has one more
   /// constraint than its motions, a degeneracy of the flat boundary rather than of the packing).
-  int selfStressesBetweenGrains = 0;
+  int selfStressesBetweenGrains() const { return grainConstraints - grainRank; }
 };
 
 /// Above this many grains the rigidity is not computed (null): SuiteSparseQR's factor grows faster

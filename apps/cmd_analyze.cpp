@@ -89,8 +89,8 @@ void runAnalyze(AnalyzeState& st) {
       const auto& z = j["coordination"]["Z"];
       // The network's self-stresses and mechanisms, where defined (docs/model.md, "Isostaticity").
       const std::string rigidity = result.rigidity
-                                       ? fmt::format(", {} self-stresses, {} mechanisms", result.rigidity->selfStresses,
-                                                     result.rigidity->mechanisms)
+                                       ? fmt::format(", {} self-stresses, {} mechanisms",
+                                                     result.rigidity->selfStresses(), result.rigidity->mechanisms())
                                        : "";
       fmt::print("analyze: {} grains, phi = {}, Z = {}{}{} -> {}\n", result.grains,
                  phi.is_number() ? fmt::format("{:.5f}", phi.get<double>()) : "n/a",

@@ -40,11 +40,11 @@ TEST_CASE("a simple cubic crystal on the floor: one self-stress and one mechanis
   REQUIRE(r.has_value());
   CHECK(r->contacts == 3 * nx * ny * nz);
   CHECK(r->degreesOfFreedom == 3 * nx * ny * nz);
-  CHECK(r->selfStresses == nz * (nx + ny));
-  CHECK(r->mechanisms == nz * (nx + ny));
+  CHECK(r->selfStresses() == nz * (nx + ny));
+  CHECK(r->mechanisms() == nz * (nx + ny));
   // The rings are all between grains; the floor only holds the columns up.
-  CHECK(r->selfStressesBetweenGrains == nz * (nx + ny));
-  CHECK(r->rank == r->contacts - r->selfStresses);
+  CHECK(r->selfStressesBetweenGrains() == nz * (nx + ny));
+  CHECK(r->rank == 3 * nx * ny * nz - nz * (nx + ny));
 }
 
 TEST_CASE("a bead column is isostatic, each bead free to glide sideways", "[analysis][rigidity]") {
@@ -56,8 +56,8 @@ TEST_CASE("a bead column is isostatic, each bead free to glide sideways", "[anal
   const auto r = geometricRigidity(p);
   REQUIRE(r.has_value());
   CHECK(r->contacts == 5);
-  CHECK(r->selfStresses == 0);
-  CHECK(r->mechanisms == 10);
+  CHECK(r->selfStresses() == 0);
+  CHECK(r->mechanisms() == 10);
 }
 
 TEST_CASE("two beads wedged between the side walls carry one self-stress", "[analysis][rigidity]") {
@@ -68,10 +68,10 @@ TEST_CASE("two beads wedged between the side walls carry one self-stress", "[ana
   const auto r = geometricRigidity(p);
   REQUIRE(r.has_value());
   CHECK(r->contacts == 5);
-  CHECK(r->selfStresses == 1);
-  CHECK(r->mechanisms == 2);
+  CHECK(r->selfStresses() == 1);
+  CHECK(r->mechanisms() == 2);
   // It runs through the walls: between the grains alone, no self-stress.
-  CHECK(r->selfStressesBetweenGrains == 0);
+  CHECK(r->selfStressesBetweenGrains() == 0);
 }
 
 TEST_CASE("rigidity is not defined between frictional walls, and says why", "[analysis][rigidity]") {
@@ -118,8 +118,8 @@ TEST_CASE(
   CHECK(r->contacts == 1);
   CHECK(r->constraints == 3);
   CHECK(r->degreesOfFreedom == 6);
-  CHECK(r->selfStresses == 0);
-  CHECK(r->mechanisms == 3);
+  CHECK(r->selfStresses() == 0);
+  CHECK(r->mechanisms() == 3);
   // Faces on both side walls too (W = its width): each wall fixes y and the two tilts out of its
   // plane (about x and z). With the floor that is y, z and all three turns: rank 5 of 9
   // constraints, h = 4 (the grain squeezed between the walls, and twisted against them), k = 1
@@ -130,8 +130,8 @@ TEST_CASE(
   REQUIRE(r.has_value());
   CHECK(r->constraints == 9);
   CHECK(r->rank == 5);
-  CHECK(r->selfStresses == 4);
-  CHECK(r->mechanisms == 1);
+  CHECK(r->selfStresses() == 4);
+  CHECK(r->mechanisms() == 1);
 }
 
 TEST_CASE("a pinacoid's edge contact is two constraints and a vertex contact one", "[analysis][rigidity]") {
@@ -147,12 +147,12 @@ TEST_CASE("a pinacoid's edge contact is two constraints and a vertex contact one
   auto r = analysis::contactRigidity(p, analysis::forceCarryingContacts(p, {edge}, false));
   REQUIRE(r.has_value());
   CHECK(r->constraints == 2);
-  CHECK(r->selfStresses == 0);
-  CHECK(r->mechanisms == 4);
+  CHECK(r->selfStresses() == 0);
+  CHECK(r->mechanisms() == 4);
   core::Contact vertex = edge;
   vertex.points.resize(1);
   r = analysis::contactRigidity(p, analysis::forceCarryingContacts(p, {vertex}, false));
   REQUIRE(r.has_value());
   CHECK(r->constraints == 1);
-  CHECK(r->mechanisms == 5);
+  CHECK(r->mechanisms() == 5);
 }

@@ -166,7 +166,7 @@ TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at re
         out.packing, analysis::forceCarryingContacts(out.packing, *out.packing.contacts, false));
     REQUIRE(rigidity.has_value());
     CHECK(rigidity->contacts > 2 * static_cast<int>(dep.grains.size()));
-    CHECK(rigidity->selfStresses == 0);
+    CHECK(rigidity->selfStresses() == 0);
   }
 }
 
