@@ -109,6 +109,11 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
                  "Refuse a deposit of more grains than this (a guard against a mistyped box)")
       ->check(unsignedInteger())
       ->capture_default_str();
+  sub.add_option("--grain-cap", cfg.deposition.grainCap,
+                 "Shorten the box along x (length_x) so that it holds about this many grains, if it would hold "
+                 "more; 0 = no cap")
+      ->check(unsignedInteger())
+      ->capture_default_str();
   sub.add_option("--threads", cfg.threads, "Worker threads")
       ->type_name("N")
       ->check(CLI::Range(1, 4096))

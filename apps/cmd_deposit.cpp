@@ -26,8 +26,9 @@ struct DepositState {
 };
 
 void runDeposit(const DepositState& st) {
-  const core::RunConfig& cfg = st.cfg;
+  core::RunConfig cfg = st.cfg;
   checkInput("deposit", [&] {
+    cfg.fitLengthToGrainCap();
     cfg.validate();
     checkOutputTarget(st.opts.out);
   });

@@ -121,6 +121,7 @@ void runRun(RunState& st) {
       const WorkStep step("reading the packing file");
       start = startFromPacking(st);
     }
+    if (!start) cfg.fitLengthToGrainCap();  // a packing brings its own box
     cfg.validate();
     study::checkRunCells(cfg, start ? static_cast<double>(start->grains.size()) : cfg.estimatedGrainCount());
     // Here, not when the backend is built: an unknown key is bad input (exit 2), as bad JSON is.

@@ -56,7 +56,10 @@ const SettingsTable<DepositionDef>& depositionTable() {
         .integer("grain_count", &D::grainCount, Range::atLeast(0.0), "-",
                  "grains to deposit; 0 = from the height and expected_solid_fraction")
         .integer("max_grains", &D::maxGrains, Range::atLeast(1.0), "-",
-                 "largest number of grains a run may deposit (a guard against a mistyped box)");
+                 "largest number of grains a run may deposit (a guard against a mistyped box)")
+        .integer("grain_cap", &D::grainCap, Range::atLeast(0.0), "-",
+                 "most grains a box is made for: a larger box is shortened along x (length_x) to hold about "
+                 "this many; 0 = no cap");
     return t;
   }();
   return table;

@@ -25,6 +25,11 @@ struct DepositionDef {
   /// too large, refused before any work instead of failing out of memory. 1e6 is 33 times the
   /// paper's largest pile (30,400 grains), beyond what a run brings to rest in a day here.
   std::size_t maxGrains = 1'000'000;
+  /// Most grains a run's box is made for [-]; 0 = no cap. A box whose height and expected solid
+  /// fraction would hold more is shortened along x until it holds about this many
+  /// (RunConfig::fitLengthToGrainCap), so that a study's bidisperse and widest runs cost about
+  /// what its monodisperse ones do. Unlike max_grains, which refuses such a box.
+  std::size_t grainCap = 0;
 
   /// Throws std::invalid_argument naming the bad field.
   void validate() const;

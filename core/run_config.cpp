@@ -161,4 +161,20 @@ double RunConfig::estimatedGrainCount() const {
          (small > 0.0 ? volume * small / population.meanGrainVolume(population.smallSize) : 0.0);
 }
 
+void RunConfig::fitLengthToGrainCap() {
+  if (deposition.grainCap == 0 || deposition.grainCount > 0) return;
+  const double grains = estimatedGrainCount();
+  const double cap = static_cast<double>(deposition.grainCap);
+  if (grains <= cap) return;
+  // The count is proportional to length_x; rounded down so that it stays under the cap.
+  const double fitted = std::floor(box.lengthX * cap / grains * 100.0) / 100.0;
+  const double shortest = 2.0 * population.largeSize;
+  if (fitted < shortest)
+    throw std::invalid_argument(fmt::format(
+        "deposition.grain_cap: {} grains fit in a length_x of {:.3g} d_L, shorter than two large grains ({:.3g}); "
+        "raise the cap or make the box narrower or lower",
+        deposition.grainCap, fitted, shortest));
+  box.lengthX = fitted;
+}
+
 }  // namespace confpack::core

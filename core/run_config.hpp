@@ -93,6 +93,11 @@ struct RunConfig {
   void validate() const;
   /// grain_count, or the grains the box's target height holds at the expected solid fraction.
   double estimatedGrainCount() const;
+  /// With deposition.grain_cap set (and no grain_count), shortens box.length_x, down to a multiple
+  /// of 0.01 d_L, until estimatedGrainCount() <= grain_cap; never lengthens it, so a fitted
+  /// configuration fits again unchanged. Throws std::invalid_argument when the box would be
+  /// shorter than two large grains.
+  void fitLengthToGrainCap();
 };
 
 /// The keys of RunConfig (config.json), its sections with their own tables (core/settings_table.hpp).

@@ -74,9 +74,11 @@ json reproductionSweep(std::string_view scale) {
   if (scale == "medium") {
     // Between quick and paper: the paper's families, widths and seeds in a smaller box,
     // L_x = 12 d_L, h = 12 d_L (biperiodic period 12): about 830 (spheres, W = 5) to 4,300
-    // (pinacoids, W = 20) grains a monodisperse run, up to 12,500 for x_S = 40 at W = 20 (the
-    // small grains' count), and a bulk region (3 d_L from the floor and from the free surface)
-    // about 6 d_L thick, some 410 grains at W = 5.
+    // (pinacoids, W = 20) grains a monodisperse run, and a bulk region (3 d_L from the floor and
+    // from the free surface) about 6 d_L thick, some 410 grains at W = 5. A box that would hold
+    // more than 5,000 grains is shortened along x to hold 5,000 (deposition.grain_cap): the small
+    // grains of x_S = 40 would make 12,500 at W = 20 (L_x then 4.8), and a run's cost grows faster
+    // than its grain count (docs/performance.md, "What sets a medium run's cost").
     // The piles fall on the adaptive step until they are all but at rest (mean kinetic ratio
     // 1e-8), the fall bounded at 300 t0, and the finisher only ends it (a last rattler, the last
     // balance of forces): the finisher cannot do the creep of a large pile, and the dynamic
@@ -86,8 +88,10 @@ json reproductionSweep(std::string_view scale) {
     // a pinacoid pile's run time for the same packing (docs/performance.md, "The medium scale's
     // settle tolerance").
     // Bullet, which has no finisher, stops at 20 t0 and is reported as not at rest.
-    return studySweep(
-        "medium", "the confinement study in a 12 x W x 12 box, meant to run overnight on 2 cores", 12.0, 12.0,
+    json sweep = studySweep(
+        "medium",
+        "the confinement study in a 12 x W x 12 box (at most 5,000 grains), meant to run overnight on 2 cores", 12.0,
+        12.0,
         {{"time_limit", 20.0},
          {"fall_time_limit", 300.0},
          {"protocol", "quasi-static"},
@@ -95,6 +99,8 @@ json reproductionSweep(std::string_view scale) {
          {"switch_kinetic_ratio", 1e-8},
          {"settle_tolerance", 1e-5}},
         12.0, studyGroups({5.0, 10.0, 20.0, "biperiodic"}, {0.0, 10.0, 25.0, 40.0}, {0.0, 0.3, 0.5, 1.0}, 3, true));
+    sweep["base"]["deposition"] = {{"grain_cap", 5000}};
+    return sweep;
   }
   if (scale == "quick") {
     // Shrunken box: L_x = 4 d_L, h = 7 d_L (the bulk region, 3 d_L away from the floor and from

@@ -316,9 +316,12 @@ class VariedSettings {
     static const std::set<std::string> named = {
         "box.width",      "box.periodic_y", "population.shape", "population.small_fraction",
         "walls.friction", "seed",           "backend"};
+    // A length_x fitted to one grain cap for every run follows from those axes too.
+    const bool fitted = first_.is_object() && first_.contains("deposition") &&
+                        first_.at("deposition").value("grain_cap", 0) > 0 && !varied_.count("deposition.grain_cap");
     std::vector<std::string> out;
     for (const std::string& p : varied_)
-      if (!named.count(p)) out.push_back(p);
+      if (!named.count(p) && !(fitted && p == "box.length_x")) out.push_back(p);
     return out;
   }
 
@@ -655,6 +658,7 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
                   // A biperiodic box has no side walls: mu_w is meaningless there, and keeping it
                   // would make mu_w variants of the reference distinct runs of the same physics.
                   if (r.config.box.periodicY) r.config.walls.friction = 0.0;
+                  r.config.fitLengthToGrainCap();  // after every axis: the count depends on all of them
                   json key;
                   core::to_json(key, r.config);
                   if (!seen.insert(key.dump()).second) continue;

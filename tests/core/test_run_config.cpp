@@ -1,6 +1,7 @@
 // RunConfig (core/run_config.hpp): the JSON round trip of every field and the refusal of bad
 // values by field name.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -123,6 +124,52 @@ TEST_CASE("the run configuration refuses a deposit larger than max_grains, from 
   c.deposition.grainCount = 50;  // an explicit count is what is checked
   c.deposition.maxGrains = 49;
   CHECK_THROWS_WITH(c.validate(), Catch::Contains("about 50 grains"));
+}
+
+TEST_CASE("a grain cap shortens the box along x until it holds about that many grains, and only then") {
+  core::RunConfig c;
+  c.box.lengthX = 12.0;
+  c.box.width = 20.0;
+  c.box.height = 12.0;
+  c.population.smallFraction = 40.0;  // 40 % of the volume in spheres of half the size: 8 times as many a volume
+  const double full = c.estimatedGrainCount();
+  // phi L_x W h ((1 - x) / v_L + x / v_S), v_S = v_L / 8: about 12,500 grains.
+  CHECK(full == Approx(0.6 * 12.0 * 20.0 * 12.0 * (0.6 + 0.4 * 8.0) / (M_PI / 6.0)).epsilon(0.01));
+  c.fitLengthToGrainCap();  // no cap: nothing changes
+  CHECK(c.box.lengthX == 12.0);
+
+  c.deposition.grainCap = 5000;
+  c.fitLengthToGrainCap();
+  // The count is proportional to L_x: 12 * 5000 / full, rounded down to the hundredth.
+  CHECK(c.box.lengthX == Approx(std::floor(1200.0 * 5000.0 / full) / 100.0));
+  CHECK(c.estimatedGrainCount() <= 5000.0);
+  CHECK(c.estimatedGrainCount() > 0.99 * 5000.0);
+  const double fitted = c.box.lengthX;
+  c.fitLengthToGrainCap();  // a fitted box fits again unchanged, and never grows
+  CHECK(c.box.lengthX == fitted);
+  c.deposition.grainCap = 1'000'000;
+  c.fitLengthToGrainCap();
+  CHECK(c.box.lengthX == fitted);
+
+  // A box under the cap, or a deposit of an explicit count, keeps its length.
+  core::RunConfig small;
+  small.box.lengthX = 12.0;
+  small.box.width = 5.0;
+  small.box.height = 12.0;
+  small.deposition.grainCap = 5000;
+  small.fitLengthToGrainCap();
+  CHECK(small.box.lengthX == 12.0);
+  c.box.lengthX = 12.0;
+  c.deposition.grainCap = 5000;
+  c.deposition.grainCount = 8000;
+  c.fitLengthToGrainCap();
+  CHECK(c.box.lengthX == 12.0);
+
+  // A cap that leaves less than two grains' length is refused, not met by a box grains cannot fit.
+  c.deposition.grainCount = 0;
+  c.deposition.grainCap = 10;
+  CHECK_THROWS_WITH(c.fitLengthToGrainCap(), Catch::Contains("deposition.grain_cap: 10 grains"));
+  CHECK(c.box.lengthX == 12.0);
 }
 
 TEST_CASE("the config.json seeds of the fuzz corpus are accepted configurations") {

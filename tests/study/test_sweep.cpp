@@ -325,7 +325,9 @@ TEST_CASE("sweep files over the named axes alone give the run tables they gave b
   // recorded with the code before any configuration key could be an axis: those files must keep
   // naming the same runs, in the same folders, with the same labels. Recorded again when mu_w moved
   // from box.wall_friction to walls.friction: the sweep.json of the docs example was compared run
-  // by run with the one of the code before, and differed by that move alone.
+  // by run with the one of the code before, and differed by that move alone. Recorded again when
+  // deposition.grain_cap came (0 in these files): the paper scale's sweep.json differed from the
+  // one before in that key alone.
   const json docsExample = json::parse(R"({
     "format": "confpack-sweep", "version": 1, "name": "confinement",
     "base": { "box": { "length_x": 20, "height": 16 }, "compaction": { "time_limit": 400 }, "backend_options": { } },
@@ -353,7 +355,7 @@ TEST_CASE("sweep files over the named axes alone give the run tables they gave b
     hash.mix(text.str());
   }
   fs::remove_all(dir);
-  CHECK(hash.value == 0x07295bc7838ec3d0ull);
+  CHECK(hash.value == 0x4cff47dadc0a25c0ull);
 }
 
 TEST_CASE("setting axes: any key of the run configuration, by its path, expanded after mu_w and before the seeds") {
@@ -397,6 +399,33 @@ TEST_CASE("setting axes: any key of the run configuration, by its path, expanded
              Catch::Contains("r0011   d0005   MPP        0     bi20     0      2 nscd    quasi-static 75       \n"));
   // A sweep over the named axes alone varies no other setting.
   CHECK(study::variedSettings(study::expandRuns(study::parseSweepSpec(smallSweep()))).empty());
+}
+
+TEST_CASE("a sweep with a grain cap fits each run's box, and the fitted length is no setting of its own") {
+  const json doc = json::parse(R"({
+    "format": "confpack-sweep", "version": 1, "name": "capped",
+    "base": { "box": { "length_x": 12, "height": 12 }, "deposition": { "grain_cap": 3000 } },
+    "vary": { "width": [5, 20], "small_fraction": [0, 40], "backend": ["nscd"] }
+  })");
+  const auto runs = study::expandRuns(study::parseSweepSpec(doc));
+  REQUIRE(runs.size() == 4);
+  for (const study::SweepRun& r : runs) {
+    INFO(r.name);
+    CHECK(r.config.estimatedGrainCount() <= 3000.0);
+    // Only a box that would hold more is shortened: monodisperse at W = 5 holds about 820.
+    const bool over = r.config.box.width == 20.0 || r.config.population.smallFraction > 0.0;
+    CHECK((r.config.box.lengthX < 12.0) == over);
+    if (over) CHECK(r.config.estimatedGrainCount() > 0.99 * 3000.0);
+  }
+  // L_x follows from W and x_S, which have their own columns: the report groups by those alone.
+  CHECK(study::variedSettings(runs).empty());
+  // Where the cap itself varies, so does the length, and both are named.
+  json two = doc;
+  two.erase("base");
+  two["base"] = {{"box", {{"length_x", 12}, {"height", 12}}}};
+  two["vary"] = {{"width", {20}}, {"deposition.grain_cap", {3000, 4000}}, {"backend", {"nscd"}}};
+  CHECK(study::variedSettings(study::expandRuns(study::parseSweepSpec(two))) ==
+        std::vector<std::string>{"box.length_x", "deposition.grain_cap"});
 }
 
 TEST_CASE("setting axes: an unknown path or a value the configuration's readers refuse is refused by name") {
