@@ -119,10 +119,11 @@ TEST_CASE("bad input is refused with one line, exit 2 and no output directory") 
       {"run " + valid + " --protocol static", "--protocol"},
       {"run " + valid + " --switch-kinetic-ratio 0", "--switch-kinetic-ratio"},
       {"run " + valid + " --time-limit 1e20", "time_limit"},  // once 0 steps and exit 0 (step count overflow)
-      {"deposit --length-x 6", "--out"},                                      // missing --out
+      {"deposit --length-x 6", "--out"},                      // missing --out
       // about 6.9e12 grains: once allocated until "std::bad_alloc"; now refused before any work.
       {"deposit --length-x 1e6 --width 1e6 --height 6 --out out", "max_grains"},
       {"deposit " + valid + " --max-grains 10", "max_grains (10)"},
+      {"deposit " + valid + " --grain-cap 5", "grain_cap: 5 grains"},         // would leave L_x under two grains
       {"deposit " + valid + " --shape pinacoid --pinacoid-E 3", "pinacoid"},  // no ridge: refused by validate()
       {"", "subcommand"},
       {"frobnicate", "frobnicate"},
@@ -148,6 +149,22 @@ TEST_CASE("every subcommand refuses an unknown flag with one line and exit 2") {
     CHECK(lineCount(r.err) == 1);
     CHECK(s.entries().empty());
   }
+}
+
+TEST_CASE("a deposit with a grain cap is made in a box shortened along x, which its packing and config carry") {
+  ConfpackSession s("cli_grain_cap");
+  // 6 x 4 x 4 at phi 0.6 holds about 110 spheres; capped at 50, L_x = 6 * 50 / 110, to the hundredth.
+  const CommandResult r = s.run("deposit --length-x 6 --width 4 --height 4 --grain-cap 50 --out dep");
+  INFO("stderr: " << r.err);
+  REQUIRE(r.code == 0);
+  const core::Packing p = core::readPacking(s.dir / "dep" / "packing.json");
+  CHECK(p.box.lengthX < 3.0);
+  CHECK(p.box.lengthX > 2.5);
+  CHECK(p.grains.size() <= 55);  // about 50: the draw is by volume, with a 3 % size spread
+  CHECK(p.grains.size() >= 40);
+  const nlohmann::json cfg = nlohmann::json::parse(slurp(s.dir / "dep" / "config.json"));
+  CHECK(cfg.at("box").at("length_x") == p.box.lengthX);
+  CHECK(cfg.at("deposition").at("grain_cap") == 50);
 }
 
 TEST_CASE("a small deposit writes a readable packing inside the box, its config and a ParaView series") {
