@@ -1408,10 +1408,47 @@ std::string runBuilds(const StudyView& study) {
   return out;
 }
 
+// The runs' boxes: L_x and h, and where a grain cap shortened some (docs/model.md, "Box"), which
+// configurations and to what length.
+std::string boxSentence(const StudyView& study) {
+  std::set<double> lengths, heights;
+  std::size_t cap = 0;
+  std::map<std::string, double> shortened;  // "BSP xS=40 W=20" -> L_x
+  double longest = 0.0;
+  for (const RunRecord& r : study.records) lengths.insert(r.run.config.box.lengthX);
+  if (!lengths.empty()) longest = *lengths.rbegin();
+  for (const RunRecord& r : study.records) {
+    const core::RunConfig& c = r.run.config;
+    heights.insert(c.box.height);
+    cap = std::max(cap, c.deposition.grainCap);
+    if (c.box.lengthX < longest) {
+      const std::string label = r.run.label();
+      shortened[label.substr(0, label.find(" mu="))] = c.box.lengthX;
+    }
+  }
+  if (lengths.empty()) return "";
+  const auto list = [](const std::set<double>& v) {
+    std::string out;
+    for (double x : v) out += fmt::format("{}{:g}", out.empty() ? "" : ", ", x);
+    return out;
+  };
+  std::string text =
+      fmt::format("Boxes L_x x W x h with h = {} d_L (the target height) and L_x = {:g} d_L", list(heights), longest);
+  if (shortened.empty()) return text + ".";
+  text += fmt::format(
+      ", but where a box would hold more than {} grains (deposition.grain_cap), shortened along x to "
+      "hold about that many:",
+      cap);
+  for (const auto& [label, length] : shortened) text += fmt::format(" {} L_x = {:g};", label, length);
+  text.back() = '.';
+  return text;
+}
+
 void addMethodSection(Document& doc, const StudyView& study, bool runLinks) {
   doc.heading(2, "Method");
   const std::string builds = runBuilds(study);
   doc.bullets({
+      boxSentence(study),
       "The finished runs were computed by " +
           (builds.empty() ? std::string("no build yet (no run finished)") : builds) +
           ". A run resumed from a checkpoint records the build that finished it.",

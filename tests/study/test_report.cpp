@@ -71,15 +71,16 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
       {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
-fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false) {
+fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false, std::size_t grainCap = 0) {
   const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  const json doc = json::parse(R"({
+  json doc = json::parse(R"({
     "name": "synthetic",
     "base": { "box": { "length_x": 6, "height": 4 } },
     "biperiodic_width": 12,
     "vary": { "width": [4, 5, 10, 20, "biperiodic"], "replicas": 3, "backend": ["nscd", "bullet"] }
   })");
+  if (grainCap > 0) doc["base"]["deposition"] = {{"grain_cap", grainCap}};
   const study::SweepSpec spec = study::parseSweepSpec(doc);
   auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
                     const study::RunProgressFn&) {
@@ -332,6 +333,28 @@ TEST_CASE("the report names the build that wrote it and counts the runs each bui
                 "0.1.0 at revision ba9876543210-dirty (10 runs); a build that recorded no version (10 runs).") !=
         std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST_CASE("the report says what boxes the runs had, and a grain cap's shorter boxes stay in their family") {
+  const fs::path plain = makeStudy("boxes", false);
+  study::ReportOptions o;
+  o.gnuplot.clear();
+  std::string md = slurp(study::writeReport(plain, plain / "report", o).markdown);
+  CHECK(md.find("Boxes L_x x W x h with h = 4 d_L (the target height) and L_x = 6 d_L.") != std::string::npos);
+  fs::remove_all(plain);
+
+  // At phi 0.6, 6 x W x 4 holds about 110 spheres at W = 4, 137 at W = 5, 275 at W = 10, 550 at
+  // W = 20 and 330 biperiodic (12): capped at 200, the last three are shortened to 6 * 200 / n
+  // (n a third of a percent less: the size spread), rounded down to the hundredth.
+  const fs::path capped = makeStudy("capped", false, false, 200);
+  md = slurp(study::writeReport(capped, capped / "report", o).markdown);
+  CHECK(md.find("but where a box would hold more than 200 grains (deposition.grain_cap), shortened along x to hold "
+                "about that many: MSP xS=0 W=10 L_x = 4.36; MSP xS=0 W=20 L_x = 2.18; MSP xS=0 W=bi12 L_x = 3.63.") !=
+        std::string::npos);
+  // One family over the four widths, as without the cap: the fitted L_x is not a setting that splits it.
+  CHECK(md.find("Beyond W, shape, x_S, mu_w, seed and backend this study varies") == std::string::npos);
+  CHECK(md.find("| MSP x_S=0 mu_w=0 | nscd | 4 |") != std::string::npos);
+  fs::remove_all(capped);
 }
 
 TEST_CASE("report without gnuplot keeps the data and says so") {
