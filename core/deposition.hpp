@@ -27,8 +27,8 @@ struct DepositionDef {
   std::size_t maxGrains = 1'000'000;
   /// Most grains a run's box is made for [-]; 0 = no cap. A box whose height and expected solid
   /// fraction would hold more is shortened along x until it holds about this many
-  /// (RunConfig::fitLengthToGrainCap), so that a study's bidisperse and widest runs cost about
-  /// what its monodisperse ones do. Unlike max_grains, which refuses such a box.
+  /// (RunConfig::fitLengthToGrainCap), so that no run of a study outgrows the others (a run's
+  /// cost grows faster than its grain count). Unlike max_grains, which refuses such a box.
   std::size_t grainCap = 0;
 
   /// Throws std::invalid_argument naming the bad field.

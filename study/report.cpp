@@ -1411,35 +1411,29 @@ std::string runBuilds(const StudyView& study) {
 // The runs' boxes: L_x and h, and where a grain cap shortened some (docs/model.md, "Box"), which
 // configurations and to what length.
 std::string boxSentence(const StudyView& study) {
-  std::set<double> lengths, heights;
-  std::size_t cap = 0;
-  std::map<std::string, double> shortened;  // "BSP xS=40 W=20" -> L_x
   double longest = 0.0;
-  for (const RunRecord& r : study.records) lengths.insert(r.run.config.box.lengthX);
-  if (!lengths.empty()) longest = *lengths.rbegin();
+  std::size_t cap = 0;
+  std::set<double> heights;
   for (const RunRecord& r : study.records) {
-    const core::RunConfig& c = r.run.config;
-    heights.insert(c.box.height);
-    cap = std::max(cap, c.deposition.grainCap);
-    if (c.box.lengthX < longest) {
-      const std::string label = r.run.label();
-      shortened[label.substr(0, label.find(" mu="))] = c.box.lengthX;
-    }
+    longest = std::max(longest, r.run.config.box.lengthX);
+    heights.insert(r.run.config.box.height);
+    cap = std::max(cap, r.run.config.deposition.grainCap);
   }
-  if (lengths.empty()) return "";
-  const auto list = [](const std::set<double>& v) {
-    std::string out;
-    for (double x : v) out += fmt::format("{}{:g}", out.empty() ? "" : ", ", x);
-    return out;
-  };
-  std::string text =
-      fmt::format("Boxes L_x x W x h with h = {} d_L (the target height) and L_x = {:g} d_L", list(heights), longest);
+  std::map<std::string, double> shortened;  // "BSP xS=40 W=20" (the run's label to its mu_w) -> L_x
+  for (const RunRecord& r : study.records)
+    if (r.run.config.box.lengthX < longest) {
+      const std::string label = r.run.label();
+      shortened[label.substr(0, label.find(" mu="))] = r.run.config.box.lengthX;
+    }
+  std::string text = "Boxes L_x x W x h with h = ";
+  for (double h : heights) text += num(h) + (h == *heights.rbegin() ? "" : ", ");
+  text += fmt::format(" d_L (the target height) and L_x = {} d_L", num(longest));
   if (shortened.empty()) return text + ".";
   text += fmt::format(
-      ", but where a box would hold more than {} grains (deposition.grain_cap), shortened along x to "
-      "hold about that many:",
+      ", but where a box would hold more than {} grains (deposition.grain_cap), shortened along x to hold about "
+      "that many:",
       cap);
-  for (const auto& [label, length] : shortened) text += fmt::format(" {} L_x = {:g};", label, length);
+  for (const auto& [label, length] : shortened) text += fmt::format(" {} L_x = {};", label, num(length));
   text.back() = '.';
   return text;
 }

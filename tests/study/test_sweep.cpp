@@ -421,7 +421,6 @@ TEST_CASE("a sweep with a grain cap fits each run's box, and the fitted length i
   CHECK(study::variedSettings(runs).empty());
   // Where the cap itself varies, so does the length, and both are named.
   json two = doc;
-  two.erase("base");
   two["base"] = {{"box", {{"length_x", 12}, {"height", 12}}}};
   two["vary"] = {{"width", {20}}, {"deposition.grain_cap", {3000, 4000}}, {"backend", {"nscd"}}};
   CHECK(study::variedSettings(study::expandRuns(study::parseSweepSpec(two))) ==
