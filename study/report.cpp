@@ -1,6 +1,7 @@
 #include "study/report.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -1411,6 +1412,7 @@ std::string runBuilds(const StudyView& study) {
 // The runs' boxes: L_x and h, and where a grain cap shortened some (docs/model.md, "Box"), which
 // configurations and to what length.
 std::string boxSentence(const StudyView& study) {
+  if (study.records.empty()) return "";
   double longest = 0.0;
   std::size_t cap = 0;
   std::set<double> heights;
@@ -1425,9 +1427,8 @@ std::string boxSentence(const StudyView& study) {
       const std::string label = r.run.label();
       shortened[label.substr(0, label.find(" mu="))] = r.run.config.box.lengthX;
     }
-  std::string text = "Boxes L_x x W x h with h = ";
-  for (double h : heights) text += num(h) + (h == *heights.rbegin() ? "" : ", ");
-  text += fmt::format(" d_L (the target height) and L_x = {} d_L", num(longest));
+  std::string text = fmt::format("Boxes L_x x W x h with h = {:g} d_L (the target height) and L_x = {:g} d_L",
+                                 fmt::join(heights, ", "), longest);
   if (shortened.empty()) return text + ".";
   text += fmt::format(
       ", but where a box would hold more than {} grains (deposition.grain_cap), shortened along x to hold about "
