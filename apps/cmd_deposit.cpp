@@ -12,7 +12,7 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "core/packing_io.hpp"
 #include "core/vtk_writer.hpp"
 
@@ -40,8 +40,8 @@ void runDeposit(const DepositState& st) {
 
     Progress progress("deposit", !st.opts.quiet, 5.0);
     WorkStep step("depositing the grains");
-    const core::Deposit pile =
-        core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
+    const compaction::Deposit pile =
+        compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
           progress.update(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
                           fmt::format("{}/{} placeholders", done, total));
         });

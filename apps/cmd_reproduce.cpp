@@ -55,7 +55,8 @@ void runReproduceCommand(const ReproduceState& st) {
     std::filesystem::create_directories(st.out);
     // The study's definition next to its results, as a sweep file a user can edit and rerun.
     core::writeFileAtomically(st.out / "study.json", study::reproductionSweep(st.scale).dump(2));
-    summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1), study::pipelineDepositor());
+    summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1, compaction::Checkpointing{}.everySeconds, spec.settleWith),
+                               study::pipelineDepositor());
     step.next("writing the report");
     // Staged like `confpack report`'s: an interrupted report leaves the previous one whole.
     StagedOutput staged(st.out / "report");

@@ -45,7 +45,7 @@ struct RunState {
   std::string from;            ///< --from PACKING: start from its grains instead of a deposit
   std::string configFile;      ///< --config FILE: the configuration instead of the flags
   bool allowImplausible = false;  ///< --allow-implausible: take an implausible --from packing
-  study::Checkpointing checkpointing;  ///< --checkpoint FILE, --checkpoint-every SECONDS
+  compaction::Checkpointing checkpointing;  ///< --checkpoint FILE, --checkpoint-every SECONDS
   CLI::App* sub = nullptr;
 };
 
@@ -89,7 +89,7 @@ nlohmann::json resolvedConfig(core::RunConfig cfg, const nlohmann::json& result)
 
 /// The starting state of `run --from`: the packing's grains at rest, with cfg's box and population
 /// taken from it (the side walls' friction from --wall-friction or --config when given).
-core::Deposit startFromPacking(RunState& st) {
+compaction::Deposit startFromPacking(RunState& st) {
   for (const char* name : kGivenByPacking)
     if (st.sub->count(name) > 0)
       throw std::invalid_argument(fmt::format("--from takes the box and the grains from the packing; drop {}", name));
@@ -99,7 +99,7 @@ core::Deposit startFromPacking(RunState& st) {
   const bool frictionGiven = st.sub->count("--wall-friction") > 0 || !st.configFile.empty();
   cfg.box = packing.box;
   if (!frictionGiven) cfg.walls = packing.walls;
-  core::Deposit start = study::depositFromPacking(packing, st.from);
+  compaction::Deposit start = compaction::depositFromPacking(packing, st.from);
   cfg.population.shape = packing.grains.front().shape;
   if (cfg.population.shape == core::ShapeKind::Pinacoid) cfg.population.pinacoid = packing.grains.front().params;
   cfg.population.largeSize = 0.0;
@@ -110,7 +110,7 @@ core::Deposit startFromPacking(RunState& st) {
 
 void runRun(RunState& st) {
   core::RunConfig& cfg = st.cfg;
-  std::optional<core::Deposit> start;
+  std::optional<compaction::Deposit> start;
   checkInput("run", [&] {
     if (!st.configFile.empty()) cfg = readConfigFile(st);
     if (!st.backendOptions.empty()) cfg.backendOptions = core::parseJsonText(st.backendOptions, "--backend-options");

@@ -32,7 +32,7 @@ struct SweepState {
   std::filesystem::path out;
   int jobs = 1;
   int threads = 0;
-  double checkpointEvery = study::Checkpointing{}.everySeconds;  ///< --checkpoint-every
+  double checkpointEvery = compaction::Checkpointing{}.everySeconds;  ///< --checkpoint-every
   std::size_t taskIndex = 0;
   std::size_t taskCount = 1;
   bool list = false;
@@ -213,7 +213,7 @@ void runSweepCommand(const SweepState& st) {
     opt.runs = only;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
-    summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads, st.checkpointEvery),
+    summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads, st.checkpointEvery, spec.settleWith),
                               study::pipelineDepositor());
   });
   if (summary.failed > 0) {

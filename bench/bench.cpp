@@ -15,7 +15,8 @@
 #include "analysis/bulk_region.hpp"
 #include "analysis/interpenetration.hpp"
 #include "core/build_info.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
+#include "compaction/time_step.hpp"
 #include "study/run_pipeline.hpp"
 
 namespace confpack::bench {
@@ -90,7 +91,7 @@ core::RunConfig baseConfig(const BenchDef& def, core::ShapeKind shape) {
 struct BackendRun {
   nlohmann::json json;
   double finalInterpenetration = 0.0;
-  study::CompactionOutcome outcome;
+  compaction::CompactionOutcome outcome;
 };
 
 /// `progress` with every status led by `what` (the case: a compaction's own status starts with
@@ -102,13 +103,13 @@ study::RunProgressFn labelled(const study::RunProgressFn& progress, std::string 
   };
 }
 
-BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const core::Deposit& dep,
+BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const compaction::Deposit& dep,
                       const study::RunProgressFn& progress) {
   cfg.backend = backend;
   resetPeakRss();
   BackendRun run;
-  run.outcome = study::compact(cfg, dep, {}, progress);
-  const study::CompactionOutcome& out = run.outcome;
+  run.outcome = compaction::compact(cfg, dep, {}, progress);
+  const compaction::CompactionOutcome& out = run.outcome;
   const analysis::Interpenetration inter =
       analysis::interpenetration(out.packing, analysis::bulkRegion(out.packing), analysis::InterpenetrationDef{});
   run.finalInterpenetration = inter.exactPercent;
@@ -140,7 +141,7 @@ BackendRun runBackend(core::RunConfig cfg, const std::string& backend, const cor
 nlohmann::json compareCase(const BenchDef& def, const std::string& name, core::ShapeKind shape,
                            const std::function<void(const std::string&)>& log, const study::RunProgressFn& progress) {
   const core::RunConfig cfg = baseConfig(def, shape);
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   nlohmann::json c = {{"n_grains", dep.grains.size()},
                       {"shape", std::string(core::toString(shape))},
                       {"box", cfg.box},
@@ -201,7 +202,7 @@ nlohmann::json restSeries(const BenchDef& def, nlohmann::json& exponents,
   std::vector<double> logN, logWall, logCpu;
   for (int n : def.restSizes) {
     core::RunConfig cfg = stretchedConfig(def, n);
-    const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+    const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
     const BackendRun run = runBackend(cfg, "nscd", dep, labelled(progress, fmt::format("rest n={}", dep.grains.size())));
     const double wall = run.json["wall_s"].get<double>();
     const double cpu = run.outcome.history.empty() ? 0.0 : run.outcome.history.back().stepCpuSeconds;
@@ -235,7 +236,7 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
   for (int n : def.scalingSizes) {
     core::RunConfig cfg = stretchedConfig(def, n);
     cfg.compaction.timeLimit = 1e9;
-    const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+    const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
     // Let the pile fall and load for scalingFall (rounded up to whole windows of scalingSteps),
     // then time one window of scalingSteps steps: the cost per step of a compaction is that of a
     // loaded pile (about 3 contact rows per grain), not of the first steps after the deposit.
@@ -244,20 +245,20 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
       core::RunConfig c = cfg;
       c.backend = backend;
       c.compaction.protocol = core::Protocol::Dynamic;  // the series times dynamic steps
-      const double dt = study::defaultTimeStep(c, dep);
+      const double dt = compaction::defaultTimeStep(c, dep);
       c.compaction.dt = dt;
       c.compaction.adaptiveDt = false;  // the window below counts fixed steps
       const long fallWindows = static_cast<long>(std::ceil(def.scalingFall / (def.scalingSteps * dt) - 1e-9));
       c.compaction.checkInterval = def.scalingSteps;
       c.compaction.timeLimit = static_cast<double>((fallWindows + 1) * def.scalingSteps) * dt;
-      const study::CompactionOutcome out =
-          study::compact(c, dep, {}, labelled(progress, fmt::format("scaling n={}", dep.grains.size())));
+      const compaction::CompactionOutcome out =
+          compaction::compact(c, dep, {}, labelled(progress, fmt::format("scaling n={}", dep.grains.size())));
       // Over the timed window (between the two checks): time per step, solver iterations per
       // step, and the solve time per contact update (rows x iterations), which separates the
       // cost of one iteration from the number of them.
       const auto& h = out.history;
       if (h.empty()) throw std::runtime_error(fmt::format("bench scaling: {} stopped before its first check", backend));
-      const study::CheckPoint first = h.size() >= 2 ? h[h.size() - 2] : study::CheckPoint{}, last = h.back();
+      const compaction::CheckPoint first = h.size() >= 2 ? h[h.size() - 2] : compaction::CheckPoint{}, last = h.back();
       const double steps = static_cast<double>(last.steps - first.steps);
       const double perStep = (last.stepSeconds - first.stepSeconds) / steps;
       const double cpuPerStep = (last.stepCpuSeconds - first.stepCpuSeconds) / steps;

@@ -25,7 +25,7 @@
 #include "backends/nscd/nscd_settings.hpp"
 #include "collision/polyhedron_contact.hpp"
 #include "core/build_info.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "core/population.hpp"
 #include "core/random.hpp"
 
@@ -79,11 +79,11 @@ core::BoxDef boxFor(int n) {
 }
 
 /// The deposit `confpack deposit` makes for this box (monodisperse spheres), with exactly n grains.
-core::Deposit sphereDeposit(const core::BoxDef& box, int n, std::uint64_t seed) {
+compaction::Deposit sphereDeposit(const core::BoxDef& box, int n, std::uint64_t seed) {
   core::PopulationDef pop;
   core::DepositionDef def;
   def.grainCount = static_cast<std::size_t>(n);
-  return core::deposit(box, pop, def, seed);
+  return compaction::deposit(box, pop, def, seed);
 }
 
 struct BroadPhaseFixture {
@@ -95,7 +95,7 @@ struct BroadPhaseFixture {
 
 BroadPhaseFixture makeBroadPhaseFixture(int n, std::uint64_t seed) {
   const core::BoxDef box = boxFor(n);
-  const core::Deposit dep = sphereDeposit(box, n, seed);
+  const compaction::Deposit dep = sphereDeposit(box, n, seed);
   const nscd::NarrowPhase narrow(box, dep.grains, nscd::NscdSettings{}.alertDistance);
   BroadPhaseFixture f;
   for (std::size_t i = 0; i < dep.grains.size(); ++i) {
@@ -314,7 +314,7 @@ nscd::NscdSettings mprgpSettings() {
 // phases are rebuilt from its state: q_m, inverse masses, free velocities, pairs and contacts.
 SolverFixture makeSolverFixture(int n, std::uint64_t seed) {
   const core::BoxDef box = boxFor(n);
-  const core::Deposit dep = sphereDeposit(box, n, seed);
+  const compaction::Deposit dep = sphereDeposit(box, n, seed);
   core::SystemDef system;
   system.box = box;
   system.grains = dep.grains;

@@ -18,6 +18,34 @@ using nlohmann::json;
 
 std::string toString(Protocol p) { return p == Protocol::QuasiStatic ? "quasi-static" : "dynamic"; }
 
+const SettingsTable<DepositionDef>& depositionTable() {
+  using D = DepositionDef;
+  static const SettingsTable<D> table = [] {
+    SettingsTable<D> t("deposition");
+    t.number("expected_solid_fraction", &D::expectedSolidFraction, Range::open(0.0, 1.0), "-",
+             "solid fraction expected after compaction; with the height it sets the volume of grains drawn")
+        .integer("grain_count", &D::grainCount, Range::atLeast(0.0), "-",
+                 "grains to deposit; 0 = from the height and expected_solid_fraction")
+        .integer("max_grains", &D::maxGrains, Range::atLeast(1.0), "-",
+                 "largest number of grains a run may deposit (a guard against a mistyped box)")
+        .integer("grain_cap", &D::grainCap, Range::atLeast(0.0), "-",
+                 "most grains a box is made for: a larger box is shortened along x (length_x) to hold about "
+                 "this many; 0 = no cap");
+    return t;
+  }();
+  return table;
+}
+
+void DepositionDef::validate() const { depositionTable().validate(*this); }
+
+void to_json(nlohmann::json& j, const DepositionDef& d) { j = depositionTable().write(d); }
+
+void from_json(const nlohmann::json& j, DepositionDef& d) {
+  DepositionDef out;
+  depositionTable().read(j, out);
+  d = out;
+}
+
 const SettingsTable<CompactionDef>& compactionTable() {
   using C = CompactionDef;
   static const SettingsTable<C> table = [] {

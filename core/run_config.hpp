@@ -1,16 +1,45 @@
 #pragma once
 // The fully resolved configuration of one run: definition structs with
 // defaults and units, each with a JSON round trip so that a run writes back what it used.
+#include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/box.hpp"
-#include "core/deposition.hpp"
 #include "core/population.hpp"
 #include "core/walls.hpp"
 
 namespace confpack::core {
+
+/// Deposition (docs/model.md, "Deposition"): how many grains, for the box made for them.
+struct DepositionDef {
+  /// Solid fraction expected after compaction [-]. With the target height h it sets the grain
+  /// volume to draw: V = phi_expected * L_x * W * h.
+  double expectedSolidFraction = 0.60;
+  /// Number of grains to deposit; 0 = derive it from the box height and expectedSolidFraction.
+  std::size_t grainCount = 0;
+  /// Largest number of grains a run may deposit [-]: a guard against a box typed a thousand times
+  /// too large, refused before any work instead of failing out of memory. 1e6 is 33 times the
+  /// paper's largest pile (30,400 grains), beyond what a run brings to rest in a day here.
+  std::size_t maxGrains = 1'000'000;
+  /// Most grains a run's box is made for [-]; 0 = no cap. A box whose height and expected solid
+  /// fraction would hold more is shortened along x until it holds about this many
+  /// (RunConfig::fitLengthToGrainCap), so that no run of a study outgrows the others (a run's
+  /// cost grows faster than its grain count). Unlike max_grains, which refuses such a box.
+  std::size_t grainCap = 0;
+
+  /// Throws std::invalid_argument naming the bad field.
+  void validate() const;
+};
+
+template <class T>
+class SettingsTable;
+/// The keys of DepositionDef (core/settings_table.hpp).
+const SettingsTable<DepositionDef>& depositionTable();
+
+void to_json(nlohmann::json& j, const DepositionDef& d);
+void from_json(const nlohmann::json& j, DepositionDef& d);
 
 /// How a compaction ends (docs/model.md, "Protocols").
 enum class Protocol {
@@ -31,7 +60,7 @@ struct CompactionDef {
   /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
   /// the smallest grain's size of motion (d_L/100 for a monodisperse sample, as the fixed step)
   /// at its current speed, gravity included, never below `dt` (or the fixed step) and at most
-  /// kAdaptiveGrowth times the step before (study/run_pipeline.hpp, AdaptiveTimeStep).
+  /// kAdaptiveGrowth times the step before (compaction/time_step.hpp, AdaptiveTimeStep).
   bool adaptiveDt = false;
   /// Simulated time after which the run stops unequilibrated [t0]; with the quasi-static
   /// protocol, after which the finisher takes over if the fall has not ended before. At most
@@ -69,8 +98,6 @@ struct CompactionDef {
   int finisherMaxSteps = 3000;
 };
 
-template <class T>
-class SettingsTable;
 /// The keys of CompactionDef with units, ranges and meaning (core/settings_table.hpp): the JSON
 /// reader and writer and the validation come from it.
 const SettingsTable<CompactionDef>& compactionTable();

@@ -19,7 +19,7 @@
 
 #include "analysis/plausibility.hpp"
 #include "backends/backend_factory.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "core/run_config.hpp"
 #include "python/bindings.hpp"
 #include "study/run_pipeline.hpp"
@@ -125,7 +125,7 @@ void bindRun(py::module_& m) {
         PyPacking out;
         {
           const py::gil_scoped_release release;
-          const core::Deposit pile = core::deposit(
+          const compaction::Deposit pile = compaction::deposit(
               cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
                 report(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
                        fmt::format("{}/{} placeholders", done, total));

@@ -22,7 +22,7 @@ double number(const nlohmann::json& j, const char* key, std::string_view source)
 
 }  // namespace
 
-nlohmann::json depositToJson(const core::Deposit& deposit, const core::BoxDef& box) {
+nlohmann::json depositToJson(const compaction::Deposit& deposit, const core::BoxDef& box) {
   core::Packing packing;
   packing.box = box;
   packing.grains = deposit.grains;
@@ -39,14 +39,14 @@ nlohmann::json depositToJson(const core::Deposit& deposit, const core::BoxDef& b
           {"seconds", deposit.seconds}};
 }
 
-core::Deposit depositFromJson(const nlohmann::json& j, std::string_view source) {
+compaction::Deposit depositFromJson(const nlohmann::json& j, std::string_view source) {
   if (!j.is_object() || j.value("format", std::string()) != kDepositFormat)
     throw std::invalid_argument(fmt::format("{}: format: not a {} document", source, kDepositFormat));
   if (j.value("version", 0) != kDepositVersion)
     throw std::invalid_argument(fmt::format("{}: version: expected {}", source, kDepositVersion));
   if (!j.contains("packing"))
     throw std::invalid_argument(fmt::format("{}: packing: missing", source));
-  core::Deposit d;
+  compaction::Deposit d;
   d.grains = core::packingFromJson(j.at("packing"), fmt::format("{}: packing", source)).grains;
   const nlohmann::json& ph = j.value("placeholders", nlohmann::json::array());
   if (!ph.is_array() || ph.size() != d.grains.size())
@@ -67,11 +67,11 @@ core::Deposit depositFromJson(const nlohmann::json& j, std::string_view source) 
   return d;
 }
 
-void writeDeposit(const core::Deposit& deposit, const core::BoxDef& box, const std::filesystem::path& path) {
+void writeDeposit(const compaction::Deposit& deposit, const core::BoxDef& box, const std::filesystem::path& path) {
   core::writeFileAtomically(path, depositToJson(deposit, box).dump());
 }
 
-core::Deposit readDeposit(const std::filesystem::path& path) {
+compaction::Deposit readDeposit(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(fmt::format("{}: cannot open", path.string()));
   nlohmann::json j;

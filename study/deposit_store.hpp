@@ -14,20 +14,20 @@
 #include <nlohmann/json.hpp>
 
 #include "core/box.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 
 namespace confpack::study {
 
 /// The deposit as a JSON document (see the format above). `box` is the box it was made for.
-nlohmann::json depositToJson(const core::Deposit& deposit, const core::BoxDef& box);
+nlohmann::json depositToJson(const compaction::Deposit& deposit, const core::BoxDef& box);
 
 /// Parses a deposit document; throws std::invalid_argument naming `source` and the bad field.
-core::Deposit depositFromJson(const nlohmann::json& j, std::string_view source = "deposit");
+compaction::Deposit depositFromJson(const nlohmann::json& j, std::string_view source = "deposit");
 
 /// Writes the deposit atomically (temporary file + rename): the file exists only when complete.
-void writeDeposit(const core::Deposit& deposit, const core::BoxDef& box, const std::filesystem::path& path);
+void writeDeposit(const compaction::Deposit& deposit, const core::BoxDef& box, const std::filesystem::path& path);
 
 /// Reads a deposit file written by writeDeposit.
-core::Deposit readDeposit(const std::filesystem::path& path);
+compaction::Deposit readDeposit(const std::filesystem::path& path);
 
 }  // namespace confpack::study

@@ -446,7 +446,7 @@ class ProgressPrinter {
 // released when the last run of the group in this task has finished.
 struct DepositSlot {
   std::mutex mutex;
-  std::shared_ptr<const core::Deposit> deposit;
+  std::shared_ptr<const compaction::Deposit> deposit;
   std::size_t remaining = 0;
 };
 
@@ -560,12 +560,13 @@ std::string_view toString(RunStatus s) {
 
 SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t maxRuns) {
   if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
-  static const std::set<std::string> known = {"format", "version", "name", "base", "biperiodic_width", "vary",
-                                              "groups", "description"};
+  static const std::set<std::string> known = {"format", "version", "name",   "base",       "biperiodic_width",
+                                              "vary",   "groups",  "description", "settle_with"};
   for (const auto& [key, v] : doc.items())
     if (!known.count(key))
       bad(source, core::textExcerpt(key),
-          "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups)");
+          "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups, "
+          "settle_with)");
   if (doc.contains("format") && doc.at("format") != kSweepFormat)
     bad(source, "format", fmt::format("expected \"{}\"", kSweepFormat));
   if (doc.contains("version") && doc.at("version") != kSweepVersion)
@@ -592,6 +593,13 @@ SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t m
     if (!w.is_number() || !(w.get<double>() > 0.0))
       bad(source, "biperiodic_width", fmt::format("expected a positive number (got {})", core::jsonExcerpt(w)));
     spec.biperiodicWidth = w.get<double>();
+  }
+  if (doc.contains("settle_with")) {
+    // Only nscd has the quasi-static finisher that brings a pile to rest whatever its state.
+    const json& w = doc.at("settle_with");
+    if (w != "nscd")
+      bad(source, "settle_with", fmt::format("expected \"nscd\", the backend with a finisher (got {})", core::jsonExcerpt(w)));
+    spec.settleWith = w.get<std::string>();
   }
   if (doc.contains("vary") == doc.contains("groups"))
     bad(source, "vary", "give exactly one of \"vary\" (one product) or \"groups\" (a list of products)");
@@ -897,15 +905,15 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
   const LivenessFn alive = opt.alive ? opt.alive : LivenessFn(holderLiveness);
   const std::size_t total = todo.size();
 
-  auto depositFor = [&](const SweepRun& r) -> std::shared_ptr<const core::Deposit> {
+  auto depositFor = [&](const SweepRun& r) -> std::shared_ptr<const compaction::Deposit> {
     DepositSlot& slot = slots.at(r.depositIndex);
     std::lock_guard lock(slot.mutex);
     if (!slot.deposit) {
       const fs::path file = dir / "deposits" / (r.depositName() + ".json");
       if (fs::exists(file)) {
-        slot.deposit = std::make_shared<const core::Deposit>(readDeposit(file));
+        slot.deposit = std::make_shared<const compaction::Deposit>(readDeposit(file));
       } else {
-        auto made = std::make_shared<const core::Deposit>(makeDeposit(r.config));
+        auto made = std::make_shared<const compaction::Deposit>(makeDeposit(r.config));
         writeDeposit(*made, r.config.box, file);
         slot.deposit = std::move(made);
       }
@@ -965,7 +973,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
         json cfg;
         core::to_json(cfg, r.config);
         core::writeFileAtomically(runDir / "config.json", cfg.dump(2));
-        const std::shared_ptr<const core::Deposit> deposit = depositFor(r);
+        const std::shared_ptr<const compaction::Deposit> deposit = depositFor(r);
         const std::string tag = fmt::format("{} {}", r.name, r.config.backend);
         result = run(r.config, runDir, *deposit,
                      [&](double fraction, const std::string& status) { printer.update(tag, fraction, status); });

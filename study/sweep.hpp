@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "core/run_config.hpp"
 #include "study/run_claim.hpp"
 #include "study/run_pipeline.hpp"
@@ -66,6 +66,10 @@ struct SweepSpec {
   nlohmann::json base = nlohmann::json::object();  ///< partial RunConfig JSON over the defaults
   double biperiodicWidth = 20.0;                   ///< period of "biperiodic" entries [d_L]
   std::vector<SweepGroup> groups;
+  /// "settle_with": a backend with a quasi-static finisher ("nscd") that takes every finished run of
+  /// another backend on to rest from its final packing, kept beside it in RUN/settled/
+  /// (docs/sweeps.md); empty: none.
+  std::string settleWith;
   nlohmann::json source;                           ///< the document as given (kept in sweep.json)
 };
 
@@ -142,9 +146,9 @@ std::string utcTimestamp();
 /// Compacts `deposit` with cfg in runDir (which exists and is empty) and returns result.json's
 /// content; it must have written result.json before returning. The real one is runAndWrite.
 using SweepRunFn = std::function<nlohmann::json(const core::RunConfig& cfg, const std::filesystem::path& runDir,
-                                                const core::Deposit& deposit, const RunProgressFn& progress)>;
-/// Makes the deposit of a configuration (the real one is core::deposit with cfg's seed).
-using SweepDepositFn = std::function<core::Deposit(const core::RunConfig& cfg)>;
+                                                const compaction::Deposit& deposit, const RunProgressFn& progress)>;
+/// Makes the deposit of a configuration (the real one is compaction::deposit with cfg's seed).
+using SweepDepositFn = std::function<compaction::Deposit(const core::RunConfig& cfg)>;
 
 struct SweepOptions {
   int jobs = 1;                ///< runs at the same time in this process

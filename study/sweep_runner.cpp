@@ -1,25 +1,32 @@
 #include "study/sweep_runner.hpp"
 
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "study/run_pipeline.hpp"
 
 namespace confpack::study {
 
-SweepRunFn pipelineRunner(int threads, double checkpointEvery) {
-  return [threads, checkpointEvery](const core::RunConfig& cfg, const std::filesystem::path& runDir,
-                                    const core::Deposit& deposit, const RunProgressFn& progress) {
+SweepRunFn pipelineRunner(int threads, double checkpointEvery, const std::string& settleWith) {
+  return [threads, checkpointEvery, settleWith](const core::RunConfig& cfg, const std::filesystem::path& runDir,
+                                                const compaction::Deposit& deposit, const RunProgressFn& progress) {
     core::RunConfig c = cfg;
     if (threads > 0) c.threads = threads;
     // runDir is SWEEPDIR/runs/rNNNN.
-    Checkpointing checkpointing;
+    const std::filesystem::path sweepDir = runDir.parent_path().parent_path();
+    const std::string name = runDir.filename().string();
+    compaction::Checkpointing checkpointing;
     checkpointing.everySeconds = checkpointEvery;
-    checkpointing.file = sweepCheckpointFile(runDir.parent_path().parent_path(), runDir.filename().string());
-    return runAndWrite(c, runDir, progress, &deposit, checkpointing);
+    checkpointing.file = compaction::sweepCheckpointFile(sweepDir, name);
+    nlohmann::json result = runAndWrite(c, runDir, progress, &deposit, checkpointing);
+    if (!settleWith.empty() && c.backend != settleWith) {
+      checkpointing.file = compaction::sweepCheckpointFile(sweepDir, name + "-settled");
+      settleAndWrite(c, runDir, settleWith, progress, checkpointing);
+    }
+    return result;
   };
 }
 
 SweepDepositFn pipelineDepositor() {
-  return [](const core::RunConfig& cfg) { return core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed); };
+  return [](const core::RunConfig& cfg) { return compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed); };
 }
 
 }  // namespace confpack::study

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "core/json_input.hpp"
-#include "study/checkpoint.hpp"
+#include "compaction/checkpoint.hpp"
 #include "study/process.hpp"
 #include "study/slurm.hpp"
 
@@ -100,7 +100,7 @@ std::vector<RunReport> sweepStatus(const fs::path& dir, const std::vector<SweepR
     }
     const std::string logOf = f.claim && !f.claim->job.empty() ? f.claim->job : f.task;
     if (!logOf.empty()) f.taskLogLine = lastOutputLine(taskLog(dir, logOf));
-    f.checkpoint = describeCheckpoint(sweepCheckpointFile(dir, r.name));
+    f.checkpoint = compaction::describeCheckpoint(compaction::sweepCheckpointFile(dir, r.name));
     out.push_back(classifyRun(f));
   }
   return out;

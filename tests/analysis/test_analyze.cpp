@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "analysis/analyze.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "tests/support/lattices.hpp"
 #include "tests/support/read_file.hpp"
 
@@ -89,7 +89,7 @@ TEST_CASE("analysis of a small pinacoid deposit", "[analysis][analyze][pinacoid]
   def.grainCount = 180;
   core::Packing p;
   p.box = box;
-  p.grains = core::deposit(box, pop, def, 3).grains;
+  p.grains = compaction::deposit(box, pop, def, 3).grains;
   const nlohmann::json j = analysis::analyzePacking(p);
   INFO(j.dump(1));
   CHECK(j["n_grains"] == 180);

@@ -36,7 +36,7 @@ void makeSweep(const fs::path& dir) {
   const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
     "name": "fake", "base": { "box": { "length_x": 6, "height": 4 } },
     "vary": { "width": [4, 8], "replicas": 2, "backend": ["nscd"] } })"));
-  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
                    const study::RunProgressFn&) {
     const double phi = 0.64 - 0.5 / cfg.box.width + 0.001 * static_cast<double>(cfg.seed);
     const json r = {{"n_grains", 100},

@@ -1,4 +1,4 @@
-// The quasi-static finisher (core/quasi_static_finisher.hpp) on nscd, against static equilibria
+// The quasi-static finisher (compaction/quasi_static_finisher.hpp) on nscd, against static equilibria
 // known in closed form: the finisher must end at the exact resting pose with the exact forces.
 #include <catch2/catch.hpp>
 #include <algorithm>
@@ -9,7 +9,7 @@
 
 #include "backends/bullet/bullet_backend.hpp"
 #include "backends/nscd/nscd_backend.hpp"
-#include "core/quasi_static_finisher.hpp"
+#include "compaction/quasi_static_finisher.hpp"
 #include "tests/support/systems.hpp"
 
 using namespace confpack;
@@ -23,10 +23,10 @@ namespace {
 
 /// Finisher steps on `b` until the last one moved nothing more than 1e-12 d_L; returns the finisher.
 /// `largestMove`, if given, receives the largest displacement of any step.
-core::QuasiStaticFinisher settle(core::ContactBackend& b, long maxSteps = 400, double* largestMove = nullptr) {
+compaction::QuasiStaticFinisher settle(core::ContactBackend& b, long maxSteps = 400, double* largestMove = nullptr) {
   core::CompactionDef def;
   def.settleTolerance = 1e-12;
-  core::QuasiStaticFinisher f(def, 1.0, 1e-3);
+  compaction::QuasiStaticFinisher f(def, 1.0, 1e-3);
   while (f.steps() < maxSteps && !(f.steps() > 1 && f.settled())) {
     const double moved = f.step(b).maxDisplacement;
     if (largestMove) *largestMove = std::max(*largestMove, moved);
@@ -53,7 +53,7 @@ TEST_CASE("finisher: a sphere ends touching the floor with its centre at d/2, ca
   s.grains.push_back(sphere(1.0, Vec3(2.0, 2.0, start)));
   auto b = nscd::makeNscdBackend(s, kTight);
   double largestMove = 0.0;
-  const core::QuasiStaticFinisher f = settle(*b, 400, &largestMove);
+  const compaction::QuasiStaticFinisher f = settle(*b, 400, &largestMove);
   INFO("start " << start << ", steps " << f.steps());
   CHECK(f.settled());
   CHECK(b->states()[0].position.z() == Approx(0.5).margin(1e-10));
@@ -172,7 +172,7 @@ TEST_CASE(
   auto b = nscd::makeNscdBackend(s, options);
   core::CompactionDef def;
   def.settleTolerance = 1e-12;
-  core::QuasiStaticFinisher f(def, 1.0, 1e-3);
+  compaction::QuasiStaticFinisher f(def, 1.0, 1e-3);
   // Until a solve ends at the cap (an inexact step), which it does once the grains touch.
   while (f.steps() < 200 && b->profile().iterations < 3) f.step(*b);
   REQUIRE(b->profile().iterations == 3);

@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "study/deposit_store.hpp"
 #include "tests/support/same_bits.hpp"
 #include "tests/support/scratch.hpp"
@@ -21,11 +21,11 @@ TEST_CASE("a deposit written to disk reads back bit for bit") {
   population.smallFraction = 30.0;  // two sizes, both with awkward doubles
   core::DepositionDef def;
   def.grainCount = 60;
-  const core::Deposit d = core::deposit(box, population, def, 21);
+  const compaction::Deposit d = compaction::deposit(box, population, def, 21);
   REQUIRE(d.grains.size() == 60);
   const fs::path dir = testing::freshDir("deposit_store");
   study::writeDeposit(d, box, dir / "deposit.json");
-  const core::Deposit back = study::readDeposit(dir / "deposit.json");
+  const compaction::Deposit back = study::readDeposit(dir / "deposit.json");
   REQUIRE(back.grains.size() == d.grains.size());
   REQUIRE(back.placeholders.size() == d.placeholders.size());
   bool same = true;
@@ -45,7 +45,7 @@ TEST_CASE("a deposit written to disk reads back bit for bit") {
 
 TEST_CASE("a document that is not a whole deposit is refused naming the field") {
   core::BoxDef box;
-  core::Deposit d;
+  compaction::Deposit d;
   d.grains.resize(2);
   d.grains[0].position = core::Vec3(1.0, 1.0, 0.5);
   d.grains[1].position = core::Vec3(3.0, 1.0, 0.5);

@@ -53,7 +53,7 @@ void makeStudy(const fs::path& dir) {
   const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
     "name": "browser", "base": { "box": { "length_x": 6, "height": 4 } }, "biperiodic_width": 12,
     "vary": { "width": [4, 8, "biperiodic"], "replicas": 2, "backend": ["nscd", "bullet"] } })"));
-  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
                    const study::RunProgressFn&) {
     const double s = 0.002 * static_cast<double>(cfg.seed);
     const double w = cfg.box.periodicY ? 1e9 : cfg.box.width;

@@ -1,26 +1,14 @@
-// study/run_pipeline.hpp: compaction with the adaptive time step and with the quasi-static
-// protocol.
-//
-// The adaptive time step of a compaction (compaction.adaptive_dt, study/run_pipeline.hpp): the
-// step keeps every grain within a hundredth of the smallest grain size per step at its current
-// speed, and a pile compacted with it ends in a true static equilibrium (forces are impulses over
-// the step that made them, whatever its length).
-//
-// The quasi-static protocol of a compaction (compaction.protocol, study/run_pipeline.hpp): nscd
-// falls with time steps, hands over to the finisher and ends in a static equilibrium whose floor
-// reaction is the weight; Bullet, which has no finisher, runs the dynamic protocol and says so.
-#include <algorithm>
+// study/run_pipeline.hpp: a run from a packing records its settle (docs/model.md, "Settling a pile
+// from another backend"): how far the grains moved to rest, and phi and Z before and after.
 #include <catch2/catch.hpp>
-#include <cmath>
+#include <filesystem>
 #include <string>
-#include <utility>
-#include <vector>
+#include <unistd.h>
 
 #include "analysis/coordination.hpp"
 #include "analysis/rigidity.hpp"
-#include "core/box.hpp"
-#include "core/deposition.hpp"
-#include "core/grain.hpp"
+#include "compaction/compaction.hpp"
+#include "core/json_input.hpp"
 #include "study/run_pipeline.hpp"
 #include "tests/support/systems.hpp"
 
@@ -28,264 +16,100 @@ using namespace confpack;
 
 namespace {
 
-core::Grain sphereOf(double d) { return testing::sphere(d, core::Vec3::Zero()); }
-
-core::BodyState moving(const core::Vec3& v, const core::Vec3& omega = core::Vec3::Zero()) {
-  core::BodyState s;
-  s.velocity = v;
-  s.angularVelocity = omega;
-  return s;
-}
-
-core::RunConfig smallBox(const std::string& backend, double wallFriction) {
-  return testing::smallQuasiStaticRun(backend, wallFriction);
-}
-
-double floorReaction(const core::Packing& p) {
-  double f = 0.0;
-  for (const core::Contact& c : *p.contacts)
-    if (c.b == static_cast<int>(core::WallId::Floor)) f -= c.forceOnB().z();
-  return f;
-}
-
-/// cfg's deposit (of its own seed) and its compaction.
-struct Compacted {
-  core::Deposit deposit;
-  study::CompactionOutcome outcome;
-};
-
-Compacted depositAndCompact(const core::RunConfig& cfg) {
-  core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  study::CompactionOutcome out = study::compact(cfg, dep);
-  return {std::move(dep), std::move(out)};
+/// The run of `cfg` started from `packing`'s grains, as `confpack run --from` starts it.
+study::FinishedRun settle(const core::RunConfig& cfg, const core::Packing& packing) {
+  const compaction::Deposit from = compaction::depositFromPacking(packing, "pile.json");
+  return study::runProtocol(cfg, {}, {}, &from);
 }
 
 }  // namespace
 
-TEST_CASE("adaptive step: v dt + g dt^2 / 2 equals a hundredth of the smallest grain") {
-  const double g = 1.0, floor = 1e-4, previous = 1e9;  // no clamp in play
-  const std::vector<core::Grain> mono(3, sphereOf(1.0));
+TEST_CASE("settle: a pile already at rest moves by nothing and keeps its phi and Z") {
+  core::RunConfig cfg = testing::smallQuasiStaticRun("nscd", 0.0);
+  cfg.box.height = 9.0;  // a bulk region 3 d_L from the floor and from the free surface
+  const study::FinishedRun rest = study::runProtocol(cfg);
+  REQUIRE(rest.result["equilibrium"]["reached"].get<bool>());
+  CHECK_FALSE(rest.result.contains("settle"));  // a run from a deposit has nothing to record
 
-  SECTION("grains at rest: the free fall from rest covers d/100, dt = sqrt(2 s / g)") {
-    const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    const double dt = study::AdaptiveTimeStep(mono, g, floor).next(previous, rest);
-    CHECK(dt == Approx(std::sqrt(0.02)).epsilon(1e-12));
-  }
-  SECTION("the fastest grain sets the step: v = 0.5 gives dt = sqrt(v^2 + 2 g s) - v") {
-    const std::vector<core::BodyState> states = {moving({0.1, 0, 0}), moving({0, -0.3, -0.4}), moving({0, 0, 0})};
-    const double dt = study::AdaptiveTimeStep(mono, g, floor).next(previous, states);
-    CHECK(dt == Approx(std::sqrt(0.25 + 0.02) - 0.5).epsilon(1e-12));
-    CHECK(0.5 * dt + 0.5 * g * dt * dt == Approx(0.01).epsilon(1e-12));
-  }
-  SECTION("a spinning pinacoid counts with the speed of its surface, omega r; a spinning sphere does not move") {
-    const std::vector<core::BodyState> spinning = {moving(core::Vec3::Zero(), {0, 0, 1.0}), moving(core::Vec3::Zero()),
-                                                   moving(core::Vec3::Zero())};
-    std::vector<core::Grain> withPinacoid = mono;
-    withPinacoid[0] = testing::pinacoid(1.0, core::Vec3::Zero());
-    const double r = withPinacoid[0].boundingRadius();
-    CHECK(study::AdaptiveTimeStep(withPinacoid, g, floor).next(previous, spinning) ==
-          Approx(std::sqrt(r * r + 0.02) - r).epsilon(1e-12));
-    // The sphere's spin leaves its boundary where it is: the step of grains at rest.
-    CHECK(study::AdaptiveTimeStep(mono, g, floor).next(previous, spinning) == Approx(std::sqrt(0.02)).epsilon(1e-12));
-  }
-  SECTION("a bidisperse sample is bounded by its small grains: s = d_S / 100") {
-    const std::vector<core::Grain> bi = {sphereOf(1.0), sphereOf(0.5), sphereOf(1.0)};
-    const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    CHECK(study::AdaptiveTimeStep(bi, g, floor).next(previous, rest) == Approx(std::sqrt(0.01)).epsilon(1e-12));
-  }
-  SECTION("clamped: never below the fixed step, never more than kAdaptiveGrowth x the step before") {
-    const std::vector<core::BodyState> fast(3, moving({0, 0, -10.0}));
-    CHECK(study::AdaptiveTimeStep(mono, g, 2e-3).next(previous, fast) == 2e-3);  // the rule alone gives ~1e-3
-    const std::vector<core::BodyState> rest(3, moving(core::Vec3::Zero()));
-    CHECK(study::AdaptiveTimeStep(mono, g, floor).next(0.01, rest) == Approx(study::kAdaptiveGrowth * 0.01));
-  }
+  const study::FinishedRun again = settle(cfg, rest.packing);
+  REQUIRE(again.result.contains("settle"));
+  const nlohmann::json& s = again.result["settle"];
+  INFO(s.dump());
+  CHECK(s["from"] == "pile.json");
+  CHECK(s["reached"].get<bool>());
+  // Rigid grains in equilibrium: the contact forces hold gravity from the first step, and no grain
+  // moves by more than the solver's tolerance allows (a millionth of a grain over the run).
+  CHECK(s["max_displacement"].get<double>() < 1e-6);
+  CHECK(s["mean_displacement"].get<double>() <= s["max_displacement"].get<double>());
+  CHECK(s["after"]["solid_fraction"].get<double>() == Approx(s["before"]["solid_fraction"].get<double>()).epsilon(1e-9));
+  CHECK(s["after"]["Z"].get<double>() == Approx(s["before"]["Z"].get<double>()).margin(1e-9));
 }
 
-TEST_CASE("adaptive step: a deposit compacts to equilibrium, the floor carries the weight, with either backend") {
-  const std::string backend = GENERATE(std::string("nscd"), std::string("bullet"));
-  INFO("backend " << backend);
-  core::RunConfig cfg;
-  cfg.box.lengthX = 4.0;
-  cfg.box.width = 3.0;
-  cfg.box.height = 4.0;
-  cfg.backend = backend;
-  cfg.seed = 2;
-  cfg.compaction.adaptiveDt = true;
-  cfg.compaction.timeLimit = 150.0;
-  cfg.compaction.checkInterval = 50;
-  const auto [dep, out] = depositAndCompact(cfg);
-  REQUIRE(dep.grains.size() > 20);
-  INFO(out.equilibrium.dump());
-  // Bullet's sequential impulses do not meet the equilibrium test's force bound (README, Known
-  // limitations): only its floor reaction is checked, to its own accuracy.
-  if (backend == "nscd") REQUIRE(out.reached);
-  // The step grew well past the fixed step once the pile stopped falling.
-  CHECK(out.dtLargest > 10.0 * out.dt);
-  // ... and equilibrium was still checked at least every kAdaptiveCheckSpacing of simulated time.
-  REQUIRE(out.history.size() > 2);
-  for (std::size_t k = 1; k < out.history.size(); ++k)
-    CHECK(out.history[k].time - out.history[k - 1].time <= study::kAdaptiveCheckSpacing + out.dtLargest);
-  // Frictionless side walls: the floor carries the whole weight (rho = g = 1), through forces
-  // computed from the impulses of a step of the last step's own length.
-  REQUIRE(out.packing.contacts.has_value());
-  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(backend == "nscd" ? 1e-6 : 1e-2));
+TEST_CASE("settle: a Bullet pile of frictionless spheres stopped early, brought to rest by nscd, is isostatic") {
+  // A biperiodic pile of a few hundred spheres, tall enough for a bulk region 3 d_L from the floor
+  // and from the free surface; Bullet stops it at 8 t0, still moving (force ratio of order one).
+  core::RunConfig bullet;
+  bullet.box.lengthX = 6.0;
+  bullet.box.width = 6.0;
+  bullet.box.periodicY = true;
+  bullet.box.height = 10.0;
+  bullet.seed = 1;
+  bullet.backend = "bullet";
+  bullet.compaction.timeLimit = 8.0;
+  const study::FinishedRun stopped = study::runProtocol(bullet);
+  REQUIRE(stopped.packing.grains.size() > 300);
+  CHECK_FALSE(stopped.result["equilibrium"]["reached"].get<bool>());
+
+  core::RunConfig nscd = bullet;
+  nscd.backend = "nscd";
+  nscd.compaction.protocol = core::Protocol::QuasiStatic;
+  nscd.compaction.timeLimit = 40.0;
+  const study::FinishedRun settled = settle(nscd, stopped.packing);
+  const nlohmann::json& s = settled.result["settle"];
+  INFO(s.dump());
+  REQUIRE(s["reached"].get<bool>());
+  // The settle moved the grains (Bullet's pile was not at rest), by a fraction of a grain.
+  CHECK(s["mean_displacement"].get<double>() > 1e-4);
+  CHECK(s["max_displacement"].get<double>() < 1.0);
+  // Rigid frictionless spheres at rest: an isostatic network, no self-stress (Roux, PRE 61, 6802,
+  // 2000), and the coordination of nscd's own pile from the same deposit at rest within 2 % (the
+  // same bulk region counts boundary contacts alike in both).
+  const auto rigidity = analysis::contactRigidity(
+      settled.packing, analysis::forceCarryingContacts(settled.packing, *settled.packing.contacts, false));
+  REQUIRE(rigidity.has_value());
+  CHECK(rigidity->selfStresses() == 0);
+  const study::FinishedRun own = study::runProtocol(nscd);
+  REQUIRE(own.result["equilibrium"]["reached"].get<bool>());
+  const double zOwn = own.result["coordination"]["Z"].get<double>() + 2.0 * own.result["coordination"]["wall"].get<double>();
+  const double zSettled = s["after"]["Z"].get<double>() + 2.0 * s["after"]["wall"].get<double>();
+  CHECK(zSettled == Approx(zOwn).epsilon(0.02));
+  // Bullet's own count, as it stopped, is not: its impulses are not converged forces.
+  CHECK(s["before"]["Z"].get<double>() < s["after"]["Z"].get<double>());
 }
 
-TEST_CASE("quasi-static protocol: nscd hands over to the finisher and ends at rest, the floor carrying the weight") {
-  const double mu = GENERATE(0.0, 0.5);
-  INFO("mu_w " << mu);
-  const core::RunConfig cfg = smallBox("nscd", mu);
-  const auto [dep, out] = depositAndCompact(cfg);
-  REQUIRE(dep.grains.size() > 20);
-  INFO(out.timing["stages"].dump());
-  REQUIRE(out.reached);
-  CHECK(out.protocol == core::Protocol::QuasiStatic);
-  CHECK(out.timing["protocol"] == "quasi-static");
-  const auto& stages = out.timing["stages"];
-  REQUIRE(stages.contains("quasi_static"));
-  CHECK(stages["quasi_static"]["steps"].get<long>() > 0);
-  CHECK(stages["quasi_static"]["last_displacement"].get<double>() <= cfg.compaction.settleTolerance);
-  // It handed over before the time limit, at a check whose kinetic ratio was below the switch.
-  CHECK(stages["dynamic"]["simulated_time"].get<double>() < cfg.compaction.timeLimit);
-  CHECK(stages["quasi_static"]["handed_over_at"] == "switch_kinetic_ratio");
-  CHECK(stages["quasi_static"]["mean_kinetic_ratio_at_hand_over"].get<double>() < cfg.compaction.switchKineticRatio);
-  // A sphere pile's finisher solves with the interior point ("auto") from the start.
-  CHECK(stages["quasi_static"]["solver"] == "ipm");
-  CHECK(stages["quasi_static"]["switched_from_mprgp"] == false);
-  // Frictionless side walls: the floor carries the whole weight (rho = g = 1). With friction the
-  // walls may carry part of it, never more than all of it.
-  const double weight = core::totalVolume(dep.grains);
-  if (mu == 0.0)
-    CHECK(floorReaction(out.packing) == Approx(weight).epsilon(1e-8));
-  else
-    CHECK(floorReaction(out.packing) <= weight * (1.0 + 1e-8));
-  // Rigid, frictionless and at rest: the contact network is isostatic, no self-stress (Roux,
-  // PRE 61, 6802, 2000), whatever the pile's local coordination.
-  if (mu == 0.0) {
-    const auto rigidity = analysis::contactRigidity(
-        out.packing, analysis::forceCarryingContacts(out.packing, *out.packing.contacts, false));
-    REQUIRE(rigidity.has_value());
-    CHECK(rigidity->contacts > 2 * static_cast<int>(dep.grains.size()));
-    CHECK(rigidity->selfStresses() == 0);
-  }
-}
+TEST_CASE("settleAndWrite: a sweep's settle_with takes a finished Bullet run on to rest beside it, in RUN/settled/") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_settle_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  core::RunConfig cfg = testing::smallQuasiStaticRun("bullet", 0.0);
+  cfg.compaction.timeLimit = 2.0;  // stopped early, still falling
+  cfg.backendOptions = {{"iterations", 20}};
+  const nlohmann::json stopped = study::runAndWrite(cfg, dir);
+  CHECK_FALSE(stopped["equilibrium"]["reached"].get<bool>());
 
-TEST_CASE("quasi-static protocol: spheres spun by wall friction do not hold the fall back") {
-  // The quick study's W = 3, mu_w = 0.5 pile of seed 2 (95 spheres). Wall friction spins spheres,
-  // and a sphere that leaves the wall keeps its spin (its other contacts are frictionless); with
-  // the spin counted, this fall ran to its 30 t0 limit, the mean kinetic ratio still 1.4e-4.
-  core::RunConfig cfg = smallBox("nscd", 0.5);
-  cfg.box.height = 7.0;
-  cfg.compaction.fallTimeLimit = 30.0;
-  cfg.compaction.checkInterval = 200;
-  cfg.compaction.settleTolerance = 1e-6;
-  const auto [dep, out] = depositAndCompact(cfg);
-  const auto& stages = out.timing["stages"];
-  INFO(stages.dump());
-  REQUIRE(stages.contains("quasi_static"));
-  CHECK(stages["quasi_static"]["handed_over_at"] == "switch_kinetic_ratio");
-  CHECK(stages["dynamic"]["simulated_time"].get<double>() < 20.0);
-  REQUIRE(out.reached);
-  CHECK(floorReaction(out.packing) <= core::totalVolume(dep.grains) * (1.0 + 1e-8));
-}
-
-TEST_CASE("quasi-static protocol: at the time limit the finisher takes over and still ends at rest") {
-  core::RunConfig cfg = smallBox("nscd", 0.0);
-  cfg.compaction.timeLimit = 3.0;  // the grains are still falling onto the pile
-  const auto [dep, out] = depositAndCompact(cfg);
-  const auto& stages = out.timing["stages"];
-  INFO(stages.dump());
-  REQUIRE(stages.contains("quasi_static"));
-  CHECK(stages["quasi_static"]["handed_over_at"] == "time_limit");
-  // Still falling: result.json says how far from the switch the fall was.
-  CHECK(stages["quasi_static"]["mean_kinetic_ratio_at_hand_over"].get<double>() > cfg.compaction.switchKineticRatio);
-  REQUIRE(out.reached);
-  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-8));
-}
-
-// nscd's fall_tolerance loosens the fall's solves only: the finisher, with its own threshold,
-// still balances the pile, so the floor carries the weight to the finisher's accuracy
-// (settle_tolerance, 1e-6 d, for pinacoids; the interior-point solves of sphere piles do better).
-// Sphere piles keep the tight solves unless told ("auto"); pinacoid piles loosen them by default.
-TEST_CASE("quasi-static protocol: a fall solved to 1e-6 takes fewer iterations and still ends in equilibrium") {
-  const bool pinacoids = GENERATE(false, true);
-  INFO((pinacoids ? "pinacoids" : "spheres"));
-  core::RunConfig cfg = smallBox("nscd", 0.0);
-  if (pinacoids) {
-    cfg.box.height = 3.0;
-    cfg.population.shape = core::ShapeKind::Pinacoid;
-  }
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const auto compactWith = [&](const nlohmann::json& options) {
-    core::RunConfig c = cfg;
-    c.backendOptions = options;
-    return study::compact(c, dep);
-  };
-  const study::CompactionOutcome tight =
-      compactWith(pinacoids ? nlohmann::json{{"fall_tolerance", 1e-10}} : nlohmann::json::object());
-  const study::CompactionOutcome loose =
-      compactWith(pinacoids ? nlohmann::json::object() : nlohmann::json{{"fall_tolerance", 1e-6}});
-  INFO(tight.timing["stages"].dump() << "\n" << loose.timing["stages"].dump());
-  REQUIRE(tight.reached);
-  REQUIRE(loose.reached);
-  CHECK(loose.timing["stages"]["dynamic"]["iterations"].get<double>() <
-        0.8 * tight.timing["stages"]["dynamic"]["iterations"].get<double>());
-  CHECK(floorReaction(loose.packing) == Approx(core::totalVolume(dep.grains)).epsilon(pinacoids ? 1e-6 : 1e-8));
-}
-
-// fall_time_limit bounds nscd's fall and leaves time_limit to Bullet, which has no finisher: one
-// study can give nscd's piles the fall they need and stop Bullet early (reproduce --scale quick).
-TEST_CASE("quasi-static protocol: fall_time_limit bounds nscd's fall, time_limit Bullet's run") {
-  for (const std::string backend : {"nscd", "bullet"}) {
-    INFO(backend);
-    core::RunConfig cfg = smallBox(backend, 0.0);
-    cfg.compaction.timeLimit = 0.5;
-    cfg.compaction.fallTimeLimit = 3.0;  // the grains are still falling onto the pile at 3 t0
-    const auto [dep, out] = depositAndCompact(cfg);
-    const auto& stages = out.timing["stages"];
-    INFO(stages.dump());
-    const double fell = stages["dynamic"]["simulated_time"].get<double>();
-    if (backend == "nscd") {
-      CHECK(fell == Approx(3.0).margin(out.dt));
-      CHECK(stages["quasi_static"]["handed_over_at"] == "fall_time_limit");
-      CHECK(out.reached);
-    } else {
-      CHECK(fell == Approx(0.5).margin(out.dt));
-      CHECK_FALSE(stages.contains("quasi_static"));
-      CHECK_FALSE(out.reached);
-    }
-  }
-}
-
-// The finisher from a pile still settling, with every long step capping grains: the overlaps a
-// capped grain leaves must be removed, not grow (with the trust radius alone, this pile never
-// came to rest in 3,000 steps and its grains sank into one another).
-TEST_CASE("quasi-static protocol: a pinacoid pile handed over early still ends at rest, without overlaps") {
-  core::RunConfig cfg = smallBox("nscd", 0.0);
-  cfg.box.height = 3.0;
-  cfg.population.shape = core::ShapeKind::Pinacoid;
-  cfg.seed = 1;
-  cfg.compaction.switchKineticRatio = 1.0;  // hand over at the first check after the fall has begun
-  const auto [dep, out] = depositAndCompact(cfg);
-  REQUIRE(dep.grains.size() > 40);
-  INFO(out.timing["stages"].dump());
-  REQUIRE(out.timing["stages"].contains("quasi_static"));
-  CHECK(out.timing["stages"]["quasi_static"]["clipped_steps"].get<long>() > 0);
-  REQUIRE(out.reached);
-  double deepest = 0.0;
-  for (const core::Contact& c : *out.packing.contacts)
-    for (const core::ContactPoint& p : c.points) deepest = std::min(deepest, p.gap);
-  CHECK(deepest > -1e-6);
-  // The finisher stops once no grain moved more than settle_tolerance (1e-6 d) in its last step;
-  // the floor carries the weight to that relative accuracy.
-  CHECK(floorReaction(out.packing) == Approx(core::totalVolume(dep.grains)).epsilon(1e-6));
-}
-
-TEST_CASE("quasi-static protocol: Bullet has no finisher, runs dynamic and records it") {
-  core::RunConfig cfg = smallBox("bullet", 0.0);
-  cfg.compaction.timeLimit = 2.0;
-  const auto [dep, out] = depositAndCompact(cfg);
-  CHECK(out.protocol == core::Protocol::Dynamic);
-  CHECK(out.timing["protocol"] == "dynamic");
-  CHECK_FALSE(out.timing["stages"].contains("quasi_static"));
+  const nlohmann::json settled = study::settleAndWrite(cfg, dir, "nscd");
+  const fs::path out = dir / study::kSettledFolder;
+  CHECK(fs::exists(out / "result.json"));
+  CHECK(fs::exists(out / "packing.json"));
+  const nlohmann::json config = core::readJsonFile(out / "config.json", "config");
+  // The run's box and grains, nscd with its own default options and the quasi-static protocol.
+  CHECK(config["backend"] == "nscd");
+  CHECK(config["backend_options"].empty());
+  CHECK(config["compaction"]["protocol"] == "quasi-static");
+  CHECK(config["box"] == nlohmann::json(cfg.box));
+  CHECK(settled["settle"]["from"] == "../packing.json");
+  CHECK(settled["equilibrium"]["reached"].get<bool>());
+  CHECK(settled["settle"]["max_displacement"].get<double>() > 0.0);
+  fs::remove_all(dir);
 }

@@ -38,8 +38,8 @@ json smallSweep() {
 }
 
 // A deposit that depends on the configuration and seed only, inside the box.
-core::Deposit fakeDeposit(const core::RunConfig& cfg) {
-  core::Deposit d;
+compaction::Deposit fakeDeposit(const core::RunConfig& cfg) {
+  compaction::Deposit d;
   for (int i = 0; i < 5; ++i) {
     core::Grain g;
     g.size = 1.0 + 0.01 * static_cast<double>((cfg.seed * 7 + i) % 5);
@@ -52,7 +52,7 @@ core::Deposit fakeDeposit(const core::RunConfig& cfg) {
   return d;
 }
 
-std::string depositDigest(const core::Deposit& d) {
+std::string depositDigest(const compaction::Deposit& d) {
   std::ostringstream s;
   s.precision(17);
   for (const core::Grain& g : d.grains) s << g.size << ' ' << g.position.transpose() << ';';
@@ -69,7 +69,7 @@ struct Recorder {
   std::set<std::string> throwOn;  // run names whose runner throws (an interruption)
 
   study::SweepRunFn runner() {
-    return [this](const core::RunConfig& cfg, const fs::path& dir, const core::Deposit& dep,
+    return [this](const core::RunConfig& cfg, const fs::path& dir, const compaction::Deposit& dep,
                   const study::RunProgressFn& progress) {
       const std::string name = dir.filename().string();
       {
@@ -178,6 +178,11 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
   CHECK_THAT(message(json::parse(R"({"vary": {}, "groups": [{}]})")), Contains("vary"));
   CHECK_THAT(message(json::parse(R"({"vary": {}, "colour": 1})")), Contains("colour"));
   CHECK(message(json::parse(R"({"vary": {"width": [5, "biperiodic"]}})")) == "accepted");
+  // Only nscd has the finisher that brings any pile to rest.
+  CHECK_THAT(message(json::parse(R"({"vary": {}, "settle_with": "bullet"})")), Contains("s.json: settle_with: expected \"nscd\""));
+  CHECK_THAT(message(json::parse(R"({"vary": {}, "settle_with": 1})")), Contains("settle_with"));
+  CHECK(message(json::parse(R"({"vary": {}, "settle_with": "nscd"})")) == "accepted");
+  CHECK(study::parseSweepSpec(json::parse(R"({"vary": {}, "settle_with": "nscd"})")).settleWith == "nscd");
 }
 
 TEST_CASE("a sweep listing more runs than the limit is refused before any run is listed") {

@@ -10,7 +10,7 @@
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "core/backend.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "tests/support/same_bits.hpp"
 #include "tests/support/systems.hpp"
 
@@ -24,7 +24,7 @@ inline core::SystemDef touchingSpheres(double lx, double w, bool periodicY, std:
   core::SystemDef s = boxSystem(lx, w, periodicY, 0.0);
   core::DepositionDef def;
   def.grainCount = count;
-  const core::Deposit dep = core::deposit(s.box, core::PopulationDef{}, def, seed);
+  const compaction::Deposit dep = compaction::deposit(s.box, core::PopulationDef{}, def, seed);
   s.grains = dep.grains;
   for (core::Grain& g : s.grains) g.size = dep.placeholderDiameter;
   return s;
@@ -43,7 +43,7 @@ inline core::SystemDef pile(core::ShapeKind shape, double lengthX, double width,
   population.shape = shape;
   core::DepositionDef def;
   def.grainCount = n;
-  s.grains = core::deposit(s.box, population, def, 11).grains;
+  s.grains = compaction::deposit(s.box, population, def, 11).grains;
   for (core::Grain& g : s.grains) g.size *= grow;
   return s;
 }

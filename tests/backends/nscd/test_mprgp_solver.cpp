@@ -31,7 +31,7 @@ TEST_CASE("nscd mprgp: the preconditioner's two sweep blocks share no grain, and
     population.shape = core::ShapeKind::Pinacoid;
     core::DepositionDef def;
     def.grainCount = 3000;
-    s.grains = core::deposit(s.box, population, def, 11).grains;
+    s.grains = compaction::deposit(s.box, population, def, 11).grains;
     // Placeholders circumscribe the grains: grown by half, neighbours overlap, as in a pile
     // pressed together (one cold step: overlaps only set the gap terms).
     for (core::Grain& g : s.grains) g.size *= 1.5;

@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "core/backend.hpp"
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "core/run_config.hpp"
 
-namespace confpack::study {
+namespace confpack::compaction {
 
 /// Where and how often a compaction saves its state. With a file that holds a checkpoint of the
 /// same run, the compaction resumes from it; it writes the file at the first equilibrium check
@@ -43,6 +43,11 @@ struct CheckPoint {
   double solveSeconds = 0.0;             ///< time in the solve phase since the start [s]
   double stepSeconds = 0.0;              ///< time in the backend's steps since the start (no checks) [s]
   double stepCpuSeconds = 0.0;           ///< the same in process CPU time (all threads) [s]
+  /// The pile's relaxation (docs/model.md, "Relaxation histories"): phi of the bulk region and Z of
+  /// its force-carrying contacts per bulk grain at this check; NaN in a checkpoint written
+  /// before they were recorded.
+  double solidFraction = 0.0;
+  double coordination = 0.0;
 };
 
 /// Where a compaction stands: its stage, clocks and counters (everything result.json's timing and
@@ -72,7 +77,7 @@ struct CompactionCounters {
 
 /// What a checkpoint must match to be resumed: the configuration (threads aside: they change no
 /// bit of an nscd run) and the deposit's grains (count and a fingerprint of their poses and sizes).
-nlohmann::json checkpointIdentity(const core::RunConfig& cfg, const core::Deposit& deposit);
+nlohmann::json checkpointIdentity(const core::RunConfig& cfg, const Deposit& deposit);
 
 struct LoadedCheckpoint {
   CompactionCounters counters;
@@ -101,4 +106,4 @@ std::string describeCheckpoint(const std::filesystem::path& file);
 void writeCheckpoint(const std::filesystem::path& file, const nlohmann::json& identity,
                      const CompactionCounters& counters, const nlohmann::json& backend, const nlohmann::json& finisher);
 
-}  // namespace confpack::study
+}  // namespace confpack::compaction

@@ -12,9 +12,10 @@
 #include <tuple>
 #include <vector>
 
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 
 using namespace confpack::core;
+using namespace confpack::compaction;
 
 namespace {
 

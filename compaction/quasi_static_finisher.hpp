@@ -6,7 +6,7 @@
 // multipliers (Roux, PRE 61, 6802, 2000). The finisher approaches it by a sequence of steps from
 // rest, each the implicit Euler (Moreau-Jean, theta = 1) step of length h:
 //     min_dq  1/2 dq.M dq / h^2 - F_ext.dq   subject to  gap_c + J_c dq >= 0  (and Coulomb at walls),
-// with contacts re-detected before each step (ContactBackend::quasiStaticStep). That is a proximal
+// with contacts re-detected before each step (core::ContactBackend::quasiStaticStep). That is a proximal
 // point iteration on U with the metric M / h^2: a sequential quadratic program in the spirit of
 // the sequential linear programming of Torquato & Jiao (PRE 82, 061302, 2010) and Donev's LP
 // jamming, for rigid grains with the dynamics' own contact solver. At a fixed point dq = 0, so
@@ -19,22 +19,22 @@
 #include "core/backend.hpp"
 #include "core/run_config.hpp"
 
-namespace confpack::core {
+namespace confpack::compaction {
 
 class QuasiStaticFinisher {
  public:
   /// `smallestSize` scales the trust radius and the settle tolerance; `firstStep` is the first h [t0].
-  QuasiStaticFinisher(const CompactionDef& def, double smallestSize, double firstStep);
+  QuasiStaticFinisher(const core::CompactionDef& def, double smallestSize, double firstStep);
 
   /// One finisher step on `backend` (which must have hasQuasiStaticStep()).
-  QuasiStaticMove step(ContactBackend& backend);
+  core::QuasiStaticMove step(core::ContactBackend& backend);
 
   /// The last step moved no grain's surface more than the settle tolerance.
   bool settled() const { return steps_ > 0 && lastMove_.maxDisplacement <= settleTolerance_; }
   long steps() const { return steps_; }
   long clippedSteps() const { return clipped_; }
   double lastStepLength() const { return lastStep_; }      ///< h of the last step [t0]
-  const QuasiStaticMove& lastMove() const { return lastMove_; }
+  const core::QuasiStaticMove& lastMove() const { return lastMove_; }
 
   /// The finisher's counters and next step, for a run's checkpoint (docs/model.md, "Checkpoints").
   nlohmann::json saveState() const;
@@ -48,7 +48,7 @@ class QuasiStaticFinisher {
   double h_ = 0.0;                ///< the next step [t0]
   double lastStep_ = 0.0;
   long steps_ = 0, clipped_ = 0;
-  QuasiStaticMove lastMove_;
+  core::QuasiStaticMove lastMove_;
 };
 
-}  // namespace confpack::core
+}  // namespace confpack::compaction

@@ -1,4 +1,4 @@
-// study/checkpoint.hpp: a compaction stopped and resumed from its checkpoint. nscd saves
+// compaction/checkpoint.hpp: a compaction stopped and resumed from its checkpoint. nscd saves
 // everything its next step reads, so the resumed run takes the same steps, bit for bit, as the run
 // never stopped, in the fall and in the finisher; Bullet takes back poses and velocities only.
 // The stop here is a dead process (the progress callback throws at a check, as a kill -9 would
@@ -14,10 +14,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 #include "core/run_config.hpp"
-#include "study/checkpoint.hpp"
-#include "study/run_pipeline.hpp"
+#include "compaction/checkpoint.hpp"
+#include "compaction/compaction.hpp"
 #include "tests/support/scratch.hpp"
 #include "tests/support/systems.hpp"
 
@@ -37,12 +37,12 @@ struct Killed : std::runtime_error {
 };
 
 /// The compaction with a checkpoint saved at every check, killed at the `killAt`-th check.
-void killedAt(const core::RunConfig& cfg, const core::Deposit& dep, const fs::path& file, int killAt) {
-  study::Checkpointing every;
+void killedAt(const core::RunConfig& cfg, const compaction::Deposit& dep, const fs::path& file, int killAt) {
+  compaction::Checkpointing every;
   every.file = file;
   every.everySeconds = 0.0;
   int checks = 0;
-  CHECK_THROWS_AS(study::compact(
+  CHECK_THROWS_AS(compaction::compact(
                       cfg, dep, {},
                       [&](double, const std::string&) {
                         if (++checks == killAt) throw Killed();
@@ -56,7 +56,7 @@ nlohmann::json readJson(const fs::path& p) {
   return nlohmann::json::parse(in);
 }
 
-void checkSamePacking(const study::CompactionOutcome& a, const study::CompactionOutcome& b) {
+void checkSamePacking(const compaction::CompactionOutcome& a, const compaction::CompactionOutcome& b) {
   REQUIRE(a.packing.grains.size() == b.packing.grains.size());
   for (std::size_t i = 0; i < a.packing.grains.size(); ++i) {
     INFO("grain " << i);
@@ -83,8 +83,8 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
   if (inFinisher) cfg.compaction.switchKineticRatio = 1.0;
   cfg.compaction.finisherMaxSteps = 100;
   cfg.compaction.fallTimeLimit = 6.0;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const study::CompactionOutcome whole = study::compact(cfg, dep);
+  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
   const auto& stages = whole.timing["stages"];
   INFO(stages.dump());
   REQUIRE(stages.contains("quasi_static"));
@@ -98,9 +98,9 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
   killedAt(cfg, dep, file, inFinisher ? static_cast<int>(fallChecks + 2) : 3);
   REQUIRE(fs::exists(file));
   CHECK(readJson(file)["stage"] == (inFinisher ? "finisher" : "fall"));
-  study::Checkpointing resume;
+  compaction::Checkpointing resume;
   resume.file = file;
-  const study::CompactionOutcome resumed = study::compact(cfg, dep, {}, {}, resume);
+  const compaction::CompactionOutcome resumed = compaction::compact(cfg, dep, {}, {}, resume);
   checkSamePacking(whole, resumed);
   CHECK(resumed.timing["checkpoint"]["resumes"] == 1);
   CHECK(resumed.timing["checkpoint"]["exact"] == true);
@@ -108,7 +108,7 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
     nlohmann::json j = readJson(file);
     j["finisher"]["h"] = -1.0;
     std::ofstream(file) << j.dump();
-    const study::CompactionOutcome afresh = study::compact(cfg, dep, {}, {}, resume);
+    const compaction::CompactionOutcome afresh = compaction::compact(cfg, dep, {}, {}, resume);
     CHECK(afresh.timing["checkpoint"]["resumes"] == 0);
     CHECK_THAT(afresh.timing["checkpoint"]["ignored"].get<std::string>(), Catch::Contains("does not fit"));
     checkSamePacking(whole, afresh);
@@ -118,15 +118,15 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
 TEST_CASE("checkpoint: Bullet resumes from the saved poses and velocities and still runs its time") {
   core::RunConfig cfg = smallPile("bullet", core::ShapeKind::Sphere);
   cfg.compaction.timeLimit = 3.0;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const study::CompactionOutcome whole = study::compact(cfg, dep);
+  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
   const fs::path file = testing::freshDir("checkpoint_bullet") / "run.json";
   killedAt(cfg, dep, file, 4);
   const nlohmann::json saved = readJson(file);
   const long savedSteps = saved["steps"].get<long>();
-  study::Checkpointing resume;
+  compaction::Checkpointing resume;
   resume.file = file;
-  const study::CompactionOutcome resumed = study::compact(cfg, dep, {}, {}, resume);
+  const compaction::CompactionOutcome resumed = compaction::compact(cfg, dep, {}, {}, resume);
   CHECK(resumed.timing["checkpoint"]["exact"] == false);
   CHECK(resumed.timing["checkpoint"]["resumes"] == 1);
   // The same step count to the same time limit, the history of the first attempt kept.
@@ -145,25 +145,25 @@ TEST_CASE("checkpoint: another run's checkpoint, or a damaged one, is set aside 
   core::RunConfig cfg = smallPile("nscd", core::ShapeKind::Sphere);
   cfg.compaction.timeLimit = 2.0;
   cfg.compaction.protocol = core::Protocol::Dynamic;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const study::CompactionOutcome whole = study::compact(cfg, dep);
+  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
   const fs::path file = testing::freshDir("checkpoint_other") / "run.json";
   killedAt(cfg, dep, file, 2);
-  study::Checkpointing resume;
+  compaction::Checkpointing resume;
   resume.file = file;
 
   SECTION("another seed's") {
     core::RunConfig other = cfg;
     other.seed = 3;
-    const core::Deposit otherDep = core::deposit(other.box, other.population, other.deposition, other.seed);
-    const study::CompactionOutcome out = study::compact(other, otherDep, {}, {}, resume);
+    const compaction::Deposit otherDep = compaction::deposit(other.box, other.population, other.deposition, other.seed);
+    const compaction::CompactionOutcome out = compaction::compact(other, otherDep, {}, {}, resume);
     CHECK(out.timing["checkpoint"]["resumes"] == 0);
     CHECK(out.timing["checkpoint"]["ignored"].get<std::string>().find("another run's") != std::string::npos);
   }
   SECTION("the same run's with another thread count: resumed, the same bits") {
     core::RunConfig two = cfg;
     two.threads = 2;
-    const study::CompactionOutcome out = study::compact(two, dep, {}, {}, resume);
+    const compaction::CompactionOutcome out = compaction::compact(two, dep, {}, {}, resume);
     CHECK(out.timing["checkpoint"]["resumes"] == 1);
     checkSamePacking(whole, out);
   }
@@ -171,7 +171,7 @@ TEST_CASE("checkpoint: another run's checkpoint, or a damaged one, is set aside 
     nlohmann::json j = readJson(file);
     j["backend"]["cache"]["entries"] = 7;
     std::ofstream(file) << j.dump();
-    const study::CompactionOutcome out = study::compact(cfg, dep, {}, {}, resume);
+    const compaction::CompactionOutcome out = compaction::compact(cfg, dep, {}, {}, resume);
     CHECK(out.timing["checkpoint"]["resumes"] == 0);
     CHECK(out.timing["checkpoint"]["ignored"].get<std::string>().find("does not fit") != std::string::npos);
     checkSamePacking(whole, out);
@@ -182,7 +182,7 @@ TEST_CASE("checkpoint: its description says the stage and how far from rest its 
   core::RunConfig cfg = smallPile("nscd", core::ShapeKind::Sphere);
   cfg.compaction.protocol = core::Protocol::Dynamic;
   cfg.compaction.timeLimit = 6.0;
-  const core::Deposit dep = core::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   const fs::path file = testing::freshDir("checkpoint_describe") / "run.json";
   killedAt(cfg, dep, file, 8);
   nlohmann::json j = readJson(file);
@@ -191,7 +191,7 @@ TEST_CASE("checkpoint: its description says the stage and how far from rest its 
   for (const nlohmann::json& e : j["history"])
     if (e[3].is_number() && e[5].is_number()) last = e;
   REQUIRE(!last.is_null());
-  const std::string said = study::describeCheckpoint(file);
+  const std::string said = compaction::describeCheckpoint(file);
   CHECK_THAT(said, Catch::StartsWith(fmt::format("checkpoint: fall at t = {:.1f}, ", j["sim_time"].get<double>())));
   CHECK_THAT(said, Catch::EndsWith(fmt::format("; last check: force ratio {:.2g} (rest below 0.0001), kinetic ratio "
                                                "{:.2g} (below 1e-08)",
@@ -200,9 +200,9 @@ TEST_CASE("checkpoint: its description says the stage and how far from rest its 
   // A fall whose checks have measured nothing yet (no contacts): no ratios to tell.
   for (nlohmann::json& e : j["history"]) e[3] = "inf";
   std::ofstream(file) << j.dump();
-  CHECK(study::describeCheckpoint(file).find("last check") == std::string::npos);
+  CHECK(compaction::describeCheckpoint(file).find("last check") == std::string::npos);
   // Nothing to say of a missing or unreadable file.
   std::ofstream(file) << "{";
-  CHECK(study::describeCheckpoint(file).empty());
-  CHECK(study::describeCheckpoint(file.parent_path() / "none.json").empty());
+  CHECK(compaction::describeCheckpoint(file).empty());
+  CHECK(compaction::describeCheckpoint(file.parent_path() / "none.json").empty());
 }

@@ -26,7 +26,7 @@
 // vanishes (derived in arcOnTwoSpheres). Every other event (touching a new sphere, the floor or
 // a wall) is a root of g(psi) = A + B cos(psi) + C sin(psi) along the arc, or of a quadratic
 // along the fall: all moves are exact, none is a time step.
-#include "core/deposition.hpp"
+#include "compaction/deposition.hpp"
 
 #include <fmt/format.h>
 
@@ -43,37 +43,10 @@
 #include <string>
 
 #include "collision/cell_list.hpp"
-#include "core/settings_table.hpp"
 
-namespace confpack::core {
+namespace confpack::compaction {
 
-const SettingsTable<DepositionDef>& depositionTable() {
-  using D = DepositionDef;
-  static const SettingsTable<D> table = [] {
-    SettingsTable<D> t("deposition");
-    t.number("expected_solid_fraction", &D::expectedSolidFraction, Range::open(0.0, 1.0), "-",
-             "solid fraction expected after compaction; with the height it sets the volume of grains drawn")
-        .integer("grain_count", &D::grainCount, Range::atLeast(0.0), "-",
-                 "grains to deposit; 0 = from the height and expected_solid_fraction")
-        .integer("max_grains", &D::maxGrains, Range::atLeast(1.0), "-",
-                 "largest number of grains a run may deposit (a guard against a mistyped box)")
-        .integer("grain_cap", &D::grainCap, Range::atLeast(0.0), "-",
-                 "most grains a box is made for: a larger box is shortened along x (length_x) to hold about "
-                 "this many; 0 = no cap");
-    return t;
-  }();
-  return table;
-}
-
-void DepositionDef::validate() const { depositionTable().validate(*this); }
-
-void to_json(nlohmann::json& j, const DepositionDef& d) { j = depositionTable().write(d); }
-
-void from_json(const nlohmann::json& j, DepositionDef& d) {
-  DepositionDef out;
-  depositionTable().read(j, out);
-  d = out;
-}
+using namespace core;  // the model's types: every name here is geometry over them
 
 namespace {
 
@@ -589,4 +562,4 @@ Deposit deposit(const BoxDef& box, const PopulationDef& population, const Deposi
   return out;
 }
 
-}  // namespace confpack::core
+}  // namespace confpack::compaction

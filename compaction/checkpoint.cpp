@@ -1,4 +1,4 @@
-#include "study/checkpoint.hpp"
+#include "compaction/checkpoint.hpp"
 
 #include <fmt/format.h>
 
@@ -13,7 +13,7 @@
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 
-namespace confpack::study {
+namespace confpack::compaction {
 
 namespace {
 
@@ -22,7 +22,7 @@ constexpr int kVersion = 1;
 
 /// FNV-1a over the bits of the grains' poses and sizes (a fingerprint, not a cryptographic hash:
 /// it tells a checkpoint of another deposit from this one's).
-std::string depositFingerprint(const core::Deposit& deposit) {
+std::string depositFingerprint(const Deposit& deposit) {
   std::uint64_t h = 14695981039346656037ull;
   const auto add = [&](double x) {
     std::uint64_t bits;
@@ -62,24 +62,29 @@ nlohmann::json historyToJson(const std::vector<CheckPoint>& history) {
   for (const CheckPoint& c : history)
     out.push_back({c.steps, c.time, c.wallSeconds, number(c.maxForceRatio), number(c.maxMomentRatio),
                    number(c.maxKineticRatio), number(c.interpenetrationPercent), c.iterations, c.rowUpdates,
-                   c.solveSeconds, c.stepSeconds, c.stepCpuSeconds});
+                   c.solveSeconds, c.stepSeconds, c.stepCpuSeconds, number(c.solidFraction),
+                   number(c.coordination)});
   return out;
 }
 
 std::vector<CheckPoint> historyFromJson(const nlohmann::json& j) {
   std::vector<CheckPoint> out;
   for (const nlohmann::json& e : j) {
-    if (!e.is_array() || e.size() != 12) throw std::invalid_argument("a history entry is not 12 numbers");
+    // 12 numbers: a checkpoint from before the relaxation history had phi and Z.
+    if (!e.is_array() || (e.size() != 12 && e.size() != 14))
+      throw std::invalid_argument("a history entry is not 14 numbers");
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     out.push_back({e[0].get<long>(), e[1].get<double>(), e[2].get<double>(), numberFrom(e[3]), numberFrom(e[4]),
                    numberFrom(e[5]), numberFrom(e[6]), e[7].get<long>(), e[8].get<double>(), e[9].get<double>(),
-                   e[10].get<double>(), e[11].get<double>()});
+                   e[10].get<double>(), e[11].get<double>(), e.size() == 14 ? numberFrom(e[12]) : nan,
+                   e.size() == 14 ? numberFrom(e[13]) : nan});
   }
   return out;
 }
 
 }  // namespace
 
-nlohmann::json checkpointIdentity(const core::RunConfig& cfg, const core::Deposit& deposit) {
+nlohmann::json checkpointIdentity(const core::RunConfig& cfg, const Deposit& deposit) {
   nlohmann::json config = cfg;
   config.erase("threads");
   return {{"config", std::move(config)},
@@ -199,4 +204,4 @@ std::string describeCheckpoint(const std::filesystem::path& file) {
   }
 }
 
-}  // namespace confpack::study
+}  // namespace confpack::compaction

@@ -1,11 +1,11 @@
-#include "core/quasi_static_finisher.hpp"
+#include "compaction/quasi_static_finisher.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
-namespace confpack::core {
+namespace confpack::compaction {
 
-QuasiStaticFinisher::QuasiStaticFinisher(const CompactionDef& def, double smallestSize, double firstStep)
+QuasiStaticFinisher::QuasiStaticFinisher(const core::CompactionDef& def, double smallestSize, double firstStep)
     : trustRadius_(def.trustRadius * smallestSize),
       settleTolerance_(def.settleTolerance * smallestSize),
       maxStep_(def.finisherMaxStep),
@@ -13,7 +13,7 @@ QuasiStaticFinisher::QuasiStaticFinisher(const CompactionDef& def, double smalle
   if (!(h_ > 0.0)) throw std::invalid_argument("quasi-static finisher: the first step must be positive");
 }
 
-QuasiStaticMove QuasiStaticFinisher::step(ContactBackend& backend) {
+core::QuasiStaticMove QuasiStaticFinisher::step(core::ContactBackend& backend) {
   lastMove_ = backend.quasiStaticStep(h_, trustRadius_);
   lastStep_ = h_;
   ++steps_;
@@ -50,4 +50,4 @@ void QuasiStaticFinisher::restoreState(const nlohmann::json& state) {
   lastMove_.clipped = state["last_clipped"].get<bool>();
 }
 
-}  // namespace confpack::core
+}  // namespace confpack::compaction
