@@ -122,8 +122,28 @@ std::vector<RunRecord> loadStudy(const fs::path& sweepDir, SweepSpec* spec) {
     rec.run = std::move(r);
     out.push_back(std::move(rec));
   }
+  // The settles after the table's runs, so that the backends keep their order and the settled
+  // series comes third.
+  const std::size_t tableRuns = out.size();
+  for (std::size_t i = 0; i < tableRuns; ++i) {
+    if (out[i].status != RunStatus::Done) continue;
+    const fs::path dir = sweepDir / "runs" / out[i].run.name / kSettledFolder;
+    json result = readJson(dir / "result.json");
+    if (!result.is_object()) continue;
+    RunRecord rec;
+    rec.run = out[i].run;
+    rec.run.name = (fs::path(out[i].run.name) / kSettledFolder).generic_string();
+    rec.run.config.backend = settledName(out[i].run.config.backend);
+    rec.status = RunStatus::Done;
+    rec.marker = out[i].marker;
+    rec.values = flattenResult(result);
+    rec.result = std::move(result);
+    out.push_back(std::move(rec));
+  }
   return out;
 }
+
+std::string settledName(const std::string& backend) { return backend + "_settled"; }
 
 namespace {
 
@@ -386,10 +406,14 @@ bool unequilibrated(const RunRecord& r) {
   return r.status == RunStatus::Done && it != r.values.end() && it->second && *it->second == 0.0;
 }
 
+// A run's settle (loadStudy): a second result of a table run, not a run of its own.
+bool isSettle(const RunRecord& r) { return r.run.name.find('/') != std::string::npos; }
+
 ReportSummary countRuns(const StudyView& study) {
   ReportSummary s;
-  s.runs = study.records.size();
   for (const RunRecord& r : study.records) {
+    if (isSettle(r)) continue;
+    ++s.runs;
     if (r.status == RunStatus::Done) ++s.done;
     else if (r.status == RunStatus::Failed) ++s.failed;
     else ++s.missing;
@@ -977,6 +1001,81 @@ std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const 
 }
 
 // nscd against Bullet (the first two backends) for every family and summary quantity.
+// Two estimates of one quantity compared: their difference, its combined standard error (both
+// errors needed: one side's alone would judge the other side's number exact), and whether they
+// differ by more than twice it.
+struct Comparison {
+  double diff = 0.0;
+  double se = 0.0;  ///< 0: unknown
+  bool bothErrors = false;
+  bool known() const { return se > 0.0; }
+  bool differ() const { return known() && std::abs(diff) > 2.0 * se; }
+  std::string verdict() const {
+    return known() ? (differ() ? "yes: differ (*)" : "no: agree") : diff == 0.0 ? "no: identical" : "no standard error";
+  }
+};
+
+Comparison compare(const Estimate& a, const Estimate& b) {
+  Comparison c;
+  c.diff = a.value - b.value;
+  c.bothErrors = a.error && b.error;
+  c.se = c.bothErrors ? std::hypot(*a.error, *b.error) : 0.0;
+  return c;
+}
+
+// What a difference between two backends is made of, once the second's piles were brought to rest
+// by the first (a sweep's settle_with): one that vanishes was the second stopping before rest.
+std::string differenceMadeOf(const Comparison& stopped, const Comparison& settled) {
+  if (!stopped.known() || !settled.known()) return "-";
+  if (stopped.differ() && !settled.differ()) return "not at rest";
+  if (stopped.differ() && settled.differ()) return "the solvers' own";
+  if (!stopped.differ() && settled.differ()) return "appears at rest";
+  return "none";
+}
+
+// The sentences of one backend's runs of a family: equilibrium, rigidity, failed and missing runs.
+std::string runsText(const StudyView& study, const StudySummary& summary, const SeriesKey& sk,
+                     const std::string& backend) {
+  std::string text;
+  const auto found = summary.runs.find({sk, backend});
+  if (found == summary.runs.end()) return text;
+  const RunCount& n = found->second;
+  if (n.done > 0 && n.equilibrated == 0)
+    text += fmt::format(" None of {}'s {} finished runs reached equilibrium: this compares unequilibrated piles.",
+                        backend, n.done);
+  else if (n.unequilibrated > 0)
+    text += fmt::format(
+        " {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
+        "unequilibrated piles.",
+        n.unequilibrated, backend, n.done);
+  text += rigiditySentence(study, sk, backend);
+  // Failed runs said apart from missing ones, which a study still running has many of.
+  const std::size_t missing = n.total - n.done - n.failed;
+  const auto are = [](std::size_t k) { return k == 1 ? "is" : "are"; };
+  if (n.failed > 0 && missing > 0)
+    text += fmt::format(" {} of {}'s {} runs did not finish: {} failed, {} {} missing (not run or interrupted).",
+                        n.total - n.done, backend, n.total, n.failed, missing, are(missing));
+  else if (n.failed > 0)
+    text += fmt::format(" {} of {}'s {} runs failed.", n.failed, backend, n.total);
+  else if (missing > 0)
+    text += fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, backend, n.total,
+                        are(missing));
+  return text;
+}
+
+// The sentence of one quantity compared between backends a and b.
+std::string comparisonText(const std::string& a, const std::string& b, const std::string& quantity,
+                           const Comparison& c, const std::string& both) {
+  if (!c.known() && c.diff == 0.0) return fmt::format(" {} and {} give the same {} {}.", a, b, quantity, both);
+  if (!c.known())
+    return fmt::format(" {} and {} give {} {} with no standard error to compare them.", a, b, quantity, both);
+  if (c.differ())
+    return fmt::format(" {} and {} differ on {} by {:+.3g} ± {:.2g}, {} standard errors {}.", a, b, quantity, c.diff,
+                       c.se, std::abs(c.diff) > 100.0 * c.se ? "more than 100" : fmt::format("{:.1f}", std::abs(c.diff) / c.se),
+                       both);
+  return fmt::format(" {} and {} agree on {} within 2 standard errors {}.", a, b, quantity, both);
+}
+
 void addVerdictSection(Document& doc, const StudyView& study, const StudySummary& summary) {
   doc.heading(2, "Cross-solver verdict");
   if (!study.pair()) {
@@ -985,10 +1084,20 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
   }
   const std::string& a = study.backends[0];
   const std::string& b = study.backends[1];
+  // b's piles brought to rest by a (a sweep's settle_with), when the study has them.
+  const std::string settled = settledName(b);
+  const bool withSettled = std::find(study.backends.begin(), study.backends.end(), settled) != study.backends.end();
   doc.paragraph(
       fmt::format("{} against {}: the difference {} − {}, its combined standard error sqrt(SE1² + SE2²), "
                   "and whether it is larger than twice that error.",
                   a, b, a, b));
+  if (withSettled)
+    doc.paragraph(fmt::format(
+        "{} is {}'s piles as it stopped them, each taken on to rest by {} (settle_with): the same comparison "
+        "against it says what each difference is made of. A difference that vanishes once {}'s piles are at rest "
+        "is \"not at rest\" ({} stopped early, or its impulses are not converged forces); one that stays is "
+        "\"the solvers' own\", a difference in the packings they make.",
+        settled, b, a, b, b));
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> sentences;
   for (const SeriesKey& sk : study.seriesKeys()) {
@@ -997,55 +1106,34 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       const auto ea = q.values.find({sk, a});
       const auto eb = q.values.find({sk, b});
       if (ea == q.values.end() || eb == q.values.end()) continue;
-      const double diff = ea->second.value - eb->second.value;
-      // A comparison needs both errors: one side's alone would judge the other side's number exact.
-      const bool bothErrors = ea->second.error && eb->second.error;
-      const double se = bothErrors ? std::hypot(*ea->second.error, *eb->second.error) : 0.0;
-      const bool known = se > 0.0;
-      const bool differ = known && std::abs(diff) > 2.0 * se;
-      const std::string both = fmt::format("({} against {})", ea->second.text, eb->second.text);
-      rows.push_back({familyName(sk), q.name, ea->second.text, eb->second.text, fmt::format("{:+.3g}", diff),
-                      bothErrors ? fmt::format("{:.2g}", se) : "-",
-                      known         ? (differ ? "yes: differ (*)" : "no: agree")
-                      : diff == 0.0 ? "no: identical"
-                                    : "no standard error"});
-      if (!known && diff == 0.0)
-        text += fmt::format(" {} and {} give the same {} {}.", a, b, q.name, both);
-      else if (!known)
-        text += fmt::format(" {} and {} give {} {} with no standard error to compare them.", a, b, q.name, both);
-      else if (differ)
-        text += fmt::format(
-            " {} and {} differ on {} by {:+.3g} ± {:.2g}, {} standard errors {}.", a, b, q.name, diff, se,
-            std::abs(diff) > 100.0 * se ? "more than 100" : fmt::format("{:.1f}", std::abs(diff) / se), both);
-      else
-        text += fmt::format(" {} and {} agree on {} within 2 standard errors {}.", a, b, q.name, both);
+      const Comparison c = compare(ea->second, eb->second);
+      std::vector<std::string> row = {familyName(sk), q.name, ea->second.text, eb->second.text,
+                                      fmt::format("{:+.3g}", c.diff), c.bothErrors ? fmt::format("{:.2g}", c.se) : "-",
+                                      c.verdict()};
+      text += comparisonText(a, b, q.name, c, fmt::format("({} against {})", ea->second.text, eb->second.text));
+      if (withSettled) {
+        const auto es = q.values.find({sk, settled});
+        if (es == q.values.end()) {
+          row.insert(row.end(), {"-", "-", "-", "-", "-"});
+        } else {
+          const Comparison cs = compare(ea->second, es->second);
+          const std::string madeOf = differenceMadeOf(c, cs);
+          row.insert(row.end(), {es->second.text, fmt::format("{:+.3g}", cs.diff),
+                                 cs.bothErrors ? fmt::format("{:.2g}", cs.se) : "-", cs.verdict(), madeOf});
+          text += comparisonText(a, settled, q.name, cs, fmt::format("({} against {})", ea->second.text, es->second.text));
+          if (madeOf != "-" && madeOf != "none") text += fmt::format(" On {}: {}.", q.name, madeOf);
+        }
+      }
+      rows.push_back(std::move(row));
     }
-    for (const std::string& backend : {a, b}) {
-      const RunCount& n = summary.runs.at({sk, backend});
-      if (n.done > 0 && n.equilibrated == 0)
-        text += fmt::format(" None of {}'s {} finished runs reached equilibrium: this compares unequilibrated piles.",
-                            backend, n.done);
-      else if (n.unequilibrated > 0)
-        text += fmt::format(
-            " {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
-            "unequilibrated piles.",
-            n.unequilibrated, backend, n.done);
-      text += rigiditySentence(study, sk, backend);
-      // Failed runs said apart from missing ones, which a study still running has many of.
-      const std::size_t missing = n.total - n.done - n.failed;
-      const auto are = [](std::size_t k) { return k == 1 ? "is" : "are"; };
-      if (n.failed > 0 && missing > 0)
-        text += fmt::format(" {} of {}'s {} runs did not finish: {} failed, {} {} missing (not run or interrupted).",
-                            n.total - n.done, backend, n.total, n.failed, missing, are(missing));
-      else if (n.failed > 0)
-        text += fmt::format(" {} of {}'s {} runs failed.", n.failed, backend, n.total);
-      else if (missing > 0)
-        text += fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, backend, n.total,
-                            are(missing));
-    }
+    for (const std::string& backend : {a, b}) text += runsText(study, summary, sk, backend);
+    if (withSettled) text += runsText(study, summary, sk, settled);
     if (!text.empty()) sentences.push_back(fmt::format("For {}:{}", familyName(sk), text));
   }
-  doc.table({"family", "quantity", a, b, a + " − " + b, "combined SE", "|diff| > 2 SE"}, rows);
+  std::vector<std::string> header = {"family", "quantity", a, b, a + " − " + b, "combined SE", "|diff| > 2 SE"};
+  if (withSettled)
+    header.insert(header.end(), {settled, a + " − " + settled, "combined SE", "|diff| > 2 SE", "the difference is"});
+  doc.table(header, rows);
   if (!sentences.empty()) doc.bullets(sentences);
 }
 

@@ -62,7 +62,13 @@ struct RunRecord {
   std::map<std::string, std::optional<double>> values;  ///< flattened numeric leaves ("coordination/Z")
 };
 
-/// Reads the run table and every run folder of a sweep.
+/// The backend name under which the report shows a run's settle (RUN/settled/, a sweep's
+/// settle_with): "bullet" settled by nscd is "bullet_settled", a third series beside the two.
+std::string settledName(const std::string& backend);
+
+/// Reads the run table and every run folder of a sweep; a finished run with a settle
+/// (RUN/settled/result.json) adds a record of its own after the table's, its backend
+/// settledName(backend) and its name "rNNNN/settled" (its folder under runs/).
 std::vector<RunRecord> loadStudy(const std::filesystem::path& sweepDir, SweepSpec* spec = nullptr);
 
 /// Numeric (and boolean, as 0/1) leaves of a result, keyed by their path joined with '/'. Arrays

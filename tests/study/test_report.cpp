@@ -71,7 +71,10 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
       {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
-fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false, std::size_t grainCap = 0) {
+// With `settled`, every bullet run also has a settle (RUN/settled/, a sweep's settle_with) that
+// follows nscd's law: Bullet's piles, brought to rest, are nscd's.
+fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false, std::size_t grainCap = 0,
+                   bool settled = false) {
   const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   json doc = json::parse(R"({
@@ -82,7 +85,7 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
   })");
   if (grainCap > 0) doc["base"]["deposition"] = {{"grain_cap", grainCap}};
   const study::SweepSpec spec = study::parseSweepSpec(doc);
-  auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+  auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
                     const study::RunProgressFn&) {
     // bullet at W = 20 fails for every seed: its cell must read "missing", not vanish.
     if (withFailures && cfg.backend == "bullet" && cfg.box.width == 20.0 && !cfg.box.periodicY)
@@ -94,6 +97,10 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
       if (cfg.backend == "nscd") r["timing"]["stages"] = {{"quasi_static", {{"steps", 3000}}}};
     }
     std::ofstream(runDir / "result.json") << r.dump();
+    if (settled && cfg.backend == "bullet") {
+      fs::create_directories(runDir / study::kSettledFolder);
+      std::ofstream(runDir / study::kSettledFolder / "result.json") << syntheticResult(cfg, true).dump();
+    }
     std::ofstream csv(runDir / "phi_y.csv");
     csv << "# seed " << cfg.seed << "\ny,phi\n";
     for (int i = 0; i < 10; ++i) csv << 0.1 * i << ',' << 0.6 + 0.01 * std::cos(6.0 * i) << '\n';
@@ -516,6 +523,28 @@ TEST_CASE("cross-solver verdict: agree on a shared law, differ on a shifted phi_
   }
 }
 
+TEST_CASE("cross-solver verdict with Bullet's piles settled: a difference that vanishes at rest is 'not at rest'") {
+  const fs::path dir = makeStudy("settled", false, false, 0, true);
+  const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
+  const std::string verdict = verdictOf(md);
+  // The settled piles are a third series, beside the two backends' own.
+  CHECK_THAT(md, Catch::Contains("bullet_settled"));
+  const auto row = rowCells(verdict, "| MSP: spheres x_S = 0, mu_w = 0 | phi_bulk |");
+  REQUIRE(row.size() == 12);
+  CHECK(row[6] == "yes: differ (*)");   // nscd against bullet as it stopped: 0.01 apart
+  CHECK(row[7].rfind("0.6400 ± ", 0) == 0);  // bullet settled: nscd's law
+  CHECK(row[10] == "no: agree");
+  CHECK(row[11] == "not at rest");
+  CHECK_THAT(verdict, Catch::Contains("On phi_bulk: not at rest."));
+  // A quantity on which the backends agree as they stopped and once settled has nothing to explain.
+  const auto z = rowCells(verdict, "| MSP: spheres x_S = 0, mu_w = 0 | Z_bulk |");
+  REQUIRE(z.size() == 12);
+  CHECK(z[11] == "none");
+  // The settles are second results of the table's runs, not runs of their own.
+  CHECK_THAT(md, Catch::Contains("30 runs: 30 done"));
+  fs::remove_all(dir);
+}
+
 TEST_CASE("the verdict says whose contact networks carry self-stresses, where, and how many motions are free") {
   const fs::path dir = makeStudy("rigidity", false);
   study::ReportOptions o;
@@ -764,7 +793,7 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
   const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
     "name": "shape", "base": { "box": { "length_x": 6, "height": 4 }, "population": { "shape": "pinacoid" } },
     "vary": { "width": ["biperiodic"], "population.pinacoid.alpha_deg": [60, 75], "backend": "nscd" } })"));
-  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const core::Deposit&,
+  auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
                    const study::RunProgressFn&) {
     const double alpha = cfg.population.pinacoid.alphaDeg;
     const json r = {{"solid_fraction", 0.5 + alpha / 1000.0},
