@@ -16,6 +16,7 @@
 #include "study/csv_table.hpp"
 #include "study/report_document.hpp"
 #include "study/report_figures.hpp"
+#include "study/report_relaxation.hpp"
 
 namespace confpack::study {
 
@@ -1305,6 +1306,32 @@ void addProfileSections(Document& doc, const StudyView& study, FigureWriter& fig
 // `target` as a '/'-separated path relative to the report folder `reportDir`, or absolute when there
 // is none. The report is written into a staging folder beside its final place, in the same parent
 // (StagedOutput, apps/cli_common.hpp), so the path still holds once the folder is moved there.
+// The relaxation histories of the finished runs, per family, configuration and backend
+// (study/report_relaxation.hpp).
+void addRelaxationSections(Document& doc, const StudyView& study, FigureWriter& figures) {
+  std::vector<RelaxationFamily> families;
+  for (const SeriesKey& sk : study.seriesKeys()) {
+    RelaxationFamily family{familyName(sk), fmt::format("relaxation_{:02d}", families.size() + 1), {}};
+    int color = 0;
+    for (const auto& [k, byBackend] : study.groups) {
+      if (seriesOf(k) != sk) continue;
+      ++color;
+      for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
+        if (!byBackend.count(study.backends[bi])) continue;
+        RelaxationLine line{{}, color, bi > 0, {}};
+        for (const RunRecord* r : byBackend.at(study.backends[bi]))
+          if (r->status == RunStatus::Done && r->result.contains("timing") && r->result["timing"].contains("history"))
+            line.histories.push_back(r->result["timing"]["history"]);
+        if (line.histories.empty()) continue;
+        line.label = fmt::format("W={} {} (n={})", widthText(k), study.backends[bi], line.histories.size());
+        family.lines.push_back(std::move(line));
+      }
+    }
+    families.push_back(std::move(family));
+  }
+  addRelaxationSection(doc, figures, families);
+}
+
 std::string relativeLink(const fs::path& target, const fs::path& reportDir) {
   std::error_code ec;
   const fs::path rel = fs::relative(target, reportDir, ec);
@@ -1569,6 +1596,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   addFitFigureSections(doc, study, figures, fits, references);
   addSettingSections(doc, study, figures);
   addProfileSections(doc, study, figures);
+  addRelaxationSections(doc, study, figures);
   addRunsSection(doc, study, outDir, options.runLinks);
   addQuantityTables(doc, study, outDir);
   addCostSection(doc, study);
