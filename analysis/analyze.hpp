@@ -49,11 +49,11 @@ struct AnalysisOptions {
   double density = 1.0;                             ///< rho
   double forceRatio = 1e-4, momentRatio = 1e-4, kineticRatio = 1e-8;  ///< equilibrium thresholds
   /// Most cells the profiles and the free-surface grid may take (estimatedCells), a guard against a
-  /// slice or cell typed far too small (`analyze --slice 1e-7` on 170 grains ran over 10 minutes at
-  /// 3.7 GB) [-]. 2e8: the slowest analysis per cell (few grains, thin slices: the profile fit)
-  /// takes a minute there, 55 s and 120 MB for 170 grains x 1.2e6 slices, against 25 s at 1e8 and
-  /// 6.4 min (554 MB) at 1e9, on the loaded 2-core machine at nice 15; the default slice on 30,400
-  /// grains across W = 40 is 6e7 cells, and 263,000 grains (1.6e9 cells) took 13 s.
+  /// slice or cell typed far too small (`analyze --slice 1e-7` on 170 grains: over 10 minutes and
+  /// 3.7 GB) [-]. 2e8 bounds the slowest analysis per cell (few grains, thin slices: the profile
+  /// fit) to about a minute: 55 s and 120 MB for 170 grains x 1.2e6 slices, against 25 s at 1e8 and
+  /// 6.4 min (554 MB) at 1e9. The default slice on 30,400 grains across W = 40 is 6e7 cells, and
+  /// 263,000 grains (1.6e9 cells) took 13 s.
   double maxCells = 2e8;
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field

@@ -58,8 +58,8 @@ constexpr double kGapMin = -0.005, kGapMax = 0.025;
 constexpr double kDt = 1e-3;
 /// Steps of nscd that settle the touching placeholder pile before the sweep is timed, and the
 /// sweep cap during them: enough for the impulses to spread through the network, cheap enough
-/// (the whole fixture, deposit included, measured at 0.9 s for 8,000 grains and 4.8 s for 30,000
-/// on a loaded 2-core machine).
+/// (the whole fixture, deposit included, takes about 0.9 s for 8,000 grains and 4.8 s for
+/// 30,000).
 constexpr int kSettleSteps = 10;
 constexpr int kSettleSweeps = 50;
 /// Expected solid fraction used to size the deposit boxes (the deposition default) [-].

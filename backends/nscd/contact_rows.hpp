@@ -1,7 +1,7 @@
 #pragma once
-// The contact rows of an nscd step: the unknowns, the kinematics and the contact law that both
-// solvers of contact_solver.hpp (nlgs_solver.hpp, mprgp_solver.hpp) solve, built once per step
-// and shared by them.
+// The contact rows of an nscd step: the unknowns, the kinematics and the contact law that the
+// three solvers of contact_solver.hpp (nlgs_solver.hpp, mprgp_solver.hpp, ipm_solver.hpp) solve,
+// built once per step and shared by them.
 //
 // Unknowns. One impulse per contact point and step (force x dt): r_n >= 0 along the normal n
 // (from a to b; +r_n n acts on b, -r_n n on a), plus (r_t1, r_t2) along a fixed tangent basis for
@@ -49,8 +49,8 @@
 //   to top. The halves share no grain, so two threads sweep them at once and give the bits of
 //   one: the order depends on the configuration only, never on the thread count. On one thread
 //   it costs a few per cent more iterations; the passes around the solve stay on one thread, as
-//   they stream memory and gained nothing from a second core (docs/performance.md, "Two
-//   threads").
+//   they stream memory, whose bandwidth a second core raises only 1.4 times (docs/performance.md,
+//   "Two threads").
 #include <array>
 #include <cstddef>
 #include <span>

@@ -46,8 +46,8 @@ constexpr int kPolishRounds = 6;
 // the interior point's impulses (the polish, below). A pinacoid's face contact carries up to 8
 // points for 3 constraints, so W_AA is singular there: sweeps from the interior point keep its
 // positive split of a face's load between the points, where the least impulses split it with
-// negative ones, which the active-set correction opened, round after round (on a 235-pinacoid
-// pile's finisher no polish converged before; now 49 of 51 solves end near 1e-14,
+// negative ones, which the active-set correction opens, round after round, without converging
+// (a 235-pinacoid pile's finisher: 49 of 51 solves near 1e-14 against 3 of 42 below 1e-10,
 // docs/performance.md, "The interior point's polish"). eps, the shift that makes the singular
 // W_AA factorisable, is 1e-10 of its largest diagonal entry: a sweep leaves a residual of eps
 // times its change.
@@ -62,8 +62,8 @@ constexpr std::ptrdiff_t kPolishFlips = 10;
 using core::blasLock;
 
 /// CHOLMOD's supernodal factorisation (SuiteSparse 5) opens OpenMP teams of a fixed 4 threads
-/// for copy loops of a few hundred flops each: on the 2-core machine they made 7.5 million futex
-/// calls in a 20 s finisher, a third of its time spent in the kernel. While one lives, OpenMP may
+/// for copy loops of a few hundred flops each: on 2 cores, 7.5 million futex calls in a 20 s
+/// finisher, a third of its time spent in the kernel. While one lives, OpenMP may
 /// give a team fewer threads than asked when the cores are busy (dynamic adjustment); those loops'
 /// results do not depend on their team.
 class DynamicOpenMpTeams {

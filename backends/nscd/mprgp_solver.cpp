@@ -302,7 +302,7 @@ bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int thr
 double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
                                  std::optional<double> alphaCg) {
   const std::size_t m = y_.size();
-  // Raw pointers: with the vectors as members, the compiler reloaded their data pointers after
+  // Raw pointers: with the vectors as members, the compiler reloads their data pointers after
   // every store of a double.
   double* y = y_.data();
   double* g = g_.data();
@@ -312,9 +312,9 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
   const SweepMass* mass = sweepMass_.data();
   const int world = static_cast<int>(bodyCount) - 1;
   // The forward sweep reads row k's own y_k and g_k only, so the conjugate gradient step can be
-  // made row by row as the sweep reaches it (and z_k zeroed there), with the same values as in a
-  // pass of its own before: one pass over y, g, p, A p and z fewer per iteration (0.97x the
-  // wall time of a whole 8,000-sphere run, docs/performance.md).
+  // made row by row as the sweep reaches it (and z_k zeroed there), with the same values as a
+  // pass of its own: one pass over y, g, p, A p and z fewer per iteration (0.97x the wall time of
+  // a whole 8,000-sphere run, docs/performance.md, "What we tried").
   const bool step = alphaCg.has_value();
   const double alpha = alphaCg.value_or(0.0);
   // Both sweeps over the free rows; `visit(k)` updates unknown k. The rows of the two blocks
@@ -328,8 +328,8 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
   const bool team = threads > 1 && last[1] > 0;
   // z . A p of each range, summed in the backward sweep, where each z_k takes its final value.
   double rangeZAp[3] = {0.0, 0.0, 0.0};
-  // Everything by value: a closure holding references to these locals made them escape into
-  // the parallel region, and the serial sweeps reloaded them from memory (10-15% slower).
+  // Everything by value: a closure holding references to these locals makes them escape into
+  // the parallel region, and the serial sweeps then reload them from memory (10-15% slower).
   auto sweeps = [=, &rangeZAp](const auto visit) {
     const auto forward = [=](int blk) {
       for (std::size_t k = first[blk]; k < last[blk]; ++k) {
@@ -424,8 +424,8 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
 // The preconditioner is symmetric Gauss-Seidel because it needs as few iterations as an
 // incomplete Cholesky factorisation without one: no matrix, nothing redone when the free set
 // changes. Near jamming the free block's softest modes extend over the whole pile; a coarse
-// correction or a deflation of them was tried offline and not built (docs/performance.md, "The
-// preconditioner", has those measurements).
+// correction or a deflation of them costs about what it saves in iterations (docs/performance.md,
+// "What we tried").
 int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings,
                        int maxThreads) {
   residual_ = 0.0;

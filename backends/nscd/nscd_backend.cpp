@@ -213,11 +213,10 @@ class NscdBackend final : public core::ContactBackend {
     // The trust radius caps the largest motion of a grain's surface in a step: when some grain
     // would move further, the whole step is scaled down to it. A scaled step stays inside the
     // linearised constraints (they are convex), so it leaves only the linearisation's overlaps.
-    // Capping each grain alone left a capped grain's neighbours their whole move: on a
-    // 1,064-pinacoid pile the overlap at the start of a step was about the trust radius (median
-    // 8.7e-3 d, against 1e-3 d scaled whole), the next step pushed it apart, the moves reversed,
-    // the metric weights grew to a mean of 1e4, and the pile crept on with force ratios of 2 to 20.
-    // Scaled whole, the same pile is at rest in 479 steps (docs/performance.md, "The medium scale").
+    // Capping each grain alone would leave a capped grain's neighbours their whole move: overlaps
+    // of about the trust radius at the next step (median 8.7e-3 d against 1e-3 d on a 1,064-pinacoid
+    // pile), moves that reverse, metric weights without bound and a pile that never settles; scaled
+    // whole, that pile is at rest in 479 steps (docs/performance.md, "The medium scale").
     // The grain that set the scale gets heavier (updateMetricWeight), so that one grain still
     // rearranging does not hold the whole pile to its pace for long.
     double largest = 0.0;
@@ -240,16 +239,14 @@ class NscdBackend final : public core::ContactBackend {
     return move;
   }
 
-  // "auto" finisher of a pinacoid pile: MPRGP, until a step's solve ends at its iteration cap.
-  // On a 1,064-pinacoid pile every step of MPRGP ended at its cap of 5,000 iterations (relative
-  // residual 1.2e-7 to 7.5e-6, median 9e-7; 8,160 contact rows), the moves reversed step after
-  // step, the metric weights grew to 5.2e5 and the force ratio stayed at 3e-3 to 2e-2. The
-  // interior-point method, whose iteration count hardly depends on conditioning, took 29 to 61
-  // iterations a step and brought the pile to rest (docs/performance.md, "The finisher's solves
-  // at their cap"; its solves have since been mended to end near round-off, "The interior point's
-  // polish"). From the next step on, then, and for the rest of the run. Not against frictional
-  // walls: there both solvers reach their caps in the block iteration around the Coulomb law, and
-  // the interior point's steps were the worse (docs/limitations.md).
+  // "auto" finisher of a pinacoid pile: MPRGP until a step's solve ends at its iteration cap, then
+  // the interior point from the next step to the end of the run. A capped step is inexact, and
+  // inexact steps reverse, weigh the grains down and never settle (on a 1,064-pinacoid pile every
+  // step at the cap of 5,000, residual median 9e-7, metric weights up to 5.2e5); the interior
+  // point's iterations hardly depend on conditioning (29 to 61 a step there) and it brings that
+  // pile to rest (docs/performance.md, "The finisher's solves at their cap"). Not against
+  // frictional walls: there both solvers reach their caps in the block iteration around the
+  // Coulomb law, and the interior point's steps are the worse (docs/limitations.md).
   void fallBackToInteriorPoint() {
     if (settings_.finisherSolver != FinisherSolverKind::Auto || finisherSettings_.solver != SolverKind::Mprgp) return;
     if (walls_.friction > 0.0) return;
@@ -327,9 +324,8 @@ class NscdBackend final : public core::ContactBackend {
   }
 
   // q_m, the world inverse inertia there, and the free velocities. One thread: the loop is ~8%
-  // of a step, and any OpenMP construct in this class (even a region never entered) was
-  // measured to make the compiled single-thread loop ~10-20% slower; a gain on 2 threads could
-  // not be shown on the shared machine.
+  // of a step, and any OpenMP construct in this class (even a region never entered) makes the
+  // compiled single-thread loop ~10-20% slower, for no measurable gain on 2 threads.
   void predict(double dt) {
     const double h = dt * (1.0 - settings_.theta);
     for (int i = 0; i < n_; ++i) {
@@ -350,11 +346,10 @@ class NscdBackend final : public core::ContactBackend {
   // every grain that carried a contact impulse in the last step and moves slower than v_d are
   // multiplied by exp(-c dt), before the free velocity.
   // The same factor for every loaded grain, so the relative velocity at a contact between two of
-  // them scales alike and the contact problem keeps its structure. Two rules that damp only
-  // unbalanced motion were tried first on the 188-pinacoid pile and dropped: Cundall's local
-  // damping (each velocity component cut by alpha |its change|, per component or along v) took
-  // 1.5 to 7 times more MPRGP iterations per step, and damping only decelerating grains
-  // (v . dv < 0) 1.2 to 2 times more while settling more slowly than this rule.
+  // them scales alike and the contact problem keeps its structure. Rules that damp only unbalanced
+  // motion cost more (a 188-pinacoid pile): Cundall's local damping (each velocity component cut
+  // by alpha |its change|) 1.5 to 7 times the MPRGP iterations per step, damping only decelerating
+  // grains (v . dv < 0) 1.2 to 2 times, and it settles more slowly.
   void damp(double factor) {
     const double speed2 = settings_.dampingSpeed * settings_.dampingSpeed;
     for (int i = 0; i < n_ && i < static_cast<int>(loaded_.size()); ++i) {

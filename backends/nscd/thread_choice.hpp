@@ -1,10 +1,9 @@
 #pragma once
 // Picks, call after call, the team size of one parallel phase of the nscd step (1 thread or the
 // configured count) by timing both. The phases give the same bits for any team size, so the
-// choice changes only the speed, and it can follow the machine: on a shared machine with more
-// runnable threads than cores, a parallel region waits for a thread that is not running and was
-// measured to cost 5 to 10 times the single-thread phase (broad phase of a 3,655-sphere pile at
-// load 6-9 on 2 cores: 8 s instead of 1.6 s over 791 steps); on a free machine the team wins.
+// choice changes only the speed. With more runnable threads than cores a parallel region waits for
+// a thread that is not running: 5 to 10 times the single-thread phase (a 3,655-sphere pile's broad
+// phase, 2 cores, load 6 to 9: 8 s against 1.6 s over 791 steps); on free cores the team wins.
 #include <algorithm>
 
 namespace confpack::nscd {
