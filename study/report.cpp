@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <ctime>
 #include <fstream>
 #include <set>
@@ -868,8 +869,102 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   return out;
 }
 
+// What a family's numbers can carry (docs/sweeps.md, "The report"): below these sizes its phi_bulk
+// and C are a check of the pipeline, not a measurement.
+// A bulk region at least 4 d_L thick: thinner, it is one or two layers that the floor's and the
+// free surface's ordering reach (the quick scale's is about 1 d_L).
+constexpr double kMinBulkThickness = 4.0;
+// At least 300 grains in it: the seed-to-seed scatter of phi falls as 1/sqrt(n), about 0.003 at
+// 300 grains, a tenth of the confinement effect C/W at W = 10.
+constexpr double kMinBulkGrains = 300.0;
+// Confined widths spanning at least a factor 3: over less, phi_bulk is an extrapolation in 1/W
+// longer than the data it comes from.
+constexpr double kMinWidthSpan = 3.0;
+
+// The size of what a family measured: the thinnest bulk region and the fewest bulk grains of any of
+// its configurations (each the mean over its finished runs, all backends), and the confined widths
+// its fits span.
+struct FamilySize {
+  double thickness = std::numeric_limits<double>::quiet_NaN();  ///< [d_L]
+  double grains = std::numeric_limits<double>::quiet_NaN();
+  double widthMin = 0.0, widthMax = 0.0;  ///< confined widths with a finished run [d_L]
+  int widths = 0;
+};
+
+FamilySize familySize(const StudyView& study, const SeriesKey& sk) {
+  FamilySize out;
+  for (const auto& [k, byBackend] : study.groups) {
+    if (seriesOf(k) != sk) continue;
+    double thickness = 0.0, grains = 0.0;
+    int n = 0;
+    bool done = false;
+    for (const auto& [backend, runs] : byBackend)
+      for (const RunRecord* r : runs) {
+        if (r->status != RunStatus::Done) continue;
+        done = true;
+        const auto lo = r->values.find("bulk_region/z_low"), hi = r->values.find("bulk_region/z_high"),
+                   g = r->values.find("bulk_region/grains");
+        if (lo == r->values.end() || hi == r->values.end() || g == r->values.end() || !lo->second || !hi->second ||
+            !g->second)
+          continue;
+        thickness += std::max(0.0, *hi->second - *lo->second);
+        grains += *g->second;
+        ++n;
+      }
+    if (done && !k.periodic) {
+      out.widthMin = out.widths == 0 ? k.width : std::min(out.widthMin, k.width);
+      out.widthMax = out.widths == 0 ? k.width : std::max(out.widthMax, k.width);
+      ++out.widths;
+    }
+    if (n == 0) continue;
+    thickness /= n;
+    grains /= n;
+    if (!(out.thickness <= thickness)) out.thickness = thickness;
+    if (!(out.grains <= grains)) out.grains = grains;
+  }
+  return out;
+}
+
+std::string bulkSizeText(const FamilySize& f) {
+  return std::isfinite(f.thickness) ? fmt::format("{:.1f} / {:.0f}", f.thickness, f.grains) : "-";
+}
+
+std::string widthSpanText(const FamilySize& f) {
+  return f.widths == 0 ? "-" : f.widths == 1 ? num(f.widthMin) : fmt::format("{} to {}", num(f.widthMin), num(f.widthMax));
+}
+
+// The warning that opens the summary where a family's numbers cannot carry its physics: a bulk too
+// thin or too small, fits over too narrow a span of widths, or first-backend runs not at rest.
+void addAdequacyWarning(Document& doc, const StudyView& study, const StudySummary& summary) {
+  std::vector<std::string> problems;
+  for (const SeriesKey& sk : study.seriesKeys()) {
+    const FamilySize f = familySize(study, sk);
+    std::vector<std::string> why;
+    if (std::isfinite(f.thickness) && f.thickness < kMinBulkThickness)
+      why.push_back(fmt::format("its bulk region is {:.1f} d_L thick (fewer than {:g})", f.thickness, kMinBulkThickness));
+    if (std::isfinite(f.grains) && f.grains < kMinBulkGrains)
+      why.push_back(fmt::format("it holds {:.0f} grains (fewer than {:g})", f.grains, kMinBulkGrains));
+    if (f.widths >= 2 && f.widthMax < kMinWidthSpan * f.widthMin)
+      why.push_back(fmt::format("its fits span W = {} to {}, a factor {:.2g} (less than {:g})", num(f.widthMin),
+                                num(f.widthMax), f.widthMax / f.widthMin, kMinWidthSpan));
+    const auto first = summary.runs.find({sk, study.backends.front()});
+    if (first != summary.runs.end() && first->second.done > first->second.equilibrated)
+      why.push_back(fmt::format("{} of {}'s {} finished runs are not at rest", first->second.done - first->second.equilibrated,
+                                study.backends.front(), first->second.done));
+    if (!why.empty()) problems.push_back(fmt::format("{}: {}.", familyName(sk), fmt::join(why, "; ")));
+  }
+  if (problems.empty()) return;
+  doc.paragraph(
+      "Warning: these numbers cannot carry their physics. For the families below the boxes are too small or "
+      "the runs not at rest, so that their phi_bulk, C and Z are a test of the pipeline, not a measurement (the "
+      "sizes are each family's least over its configurations). The measured values are in docs/medium.md, from "
+      "confpack reproduce --scale medium (or --scale paper).");
+  doc.bullets(problems);
+}
+
 void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary, References& references) {
   doc.heading(2, "Summary: the results per family and backend");
+  addAdequacyWarning(doc, study, summary);
   // The columns: each quantity, its published value beside it when the reference file gives one
   // for a family of the study, the fit quality after C; a published quantity the study has no
   // number for (no Z, no profile fit) still gets its reference column, at the end.
@@ -883,7 +978,8 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
     return std::any_of(keys.begin(), keys.end(), [&](const SeriesKey& sk) { return references.find(sk, key); });
   };
   std::vector<Column> columns;
-  std::vector<std::string> head = {"family", "backend", "runs at equilibrium / total"};
+  std::vector<std::string> head = {"family", "backend", "runs at equilibrium / total", "bulk d_L / grains",
+                                   "widths fitted"};
   std::set<std::string> withReference;
   for (const SummaryQuantity& q : summary.quantities) {
     columns.push_back({Column::Value, &q, ""});
@@ -910,7 +1006,9 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
     for (const std::string& b : study.backends) {
       const RunCount& n = summary.runs.at({sk, b});
       if (n.total == 0) continue;
-      std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total)};
+      const FamilySize size = familySize(study, sk);
+      std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total),
+                                      bulkSizeText(size), widthSpanText(size)};
       for (const Column& c : columns) {
         if (c.kind == Column::Value) {
           const auto it = c.quantity->values.find({sk, b});
@@ -942,7 +1040,10 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
   }
   std::vector<std::string> definitions = {
       "runs at equilibrium: finished runs whose forces and moments balance (equilibrium reached), out of all the "
-      "runs of the family and backend"};
+      "runs of the family and backend",
+      "bulk d_L / grains: the thickness of the bulk region (3 d_L from the floor and from the free surface) and the "
+      "grains in it, the least over the family's configurations (mean over each one's runs)",
+      "widths fitted: the confined widths W the fits phi(W) and Z(W) span"};
   for (const SummaryQuantity& q : summary.quantities) {
     definitions.push_back(q.name + ": " + q.definition);
     if (q.name == "C")

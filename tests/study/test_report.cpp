@@ -38,6 +38,15 @@ using confpack::testing::slurp;
 // With sameLaw, bullet follows nscd's law for every quantity.
 constexpr double kDelta = 0.002;
 
+// The bulk region every synthetic run reports (thickness in d_L and grains), when set, and the
+// widths of the study; by default runs give none and the widths are 4, 5, 10, 20 and biperiodic.
+struct SyntheticSizes {
+  double bulkThickness = 0.0;
+  double bulkGrains = 0.0;
+  json widths = json::array({4, 5, 10, 20, "biperiodic"});
+};
+SyntheticSizes gSizes;
+
 json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
   const bool nscd = sameLaw || cfg.backend == "nscd";
   const double phiBulk = nscd ? 0.64 : 0.63;
@@ -71,6 +80,14 @@ json syntheticResult(const core::RunConfig& cfg, bool sameLaw) {
       {"timing", {{"wall_s", 1.5}, {"steps", 1000}, {"iterations", 20000}}}};
 }
 
+// syntheticResult with gSizes' bulk region, when it has one.
+json sizedResult(const core::RunConfig& cfg, bool sameLaw) {
+  json r = syntheticResult(cfg, sameLaw);
+  if (gSizes.bulkThickness > 0.0)
+    r["bulk_region"] = {{"z_low", 3.0}, {"z_high", 3.0 + gSizes.bulkThickness}, {"grains", gSizes.bulkGrains}};
+  return r;
+}
+
 // With `settled`, every bullet run also has a settle (RUN/settled/, a sweep's settle_with) that
 // follows nscd's law: Bullet's piles, brought to rest, are nscd's.
 fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false, std::size_t grainCap = 0,
@@ -81,8 +98,9 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
     "name": "synthetic",
     "base": { "box": { "length_x": 6, "height": 4 } },
     "biperiodic_width": 12,
-    "vary": { "width": [4, 5, 10, 20, "biperiodic"], "replicas": 3, "backend": ["nscd", "bullet"] }
+    "vary": { "replicas": 3, "backend": ["nscd", "bullet"] }
   })");
+  doc["vary"]["width"] = gSizes.widths;
   if (grainCap > 0) doc["base"]["deposition"] = {{"grain_cap", grainCap}};
   const study::SweepSpec spec = study::parseSweepSpec(doc);
   auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
@@ -90,7 +108,7 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
     // bullet at W = 20 fails for every seed: its cell must read "missing", not vanish.
     if (withFailures && cfg.backend == "bullet" && cfg.box.width == 20.0 && !cfg.box.periodicY)
       throw std::runtime_error("solver diverged");
-    json r = syntheticResult(cfg, sameLaw);
+    json r = sizedResult(cfg, sameLaw);
     // Seed 3 at W = 10 is not at rest: nscd's finisher ran out of steps, Bullet hit its time limit.
     if (withFailures && cfg.box.width == 10.0 && !cfg.box.periodicY && cfg.seed == 3) {
       r["equilibrium"]["reached"] = false;
@@ -473,17 +491,19 @@ TEST_CASE("summary leads the report with the fit section's phi_bulk, C, Z_bulk a
     CHECK_THAT(zFit[4], Catch::StartsWith("1.200 ± "));
     // The summary row: every run at equilibrium, the same numbers as the fits, the fit quality.
     const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
-    REQUIRE(row.size() == 10);
+    REQUIRE(row.size() == 12);
     CHECK(md.find("| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt) < verdictAt);
     CHECK(row[2] == "15 / 15");
-    CHECK(row[3] == phiFit[3]);
-    CHECK(row[4] == phiFit[4]);
-    CHECK(row[5] == "chi²/dof " + phiFit[7] + ", Q " + phiFit[8]);
-    CHECK(row[6] == zFit[3]);
-    CHECK(row[7] == zFit[4]);
+    CHECK(row[3] == "-");  // these synthetic runs report no bulk region
+    CHECK(row[4] == "4 to 20");
+    CHECK(row[5] == phiFit[3]);
+    CHECK(row[6] == phiFit[4]);
+    CHECK(row[7] == "chi²/dof " + phiFit[7] + ", Q " + phiFit[8]);
+    CHECK(row[8] == zFit[3]);
+    CHECK(row[9] == zFit[4]);
     // lambda_L/d_avg of the widest confined sample (W = 20): the replicas' mean and standard error.
-    CHECK(row[8] == fmt::format("{:.3g} ± {:.2g}", backend == "nscd" ? 1.25 : 1.5, kDelta / std::sqrt(3.0)));
-    CHECK_THAT(row[9], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
+    CHECK(row[10] == fmt::format("{:.3g} ± {:.2g}", backend == "nscd" ? 1.25 : 1.5, kDelta / std::sqrt(3.0)));
+    CHECK_THAT(row[11], Catch::StartsWith(backend == "nscd" ? "0.01 ± " : "0.2 ± "));
   }
   // Without --reference there is no reference column.
   CHECK(md.find("reference |") == std::string::npos);
@@ -545,6 +565,35 @@ TEST_CASE("cross-solver verdict with Bullet's piles settled: a difference that v
   fs::remove_all(dir);
 }
 
+TEST_CASE("the summary opens with a warning where a family's boxes are too small or its fits too narrow") {
+  SECTION("a quick-scale study: a bulk 1 d_L thick of 40 grains, widths 3 to 6") {
+    gSizes = {1.2, 40.0, json::array({3, 4.5, 6, "biperiodic"})};
+    const fs::path dir = makeStudy("adequacy_small", false);
+    gSizes = {};
+    const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
+    const std::string summary = md.substr(md.find("## Summary"), md.find("## Cross-solver verdict") - md.find("## Summary"));
+    CHECK_THAT(summary, Catch::Contains("Warning: these numbers cannot carry their physics."));
+    CHECK_THAT(summary, Catch::Contains("its bulk region is 1.2 d_L thick (fewer than 4)"));
+    CHECK_THAT(summary, Catch::Contains("it holds 40 grains (fewer than 300)"));
+    CHECK_THAT(summary, Catch::Contains("its fits span W = 3 to 6, a factor 2 (less than 3)"));
+    // The sizes behind it, in the table.
+    const auto row = rowCells(summary, "| MSP: spheres x_S = 0, mu_w = 0 | nscd |");
+    REQUIRE(row.size() > 4);
+    CHECK(row[3] == "1.2 / 40");
+    CHECK(row[4] == "3 to 6");
+    fs::remove_all(dir);
+  }
+  SECTION("a medium-scale study: a bulk 6 d_L thick of 410 grains, widths 4 to 20: no warning") {
+    gSizes = {6.0, 410.0, json::array({4, 5, 10, 20, "biperiodic"})};
+    const fs::path dir = makeStudy("adequacy_medium", false);
+    gSizes = {};
+    const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
+    CHECK_THAT(md, !Catch::Contains("Warning: these numbers"));
+    CHECK(rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | nscd |")[3] == "6.0 / 410");
+    fs::remove_all(dir);
+  }
+}
+
 TEST_CASE("the verdict says whose contact networks carry self-stresses, where, and how many motions are free") {
   const fs::path dir = makeStudy("rigidity", false);
   study::ReportOptions o;
@@ -577,18 +626,18 @@ TEST_CASE("a number without a standard error is shown as such and the verdict do
   };
   // With every width but W = 20 at 3 runs, the fit is unweighted over 4 widths: no chi², its residuals.
   const std::string unweighted = reportWithout("unweighted", [](double w, int seed) { return w != 20.0 || seed == 1; });
-  CHECK_THAT(rowCells(unweighted, "| MSP: spheres x_S = 0, mu_w = 0 | bullet |", unweighted.find("## Summary")).at(5),
+  CHECK_THAT(rowCells(unweighted, "| MSP: spheres x_S = 0, mu_w = 0 | bullet |", unweighted.find("## Summary")).at(7),
              Catch::StartsWith("unweighted (a width without a standard error): residual sum of squares "));
   const std::string md =
       reportWithout("no_error", [](double w, int seed) { return w == 10.0 || (w == 20.0 && seed == 1); });
   const auto bullet = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | bullet |", md.find("## Summary"));
-  REQUIRE(bullet.size() == 10);
+  REQUIRE(bullet.size() == 12);
   // The line through phi(10) = 0.63 - 0.4/10 (a mean on bullet's law) and phi(20) = 0.63 - 0.4/20 - 0.002
   // (seed 1's offset): C = 0.018 / 0.05 = 0.36, phi_bulk = 0.59 + 0.036.
-  CHECK(bullet[3] == "0.6260 (no SE)");
-  CHECK(bullet[4] == "0.360 (no SE)");
-  CHECK(bullet[5] == "exact through 2 widths: no standard errors");
-  CHECK(bullet[8] == fmt::format("{:.3g} (1 run)", 1.5 + kDelta * (1.0 - 2.0)));  // seed 1's offset
+  CHECK(bullet[5] == "0.6260 (no SE)");
+  CHECK(bullet[6] == "0.360 (no SE)");
+  CHECK(bullet[7] == "exact through 2 widths: no standard errors");
+  CHECK(bullet[10] == fmt::format("{:.3g} (1 run)", 1.5 + kDelta * (1.0 - 2.0)));  // seed 1's offset
   // nscd's lambda_L/d_avg (1.25 ± 0.0012) is far from bullet's single run (1.498), but with no
   // standard error on bullet's side there is nothing to judge the difference against.
   const std::string verdict = verdictOf(md);
@@ -739,18 +788,19 @@ TEST_CASE("report with reference values: a reference column beside each quantity
   const std::size_t verdictAt = md.find("## Cross-solver verdict");
   // The columns: each referenced quantity followed by its reference, in the summary only.
   const std::string head =
-      "| family | backend | runs at equilibrium / total | phi_bulk | phi_bulk reference | C | C reference | phi(W) fit "
-      "quality | Z_bulk | Z_bulk reference | C_Z | lambda_L/d_avg | interpenetration |";
+      "| family | backend | runs at equilibrium / total | bulk d_L / grains | widths fitted | phi_bulk | phi_bulk "
+      "reference | C | C reference | phi(W) fit quality | Z_bulk | Z_bulk reference | C_Z | lambda_L/d_avg | "
+      "interpenetration |";
   CHECK(md.find(head) > summaryAt);
   CHECK(md.find(head) < verdictAt);
   for (const std::string backend : {"nscd", "bullet"}) {
     INFO(backend);
     const auto row = rowCells(md, "| MSP: spheres x_S = 0, mu_w = 0 | " + backend + " |", summaryAt);
-    REQUIRE(row.size() == 13);
-    CHECK_THAT(row[3], Catch::StartsWith(backend == "nscd" ? "0.6400 ± " : "0.6300 ± "));
-    CHECK(row[4] == "0.64 ± 0.01 [1]");
-    CHECK(row[6] == "0.45 ± 0.05 [2]");
-    CHECK(row[9] == "6 ± 0 [3]");
+    REQUIRE(row.size() == 15);
+    CHECK_THAT(row[5], Catch::StartsWith(backend == "nscd" ? "0.6400 ± " : "0.6300 ± "));
+    CHECK(row[6] == "0.64 ± 0.01 [1]");
+    CHECK(row[8] == "0.45 ± 0.05 [2]");
+    CHECK(row[11] == "6 ± 0 [3]");
   }
   // The sources, numbered as the cells cite them, in both renderings; the file is named.
   CHECK(md.find("Reference values from test-reference.json (test values); [n] in a reference cell is its source:") !=
@@ -820,9 +870,11 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
   CHECK(at60 < at75);
   // Without confined widths there is no phi_bulk to fit: the summary gives the biperiodic sample's
   // phi and Z, and the pinacoids' contact types and nematic order, each with its definition.
-  CHECK(md.find("| family | backend | runs at equilibrium / total | phi | Z | Z_s | Z_d | Z_t | S |\n", summaryAt) !=
+  CHECK(md.find("| family | backend | runs at equilibrium / total | bulk d_L / grains | widths fitted | phi | Z | Z_s | "
+                "Z_d | Z_t | S |\n",
+                summaryAt) !=
         std::string::npos);
-  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | 0.575 (1 run) | 8.75 (1 run) | "
+  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | - | - | 0.575 (1 run) | 8.75 (1 run) | "
                 "5 (1 run) | 2.75 (1 run) | 1 (1 run) | 0.75 (1 run) |",
                 summaryAt) != std::string::npos);
   CHECK(md.find("- Z_t: pinacoids: triple contacts per grain (face-face), on the biperiodic sample") !=
