@@ -57,10 +57,6 @@ class NarrowPhase {
   /// Fewer candidate pairs than this per thread and collideAll runs on fewer threads (the
   /// parallel region and the join copy cost more than they share). Speed only, never output.
   static constexpr std::size_t kMinPairsPerThread = 2000;
-  /// True if some grain is a polyhedron. Sphere-only systems collide on one thread: a sphere
-  /// pair costs ~10 ns, so the whole phase (~60 us a step for 3,600 spheres) is less than the
-  /// parallel region and the join copy (measured: 2 threads were slower).
-  bool hasPolyhedra() const { return hasPolyhedra_; }
 
   /// Throws std::invalid_argument if a grain has a size that is not a positive number.
   NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction);
@@ -106,6 +102,9 @@ class NarrowPhase {
   };
   std::vector<ThreadContacts> threadContacts_;
   ThreadChoice choice_;  // team against one thread, timed (for the last `threads` asked)
+  /// Some grain is a polyhedron. Sphere-only systems collide on one thread: a sphere pair costs
+  /// ~10 ns, so the whole phase (~60 us a step for 3,600 spheres) is less than the parallel region
+  /// and the join copy (2 threads were slower).
   bool hasPolyhedra_ = false;
 
   core::BoxDef box_;
