@@ -74,6 +74,7 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
                      const fs::path& out) {
   runWork("sweep", [&] {
     const WorkStep step("writing the Slurm job array");
+    markOutputFolder(out);
     study::prepareSweepDir(out, spec, runs);
     const std::vector<study::RunReport> reports = study::sweepStatus(out, runs);
     const std::vector<std::size_t> todo = study::unfinishedRuns(reports);
@@ -166,13 +167,15 @@ void runSweepCommand(const SweepState& st) {
         backends::checkBackendOptions(run.config.backend, run.config.backendOptions);
         what = "";
         study::checkRunCells(run.config, run.config.estimatedGrainCount());
+        run.config.validateDeposit();
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(
             fmt::format("{}: run {} ({}): {}{}", st.file.string(), run.name, run.label(varied), what, e.what()));
       }
     }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
-    checkOutputTarget(out);
+    // A sweep folder (it holds the run table) is confpack's, marked or not: resuming is the point.
+    if (!fs::exists(out / study::kSweepTable)) checkOutputTarget(out);
     if (!st.runList.empty()) only = namedRuns(runs, st.runList);
     if (st.slurm) {
       study::checkSlurmOptions(st.slurmOptions);
@@ -213,6 +216,7 @@ void runSweepCommand(const SweepState& st) {
     opt.runs = only;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
+    markOutputFolder(out);
     summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads, st.checkpointEvery),
                               study::pipelineDepositor());
   });
