@@ -12,6 +12,9 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "core/build_info.hpp"
+#ifdef CONFPACK_ALLOCATION_FAULT
+#include "tests/support/allocation_fault.hpp"
+#endif
 
 namespace {
 
@@ -55,6 +58,10 @@ int runCommandLine(int argc, char** argv) {
 // The command line's setup (the subcommands' options) allocates before parseAndRun can catch
 // anything: a failure there would otherwise end in std::terminate and its two lines.
 int main(int argc, char** argv) {
+#ifdef CONFPACK_ALLOCATION_FAULT
+  // The test build only (tests/support/allocation_fault.hpp): fail the k-th allocation from here.
+  confpack::testing::armAllocationFault();
+#endif
   try {
     return runCommandLine(argc, argv);
   } catch (const std::bad_alloc&) {
