@@ -5,6 +5,7 @@
 #include <string>
 
 #include "analysis/plausibility.hpp"
+#include "core/packing_io.hpp"
 #include "tests/support/lattices.hpp"
 #include "tests/support/systems.hpp"
 
@@ -148,3 +149,21 @@ TEST_CASE("a packing mixing spheres and pinacoids is refused naming the file and
   CHECK_THROWS_WITH(confpack::analysis::checkPlausible(p, "mixed.json", true), message);
 }
 
+TEST_CASE("the plausibility fuzz seeds: geometric edge cases at 0 and 1e-15 get their verdicts",
+          "[analysis][plausibility]") {
+  // The seed corpus of fuzz_plausibility (fuzz/corpus/plausibility/), read as analyze reads it, so
+  // that the seeds cannot go stale and each edge case has its verdict.
+  const std::string dir = std::string(CONFPACK_SOURCE_DIR) + "/fuzz/corpus/plausibility/";
+  const std::pair<const char*, const char*> verdicts[] = {
+      {"coincident_spheres.json", "grain 0 and grain 1 overlap by 1 "},
+      {"coincident_pinacoids.json", "grain 0 and grain 1 overlap by "},
+      {"nested_spheres.json", "grain 0 and grain 1 overlap by "},
+      {"coincident_across_period.json", "grain 0 and grain 1 overlap by 1 "},
+      {"touching_1e-15.json", "plausible"},
+      {"outside_box_1e-15.json", "plausible"},
+  };
+  for (const auto& [file, verdict] : verdicts) {
+    INFO(file);
+    CHECK_THAT(reasonOf(core::readPacking(dir + file)), Catch::StartsWith(verdict));
+  }
+}
