@@ -167,7 +167,6 @@ void runSweepCommand(const SweepState& st) {
         backends::checkBackendOptions(run.config.backend, run.config.backendOptions);
         what = "";
         study::checkRunCells(run.config, run.config.estimatedGrainCount());
-        run.config.validateDeposit();
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(
             fmt::format("{}: run {} ({}): {}{}", st.file.string(), run.name, run.label(varied), what, e.what()));
