@@ -163,8 +163,8 @@ void registerRun(CLI::App& app) {
       "run", "Deposit, compact with a backend until equilibrium (or the time limit), analyse, write DIR/result.json");
   addRunConfigOptions(*sub, st->cfg, st->opts);
   sub->add_option("--dt", st->cfg.compaction.dt,
-                  "Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md), else in [1e-06, 0.1] "
-                  "(core/run_config.hpp says why)")
+                  "Time step [t0]; 0 = the fixed step from the deposit's drop, else in [1e-06, 0.1] (docs/model.md, "
+                  "\"Time step\")")
       ->check(realIn(0.0, core::kMaxTimeStep, false, false, "0 or a time step of at most 0.1 t0", "T0"))
       ->capture_default_str();
   sub->add_flag("--adaptive-dt", st->cfg.compaction.adaptiveDt,
