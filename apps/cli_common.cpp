@@ -1,5 +1,6 @@
 #include "apps/cli_common.hpp"
 
+#include <dirent.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <new>
 #include <stdexcept>
 #include <system_error>
@@ -336,16 +338,22 @@ fs::path normalisedTarget(const fs::path& p) {
 
 /// Removes the staging folders of `target` (".NAME.partial-PID") whose process is gone: a
 /// command killed with SIGKILL (or by a power cut) could not remove its own.
+// readdir rather than std::filesystem::directory_iterator: libstdc++ builds each entry's path
+// inside a noexcept function, so an allocation failing there ends in std::terminate instead of
+// the out-of-memory line.
 void removeStaleStaging(const fs::path& target) {
   const std::string prefix = "." + target.filename().string() + ".partial-";
+  const std::unique_ptr<DIR, int (*)(DIR*)> dir(::opendir(target.parent_path().c_str()), ::closedir);
+  if (!dir) return;
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(target.parent_path(), ec)) {
-    const std::string name = entry.path().filename().string();
+  while (const dirent* entry = ::readdir(dir.get())) {
+    const std::string_view name = entry->d_name;
     if (!name.starts_with(prefix)) continue;
-    const std::string digits = name.substr(prefix.size());
-    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(digits));
-    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
+    const std::string_view digits = name.substr(prefix.size());
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string_view::npos)
+      continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(std::string(digits)));
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(target.parent_path() / name, ec);
   }
 }
 }  // namespace
@@ -373,6 +381,9 @@ StagedOutput::StagedOutput(const fs::path& target, RenameFn rename, RemoveFn rem
   } catch (const std::runtime_error& e) {
     discardStaging();
     throw std::runtime_error(fmt::format("cannot create output folder {}: {}", target.string(), e.what()));
+  } catch (...) {  // out of memory: no destructor will remove what was made
+    discardStaging();
+    throw;
   }
 }
 

@@ -84,9 +84,8 @@ TEST_CASE("an allocation that fails while the command line is set up is one line
 // with the k-th allocation failing, some k end in std::terminate (exit 134, two lines) because the
 // allocation that fails is made inside a noexcept function of a library: nlohmann::json's
 // destructor (it keeps the children of the value it destroys on a vector), in the normal flow as
-// well as while unwinding, and libstdc++'s directory_iterator::operator++ (removeStaleStaging).
-// About 1 in 60 of the allocations of a small analyze are such points, most while the results
-// are written; a fixed sample of k would pass or not depending on where the scratch folder's path
+// well as while unwinding. About 1 in 60 of the allocations of a small analyze were such points,
+// most while the results are written; a fixed sample of k would pass or not depending on where the scratch folder's path
 // moves the count, so the sample cannot stand as a regression test until those are dealt with.
 TEST_CASE("an allocation failing anywhere in run or analyze: success, or exit 1 with one line and no output",
           "[.][allocation-sweep]") {
