@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "analysis/cell_count.hpp"
+
 namespace confpack::analysis {
 
 void BulkRegionDef::validate() const {
@@ -40,8 +42,8 @@ double grainBottom(const core::Grain& g) {
 double freeSurfaceHeight(const core::Packing& packing, double cellSize) {
   if (packing.grains.empty()) return 0.0;
   const core::BoxDef& box = packing.box;
-  const int nx = std::max(1, static_cast<int>(std::lround(box.lengthX / cellSize)));
-  const int ny = std::max(1, static_cast<int>(std::lround(box.width / cellSize)));
+  const int nx = cellsAlong(box.lengthX, cellSize, "free surface: cell");
+  const int ny = cellsAlong(box.width, cellSize, "free surface: cell");
   const double cx = box.lengthX / nx, cy = box.width / ny;
   std::vector<double> top(static_cast<std::size_t>(nx) * ny, -std::numeric_limits<double>::infinity());
   for (const core::Grain& g : packing.grains) {

@@ -153,7 +153,7 @@ Coordination coordination(const core::Packing& packing, const BulkRegion& region
   // Z(y): distance to the nearer wall (folded) or raw y (biperiodic).
   const core::BoxDef& box = packing.box;
   const double span = box.periodicY ? box.width : 0.5 * box.width;
-  const std::vector<double> edges = sliceEdges(span, def.slice);
+  const std::vector<double> edges = sliceEdges(span, def.slice, "coordination: Z(y) slice");
   const std::size_t ns = edges.size() - 1;
   const double dy = edges[1] - edges[0];
   CoordinationProfile& p = r.profile;

@@ -55,11 +55,14 @@ std::vector<core::Contact> geometricContacts(const core::Packing& packing, const
     if (a.shape == core::ShapeKind::Sphere) {
       const double d = np.separation.norm();
       const double gap = d - 0.5 * (a.size + b.size);
-      if (gap > tol || d <= 0.0) continue;
+      if (gap > tol) continue;
       core::Contact c;
       c.a = np.i;
       c.b = np.j;
-      c.normal = np.separation / d;
+      // Coincident centres (d = 0) have no line of centres, but they are the deepest overlap there
+      // is (gap = -(r_a + r_b)): any unit normal will do, and dropping the pair would pass two
+      // grains in one place as no contact at all (the plausibility check reads these depths).
+      c.normal = d > 0.0 ? core::Vec3(np.separation / d) : core::Vec3::UnitZ();
       // Midway between the two surfaces.
       const core::Vec3 point = a.position + c.normal * (0.5 * a.size + 0.5 * gap);
       c.points.push_back({point, 1.0, core::Vec3::Zero(), gap});

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "analysis/cell_count.hpp"
 #include "analysis/grain_volumes.hpp"
 #include "analysis/neighbour_pairs.hpp"
 #include "analysis/solid_fraction.hpp"
@@ -73,9 +74,9 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
                    const std::vector<NeighbourPair>& neighbours, const std::vector<OverlapPair>& pairs, double& lower,
                    double& upper, int& cellCount) {
   const core::BoxDef& box = packing.box;
-  const int nx = std::max(1, static_cast<int>(std::lround(box.lengthX / def.cell)));
-  const int ny = std::max(1, static_cast<int>(std::lround(box.width / def.cell)));
-  const int nz = std::max(1, static_cast<int>(std::lround(region.height() / def.cell)));
+  const int nx = cellsAlong(box.lengthX, def.cell, "interpenetration: lattice cell");
+  const int ny = cellsAlong(box.width, def.cell, "interpenetration: lattice cell");
+  const int nz = cellsAlong(region.height(), def.cell, "interpenetration: lattice cell");
   const core::Vec3 h(box.lengthX / nx, box.width / ny, region.height() / nz);
   const core::Vec3 origin(0.0, 0.0, region.zLow);
   const double cellVolume = h.prod();

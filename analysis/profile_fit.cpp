@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <new>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -118,6 +120,24 @@ struct Attempt {
   bool valid = false;
 };
 
+// GSL's objects, freed on every way out. GSL's allocators return NULL when memory runs out (its
+// error handler is off, fitProfile), and its functions dereference what they are given: a NULL
+// checked here becomes std::bad_alloc, the same failure as any other allocation's, instead of a
+// segfault inside gsl_multifit_nlinear_winit.
+struct GslFree {
+  void operator()(gsl_multifit_nlinear_workspace* w) const { gsl_multifit_nlinear_free(w); }
+  void operator()(gsl_vector* v) const { gsl_vector_free(v); }
+  void operator()(gsl_matrix* m) const { gsl_matrix_free(m); }
+};
+template <class T>
+using GslPtr = std::unique_ptr<T, GslFree>;
+
+template <class T>
+GslPtr<T> checked(T* allocated) {
+  if (allocated == nullptr) throw std::bad_alloc();
+  return GslPtr<T>(allocated);
+}
+
 // What gsl_multifit_nlinear_driver does (iterate, test for convergence with xtol = gtol = ftol =
 // 1e-10, up to maxIterations; GSL_ENOPROG on the first iteration ends it), the same calls in the
 // same order, with a safe point between iterations: GSL's own loop cannot be left early (a
@@ -165,18 +185,18 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   fdf.params = &data;
   gsl_multifit_nlinear_parameters params = gsl_multifit_nlinear_default_parameters();
   params.trs = gsl_multifit_nlinear_trs_lm;
-  gsl_multifit_nlinear_workspace* w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &params, n, p);
-  gsl_vector* x0 = gsl_vector_alloc(p);
-  gsl_matrix* covar = gsl_matrix_alloc(p, p);
-  toVector(start, x0);
+  const auto workspace = checked(gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &params, n, p));
+  gsl_multifit_nlinear_workspace* w = workspace.get();
+  const auto x0 = checked(gsl_vector_alloc(p));
+  const auto covar = checked(gsl_matrix_alloc(p, p));
+  toVector(start, x0.get());
   int info = 0;
-  int status = gsl_multifit_nlinear_init(x0, &fdf, w);
+  int status = gsl_multifit_nlinear_init(x0.get(), &fdf, w);
+  // GSL_ENOMEM: an allocation inside GSL failed (the error handler is off).
+  if (status == GSL_ENOMEM) throw std::bad_alloc();
   if (status == GSL_SUCCESS && !drive(w, def.maxIterations, status, info)) {
-    // Stopped: GSL's memory freed before the exception (none may cross GSL's C frames anyway).
+    // Stopped; no exception crosses GSL's C frames (drive returned first).
     const int iterations = static_cast<int>(gsl_multifit_nlinear_niter(w));
-    gsl_matrix_free(covar);
-    gsl_vector_free(x0);
-    gsl_multifit_nlinear_free(w);
     throw core::Interrupted(core::stopSignal(),
                             fmt::format("while fitting the phi(y) profile ({} points, start {} of {}, iteration {})", n,
                                         attempt, kStarts, iterations + 1));
@@ -193,17 +213,16 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   if (status != GSL_SUCCESS) {
     f.reason = fmt::format("no convergence ({})", gsl_strerror(status));
   } else {
-    gsl_multifit_nlinear_covar(gsl_multifit_nlinear_jac(w), 0.0, covar);
+    if (gsl_multifit_nlinear_covar(gsl_multifit_nlinear_jac(w), 0.0, covar.get()) == GSL_ENOMEM) throw std::bad_alloc();
     const double scale = chisq / f.dof;
-    gsl_vector* err = gsl_vector_alloc(p);
+    const auto err = checked(gsl_vector_alloc(p));
     bool finite = true;
     for (std::size_t i = 0; i < p; ++i) {
-      const double v = gsl_matrix_get(covar, i, i) * scale;
+      const double v = gsl_matrix_get(covar.get(), i, i) * scale;
       finite = finite && std::isfinite(v) && v >= 0.0;
-      gsl_vector_set(err, i, std::sqrt(std::max(0.0, v)));
+      gsl_vector_set(err.get(), i, std::sqrt(std::max(0.0, v)));
     }
-    f.error = fromVector(err, bi);
-    gsl_vector_free(err);
+    f.error = fromVector(err.get(), bi);
     const ProfileLaw& l = f.law;
     bool physical = l.alpha > 0.0 && l.gamma[0] > 0.0 && l.lambda[0] > 0.0 && std::isfinite(chisq);
     if (bi) physical = physical && l.gamma[1] > 0.0 && l.lambda[1] > 0.0;
@@ -216,9 +235,6 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
       at.valid = true;
     }
   }
-  gsl_matrix_free(covar);
-  gsl_vector_free(x0);
-  gsl_multifit_nlinear_free(w);
   return at;
 }
 

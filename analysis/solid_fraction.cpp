@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "analysis/cell_count.hpp"
 #include "analysis/grain_volumes.hpp"
 #include "core/interrupt.hpp"
 
@@ -28,8 +29,8 @@ void ProfileDef::validate() const {
     throw std::invalid_argument(fmt::format("profile: slice thickness must be positive (got {})", slice));
 }
 
-std::vector<double> sliceEdges(double width, double slice) {
-  const int n = std::max(1, static_cast<int>(std::lround(width / slice)));
+std::vector<double> sliceEdges(double width, double slice, std::string_view what) {
+  const int n = cellsAlong(width, slice, what);
   std::vector<double> edges(n + 1);
   for (int k = 0; k <= n; ++k) edges[k] = width * k / n;
   return edges;
@@ -47,7 +48,7 @@ SolidFractionProfile solidFractionProfile(const core::Packing& packing, const Bu
   def.validate();
   SolidFractionProfile prof;
   const core::BoxDef& box = packing.box;
-  const std::vector<double> edges = sliceEdges(box.width, def.slice);
+  const std::vector<double> edges = sliceEdges(box.width, def.slice, "profile: slice");
   const std::size_t n = edges.size() - 1;
   prof.slice = edges[1] - edges[0];
   std::vector<double> volume(n, 0.0);

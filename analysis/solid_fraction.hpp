@@ -17,6 +17,7 @@
 // horizontal planes, whose excess and deficit cancel on average.
 // With side walls the profile is folded: phi(y) = (phi_raw(y) + phi_raw(W - y)) / 2 for
 // 0 <= y <= W/2 (averaged over the two walls); a biperiodic box gives the raw profile.
+#include <string_view>
 #include <vector>
 
 #include "analysis/bulk_region.hpp"
@@ -49,8 +50,9 @@ struct SolidFractionProfile {
 SolidFractionProfile solidFractionProfile(const core::Packing& packing, const BulkRegion& region,
                                           const ProfileDef& def = {});
 
-/// Slice edges 0, dy, ..., W with dy = W / round(W / slice) (at least one slice).
-std::vector<double> sliceEdges(double width, double slice);
+/// Slice edges 0, dy, ..., W with dy = W / round(W / slice) (at least one slice). Throws
+/// std::invalid_argument naming `what` when that is more slices than analysis/cell_count.hpp allows.
+std::vector<double> sliceEdges(double width, double slice, std::string_view what = "slice");
 
 /// Folds a profile over [0, W] onto [0, W/2]: f(k) = (raw(k) + raw(n-1-k)) / 2 for k < ceil(n/2).
 std::vector<double> foldProfile(const std::vector<double>& raw);

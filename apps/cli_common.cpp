@@ -1,5 +1,6 @@
 #include "apps/cli_common.hpp"
 
+#include <dirent.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <new>
 #include <stdexcept>
 #include <system_error>
@@ -134,7 +136,10 @@ void addRunConfigOptions(CLI::App& sub, core::RunConfig& cfg, CommonOptions& opt
 
 std::string oneLineFailure(const CLI::App* app, const std::exception& e) {
   while (app != nullptr && app->get_parent() != nullptr) app = app->get_parent();
-  const std::string program = app != nullptr && !app->get_name().empty() ? app->get_name() : "confpack";
+  std::string program = app != nullptr && !app->get_name().empty() ? app->get_name() : "confpack";
+  // The subcommand the failure belongs to, as every other error line of it names it ("confpack
+  // run: error: ..."): the one the parser had reached, if any.
+  if (app != nullptr && !app->get_subcommands().empty()) program += " " + app->get_subcommands().front()->get_name();
   std::string what = e.what();
   // CLI11 messages can carry a trailing newline; keep the promise of one line.
   for (char& c : what)
@@ -283,8 +288,36 @@ CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow) {
 void checkOutputTarget(const fs::path& out) {
   std::error_code ec;
   if (out.empty()) throw std::invalid_argument("--out: an output directory is required");
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+  const fs::path absolute = fs::absolute(out, ec).lexically_normal();
+  if (!ec && absolute == absolute.root_path())
+    throw std::invalid_argument(
+        fmt::format("--out: '{}' is the file system's root; give a new or empty folder", out.string()));
+  const fs::file_status status = fs::status(out, ec);
+  if (!fs::exists(status)) return;
+  if (!fs::is_directory(status))
     throw std::invalid_argument(fmt::format("--out: '{}' exists and is not a directory", out.string()));
+  if (fs::exists(out / kOutputMarker, ec)) return;
+  fs::directory_iterator entries(out, ec);
+  if (ec) throw std::invalid_argument(fmt::format("--out: cannot read folder '{}': {}", out.string(), ec.message()));
+  if (entries != fs::directory_iterator())
+    throw std::invalid_argument(
+        fmt::format("--out: '{}' is a folder with files confpack did not write (it has no {}); give a new or "
+                    "empty folder, or the output folder of an earlier confpack command",
+                    out.string(), kOutputMarker));
+}
+
+namespace {
+void writeOutputMarker(const fs::path& dir) {
+  // What the marker says to a user who finds it; its presence is what counts.
+  core::writeFileAtomically(dir / kOutputMarker,
+                            "Written by confpack: this folder is a confpack output, which the next confpack command "
+                            "given it as --out may replace.\n");
+}
+}  // namespace
+
+void markOutputFolder(const fs::path& dir) {
+  fs::create_directories(dir);
+  if (!fs::exists(dir / kOutputMarker)) writeOutputMarker(dir);
 }
 
 void applyThreads(int threads) {
@@ -305,48 +338,72 @@ fs::path normalisedTarget(const fs::path& p) {
 
 /// Removes the staging folders of `target` (".NAME.partial-PID") whose process is gone: a
 /// command killed with SIGKILL (or by a power cut) could not remove its own.
+// readdir rather than std::filesystem::directory_iterator: libstdc++ builds each entry's path
+// inside a noexcept function, so an allocation failing there ends in std::terminate instead of
+// the out-of-memory line.
 void removeStaleStaging(const fs::path& target) {
   const std::string prefix = "." + target.filename().string() + ".partial-";
+  const std::unique_ptr<DIR, int (*)(DIR*)> dir(::opendir(target.parent_path().c_str()), ::closedir);
+  if (!dir) return;
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(target.parent_path(), ec)) {
-    const std::string name = entry.path().filename().string();
+  while (const dirent* entry = ::readdir(dir.get())) {
+    const std::string_view name = entry->d_name;
     if (!name.starts_with(prefix)) continue;
-    const std::string digits = name.substr(prefix.size());
-    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(digits));
-    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
+    const std::string_view digits = name.substr(prefix.size());
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string_view::npos)
+      continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(std::string(digits)));
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(target.parent_path() / name, ec);
   }
 }
 }  // namespace
 
-StagedOutput::StagedOutput(const fs::path& target, RenameFn rename)
+StagedOutput::StagedOutput(const fs::path& target, RenameFn rename, RemoveFn removeAll)
     : target_(normalisedTarget(target)),
-      rename_(rename ? std::move(rename) : [](const fs::path& from, const fs::path& to) { fs::rename(from, to); }) {
+      rename_(rename ? std::move(rename) : [](const fs::path& from, const fs::path& to) { fs::rename(from, to); }),
+      removeAll_(removeAll ? std::move(removeAll) : [](const fs::path& p) { fs::remove_all(p); }) {
   // Parents that do not exist yet are ours: remember them so a failure removes them too.
   for (fs::path p = target_.parent_path(); !p.empty() && !fs::exists(p); p = p.parent_path()) {
     createdParents_.push_back(p);
     if (p == p.parent_path()) break;
   }
-  fs::create_directories(target_.parent_path());
-  removeStaleStaging(target_);
   staging_ = target_.parent_path() / fmt::format(".{}.partial-{}", target_.filename().string(), ::getpid());
-  fs::remove_all(staging_);
-  fs::create_directory(staging_);
+  // The user's path in the message, not the internal staging folder that failed.
+  try {
+    fs::create_directories(target_.parent_path());
+    removeStaleStaging(target_);
+    fs::remove_all(staging_);
+    fs::create_directory(staging_);
+    writeOutputMarker(staging_);
+  } catch (const fs::filesystem_error& e) {
+    discardStaging();
+    throw std::runtime_error(fmt::format("cannot create output folder {}: {}", target.string(), e.code().message()));
+  } catch (const std::runtime_error& e) {
+    discardStaging();
+    throw std::runtime_error(fmt::format("cannot create output folder {}: {}", target.string(), e.what()));
+  } catch (...) {  // out of memory: no destructor will remove what was made
+    discardStaging();
+    throw;
+  }
 }
 
-StagedOutput::~StagedOutput() {
-  if (committed_ || keepStaging_) return;
-  // remove_all allocates (directory entries) and may throw std::bad_alloc even with an error_code;
-  // out of a destructor that would terminate the program (SIGABRT) in the middle of the unwinding
-  // of an out-of-memory failure. The work's memory is released by then (it lives in scopes inside
-  // this one), so the removal normally succeeds; if it cannot, the next command on this target
-  // removes the folder (removeStaleStaging).
+void StagedOutput::discardStaging() noexcept {
   try {
     std::error_code ec;
     fs::remove_all(staging_, ec);
     for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only if empty
   } catch (...) {
   }
+}
+
+StagedOutput::~StagedOutput() {
+  if (committed_ || keepStaging_) return;
+  // remove_all allocates (directory entries) and may throw std::bad_alloc even with an error_code;
+  // out of a destructor that would terminate the program (SIGABRT) in the middle of the unwinding
+  // of an out-of-memory failure (discardStaging swallows it). The work's memory is released by
+  // then (it lives in scopes inside this one), so the removal normally succeeds; if it cannot, the
+  // next command on this target removes the folder (removeStaleStaging).
+  discardStaging();
 }
 
 void StagedOutput::commit() {
@@ -398,9 +455,22 @@ void StagedOutput::commit() {
                                "were replaced are in {}: {}",
                                target_.string(), aside.string(), e.what()));
   }
-  fs::remove_all(aside);
-  fs::remove(staging_);
+  // Every new entry is in place: the command has done its work, whatever happens to the old
+  // files now. One that cannot be removed (an immutable file) is left where it is and named.
   committed_ = true;
+  try {
+    removeAll_(aside);
+    fs::remove(staging_);
+  } catch (const std::exception& e) {
+    const auto* fsError = dynamic_cast<const fs::filesystem_error*>(&e);
+    const std::string label =
+        currentCommand.empty() ? programName() : programName() + " " + std::string(currentCommand);
+    warning_ = fmt::format(
+        "{}: warning: the output is in place in {}, but the old files it replaced could not be removed ({}); they are "
+        "left in {}",
+        label, target_.string(), fsError ? fsError->code().message() : std::string(e.what()), aside.string());
+    std::fprintf(stderr, "%s\n", warning_.c_str());
+  }
 }
 
 void writeJson(const fs::path& path, const nlohmann::json& j) {

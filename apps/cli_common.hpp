@@ -94,8 +94,17 @@ void runWork(std::string_view command, const std::function<void()>& work);
 /// `--allow-implausible` into `allow`: a packing file analysis/plausibility.hpp finds implausible is
 /// taken anyway.
 CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow);
-/// Refuses an --out that cannot be a directory (an existing file), as bad input.
+/// The file confpack writes into every output folder it commits (StagedOutput): a folder that
+/// holds it is confpack's own, which a later command may replace.
+inline constexpr const char* kOutputMarker = ".confpack-output";
+/// Refuses, as bad input, an --out that confpack may not write into. It must be a new folder (not
+/// existing yet), an empty folder, or a folder confpack wrote (it holds kOutputMarker): replacing
+/// or filling anything else (the filesystem root, a home folder, a file) would destroy or mix in
+/// files that are not confpack's. The message names the path and why.
 void checkOutputTarget(const std::filesystem::path& out);
+/// Creates folder `dir` if needed and puts kOutputMarker in it, for a folder confpack fills itself
+/// rather than through StagedOutput (a sweep's or a study's folder).
+void markOutputFolder(const std::filesystem::path& dir);
 
 /// Applies --threads to OpenMP (when the build has it).
 void applyThreads(int threads);
@@ -105,14 +114,22 @@ void applyThreads(int threads);
 /// them in place: the whole directory in one rename when the target does not exist yet, else entry
 /// by entry, each old entry first moved aside into the staging directory. When a rename fails
 /// midway, commit() moves the new entries back out and the old ones back in before it throws: the
-/// target then holds its old files, none of the new ones. Without commit() (an exception unwinds),
-/// the staging directory and any parent directories created for it are removed.
+/// target then holds its old files, none of the new ones. Once every new entry is in place the
+/// output is committed: an old entry that then cannot be removed is a warning (warning()), not a
+/// failure. Without commit() (an exception unwinds), the staging directory and any parent
+/// directories created for it are removed. The staging directory holds kOutputMarker from the
+/// start, so that every committed output carries it.
 class StagedOutput {
  public:
   /// How an entry is moved (std::filesystem::rename; a test injects failures).
   using RenameFn = std::function<void(const std::filesystem::path& from, const std::filesystem::path& to)>;
+  /// How the replaced old entries are removed after the commit (std::filesystem::remove_all; a
+  /// test injects a failure, as an immutable file gives).
+  using RemoveFn = std::function<void(const std::filesystem::path& path)>;
 
-  explicit StagedOutput(const std::filesystem::path& target, RenameFn rename = {});
+  /// Throws std::runtime_error "cannot create output folder TARGET: <reason>" when the staging
+  /// directory cannot be made next to `target` (a read-only file system, /proc).
+  explicit StagedOutput(const std::filesystem::path& target, RenameFn rename = {}, RemoveFn removeAll = {});
   ~StagedOutput();
   StagedOutput(const StagedOutput&) = delete;
   StagedOutput& operator=(const StagedOutput&) = delete;
@@ -122,14 +139,22 @@ class StagedOutput {
   /// The final directory.
   const std::filesystem::path& target() const { return target_; }
   void commit();
+  /// After commit(): the warning line it wrote on stderr when the old files it replaced could not
+  /// be removed (it names the folder they are left in), else empty.
+  const std::string& warning() const { return warning_; }
 
  private:
   std::filesystem::path target_;
   std::filesystem::path staging_;
   std::vector<std::filesystem::path> createdParents_;  ///< deepest first
   RenameFn rename_;
+  RemoveFn removeAll_;
+  std::string warning_;
   bool committed_ = false;
   bool keepStaging_ = false;  ///< a failed commit could not put the old files back: they are in it
+
+  /// Removes the staging directory and the parents created for it, if it can (never throws).
+  void discardStaging() noexcept;
 };
 
 /// Writes `j` (indented) to `path` atomically.

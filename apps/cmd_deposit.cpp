@@ -13,6 +13,7 @@
 #include "apps/commands.hpp"
 #include "apps/progress.hpp"
 #include "compaction/deposition.hpp"
+#include "core/interrupt.hpp"
 #include "core/packing_io.hpp"
 #include "core/vtk_writer.hpp"
 
@@ -30,6 +31,7 @@ void runDeposit(const DepositState& st) {
   checkInput("deposit", [&] {
     cfg.fitLengthToGrainCap();
     cfg.validate();
+    cfg.validateDeposit();
     checkOutputTarget(st.opts.out);
   });
   runWork("deposit", [&] {
@@ -40,8 +42,12 @@ void runDeposit(const DepositState& st) {
 
     Progress progress("deposit", !st.opts.quiet, 5.0);
     WorkStep step("depositing the grains");
+    // The progress callback is the deposition's safe point (every hundredth of the placeholders,
+    // at most every 1000): SIGINT or SIGTERM stops it there, the staged output is removed on the
+    // way out, exit 130 or 143.
     const compaction::Deposit pile =
         compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
+          core::stopIfRequested([&] { return fmt::format("while depositing (placeholder {} of {})", done, total); });
           progress.update(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
                           fmt::format("{}/{} placeholders", done, total));
         });
@@ -59,6 +65,8 @@ void runDeposit(const DepositState& st) {
     core::VtkSeries vtk(output.dir() / "vtk", "deposit");
     vtk.addFrame(0.0, packing);
     vtk.finish();
+    // A stop asked for while writing still leaves nothing behind.
+    core::stopIfRequested([] { return std::string("while writing the deposit"); });
     step.next("moving the output into place");
     output.commit();
 

@@ -44,7 +44,8 @@ void runReportCommand(const ReportState& st) {
     output.commit();
     // A figure gnuplot failed on is said in its place in the report and here; the rest stands.
     for (const std::string& e : s.figureErrors) fmt::print(stderr, "confpack report: {}\n", e);
-    const std::string drawn = !s.gnuplotUsed ? (st.noFigures ? " (not drawn: --no-figures)" : " (not drawn: gnuplot unavailable)")
+    const std::string drawn = !s.gnuplotUsed ? (st.noFigures ? " (not drawn: --no-figures)"
+                                                              : fmt::format(" (not drawn: gnuplot {})", s.gnuplotProblem))
                               : s.figureErrors.empty() ? ""
                                                        : fmt::format(" ({} not drawn, see above)", s.figureErrors.size());
     fmt::print("report: {} runs ({} done, {} failed, {} missing, {} not equilibrated), {} figures{}\n  {}\n  {}\n",

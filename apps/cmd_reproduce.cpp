@@ -35,7 +35,8 @@ void runReproduceCommand(const ReproduceState& st) {
   checkInput("reproduce", [&] {
     spec = study::parseSweepSpec(study::reproductionSweep(st.scale), st.scale);
     runs = study::expandRuns(spec);
-    checkOutputTarget(st.out);
+    // A study folder (it holds the run table) is confpack's, marked or not: rerunning resumes it.
+    if (!std::filesystem::exists(st.out / study::kSweepTable)) checkOutputTarget(st.out);
   });
   if (st.list) {
     std::fputs(study::formatRunTable(
@@ -52,7 +53,7 @@ void runReproduceCommand(const ReproduceState& st) {
     opt.jobs = st.jobs;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
-    std::filesystem::create_directories(st.out);
+    markOutputFolder(st.out);
     // The study's definition next to its results, as a sweep file a user can edit and rerun.
     core::writeFileAtomically(st.out / "study.json", study::reproductionSweep(st.scale).dump(2));
     summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1, compaction::Checkpointing{}.everySeconds, spec.settleWith),

@@ -123,6 +123,7 @@ void runRun(RunState& st) {
     }
     if (!start) cfg.fitLengthToGrainCap();  // a packing brings its own box
     cfg.validate();
+    if (!start) cfg.validateDeposit();
     study::checkRunCells(cfg, start ? static_cast<double>(start->grains.size()) : cfg.estimatedGrainCount());
     // Here, not when the backend is built: an unknown key is bad input (exit 2), as bad JSON is.
     backends::checkBackendOptions(cfg.backend, cfg.backendOptions);
@@ -162,8 +163,9 @@ void registerRun(CLI::App& app) {
       "run", "Deposit, compact with a backend until equilibrium (or the time limit), analyse, write DIR/result.json");
   addRunConfigOptions(*sub, st->cfg, st->opts);
   sub->add_option("--dt", st->cfg.compaction.dt,
-                  "Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md)")
-      ->check(nonNegativeNumber())
+                  "Time step [t0]; 0 = the fixed step from the deposit's drop, else in [1e-06, 0.1] (docs/model.md, "
+                  "\"Time step\")")
+      ->check(realIn(0.0, core::kMaxTimeStep, false, false, "0 or a time step of at most 0.1 t0", "T0"))
       ->capture_default_str();
   sub->add_flag("--adaptive-dt", st->cfg.compaction.adaptiveDt,
                 "Adaptive time step: the largest that keeps every grain within a hundredth of the smallest "

@@ -74,6 +74,7 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
                      const fs::path& out) {
   runWork("sweep", [&] {
     const WorkStep step("writing the Slurm job array");
+    markOutputFolder(out);
     study::prepareSweepDir(out, spec, runs);
     const std::vector<study::RunReport> reports = study::sweepStatus(out, runs);
     const std::vector<std::size_t> todo = study::unfinishedRuns(reports);
@@ -172,7 +173,8 @@ void runSweepCommand(const SweepState& st) {
       }
     }
     if (st.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", st.jobs));
-    checkOutputTarget(out);
+    // A sweep folder (it holds the run table) is confpack's, marked or not: resuming is the point.
+    if (!fs::exists(out / study::kSweepTable)) checkOutputTarget(out);
     if (!st.runList.empty()) only = namedRuns(runs, st.runList);
     if (st.slurm) {
       study::checkSlurmOptions(st.slurmOptions);
@@ -213,6 +215,7 @@ void runSweepCommand(const SweepState& st) {
     opt.runs = only;
     opt.quiet = st.quiet;
     opt.live = ::isatty(STDERR_FILENO) != 0;
+    markOutputFolder(out);
     summary = study::runSweep(spec, out, opt, study::pipelineRunner(st.threads, st.checkpointEvery, spec.settleWith),
                               study::pipelineDepositor());
   });

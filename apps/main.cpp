@@ -1,14 +1,24 @@
 // confpack: the command line (README, "Command line"). Thin: parse, dispatch to a subcommand,
 // return its code.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstring>
+#include <exception>
+#include <new>
 #include <string>
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "core/build_info.hpp"
+#ifdef CONFPACK_ALLOCATION_FAULT
+#include "tests/support/allocation_fault.hpp"
+#endif
 
-int main(int argc, char** argv) {
+namespace {
+
+int runCommandLine(int argc, char** argv) {
   using namespace confpack::app;
   CLI::App app{
       "confpack: dense packings of frictionless spheres and pinacoids between two walls, compacted by a "
@@ -41,4 +51,26 @@ int main(int argc, char** argv) {
     }
   }
   return parseAndRun(app, argc, argv);
+}
+
+}  // namespace
+
+// The command line's setup (the subcommands' options) allocates before parseAndRun can catch
+// anything: a failure there would otherwise end in std::terminate and its two lines.
+int main(int argc, char** argv) {
+#ifdef CONFPACK_ALLOCATION_FAULT
+  // The test build only (tests/support/allocation_fault.hpp): fail the k-th allocation from here.
+  confpack::testing::armAllocationFault();
+#endif
+  try {
+    return runCommandLine(argc, argv);
+  } catch (const std::bad_alloc&) {
+    // Without allocating: memory has run out.
+    constexpr const char line[] = "confpack: out of memory while setting up the command line\n";
+    std::fflush(stdout);
+    (void)!::write(STDERR_FILENO, line, sizeof line - 1);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "confpack: error: %s\n", e.what());
+  }
+  return confpack::app::kExitRuntimeFailure;
 }

@@ -1,7 +1,12 @@
 #include "core/json_input.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -14,6 +19,14 @@ namespace confpack::core {
 using nlohmann::json;
 
 namespace {
+const char* fileKind(mode_t mode) {
+  if (S_ISFIFO(mode)) return "FIFO";
+  if (S_ISCHR(mode)) return "character device";
+  if (S_ISBLK(mode)) return "block device";
+  if (S_ISSOCK(mode)) return "socket";
+  return "special file";
+}
+
 // Where the parser stopped, as a field path ("grains[0].size"): the text is parsed again with a
 // callback that follows the containers, up to the value nlohmann could not read (its out_of_range
 // error carries no position). Only after such a failure, so a good document is parsed once.
@@ -83,18 +96,50 @@ json parseJsonText(std::string_view text, std::string_view source) {
 
 json readJsonFile(const std::filesystem::path& path, std::string_view what) {
   const std::string source = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw std::invalid_argument(fmt::format("{}: is a folder, not a {}", source, what));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the {}", source, what));
+  // Non-blocking, so that opening a FIFO with no writer returns at once instead of waiting for
+  // one; what the descriptor is (fstat) is checked before a byte is read.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    if (errno == EISDIR) throw std::invalid_argument(fmt::format("{}: is a folder, not a {}", source, what));
+    throw std::invalid_argument(fmt::format("{}: cannot open the {} ({})", source, what, std::strerror(errno)));
+  }
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0)
+    throw std::invalid_argument(fmt::format("{}: cannot read the {} ({})", source, what, std::strerror(errno)));
+  if (S_ISDIR(st.st_mode)) throw std::invalid_argument(fmt::format("{}: is a folder, not a {}", source, what));
+  if (!S_ISREG(st.st_mode))
+    throw std::invalid_argument(
+        fmt::format("{}: is a {}, not a regular file: give the {} itself", source, fileKind(st.st_mode), what));
+  const auto size = static_cast<std::uintmax_t>(st.st_size);
+  if (size > kMaxJsonFileBytes)
+    throw std::invalid_argument(
+        fmt::format("{}: {} bytes, more than the {} bytes a {} may have", source, size, kMaxJsonFileBytes, what));
+  // Not `text << in.rdbuf()` or a stream at all: a stream's insertion catches std::bad_alloc and
+  // only sets failbit, so a file read under memory pressure came out cut short and was refused as
+  // invalid JSON instead of failing as out of memory. Read to the end rather than to st_size (a
+  // file may grow meanwhile, or, in /proc, have no size), the bound checked as it goes.
+  constexpr std::size_t kChunk = std::size_t{1} << 16;
   std::string text;
-  // Not `text << in.rdbuf()`: that insertion catches an exception (std::bad_alloc while the text
-  // grows) and only sets failbit, so a file read under memory pressure came out cut short and
-  // was refused as invalid JSON instead of failing as out of memory.
-  if (const std::uintmax_t size = std::filesystem::file_size(path, ec); !ec) text.reserve(size);
-  text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  if (in.bad()) throw std::invalid_argument(fmt::format("{}: cannot read the {}", source, what));
+  text.reserve(static_cast<std::size_t>(size) + kChunk);
+  std::size_t got = 0;
+  for (;;) {
+    if (text.size() < got + kChunk) text.resize(got + kChunk);
+    const ssize_t n = ::read(fd, text.data() + got, kChunk);
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::invalid_argument(fmt::format("{}: cannot read the {} ({})", source, what, std::strerror(errno)));
+    }
+    got += static_cast<std::size_t>(n);
+    if (got > kMaxJsonFileBytes)
+      throw std::invalid_argument(
+          fmt::format("{}: more than the {} bytes a {} may have", source, kMaxJsonFileBytes, what));
+  }
+  text.resize(got);
   return parseJsonText(text, source);
 }
 

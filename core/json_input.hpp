@@ -4,6 +4,7 @@
 // std::invalid_argument that names where the text came from, so that each reader of the toolkit
 // refuses bad JSON with the same kind of message and the same exit code (bad input, 2).
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,9 +16,16 @@ namespace confpack::core {
 /// and "SOURCE: a number out of the range of a double: ..." for a number such as 1e400.
 nlohmann::json parseJsonText(std::string_view text, std::string_view source);
 
-/// Reads and parses a JSON file; a folder ("FILE: is a folder, not a WHAT") or a file that cannot
-/// be opened ("FILE: cannot open the WHAT") is refused with std::invalid_argument, as is bad JSON
-/// (parseJsonText). `what` names the kind of file: "packing file", "sweep file".
+/// Largest JSON file read [bytes]: a packing of a million grains (the largest deposit) with its
+/// contacts is well under 1 GiB, and parsing takes several times the file's size in memory.
+inline constexpr std::uintmax_t kMaxJsonFileBytes = std::uintmax_t{2} << 30;
+
+/// Reads and parses a JSON file. Only a regular file of at most kMaxJsonFileBytes is read, refused
+/// before reading anything otherwise: a folder ("FILE: is a folder, not a WHAT"), a FIFO or a
+/// device (/dev/zero, /dev/urandom: endless; a FIFO: may never be written), a file too large, or
+/// one that cannot be opened ("FILE: cannot open the WHAT (<reason>)") is refused with
+/// std::invalid_argument, as is bad JSON (parseJsonText). Opening never blocks. `what` names the
+/// kind of file: "packing file", "sweep file".
 nlohmann::json readJsonFile(const std::filesystem::path& path, std::string_view what);
 
 /// `value` as a message shows it: its JSON text when short, else its first `limit` characters

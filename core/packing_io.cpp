@@ -477,12 +477,16 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view tex
   // VTK frame.
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw std::runtime_error(fmt::format("{}: cannot create ({})", tmp.string(), std::strerror(errno)));
+  // The reason (disk full, quota) is errno of the call that failed, before anything else sets it.
   const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const int writeError = written ? 0 : errno;
   const bool closed = std::fclose(f) == 0;
+  const int reason = writeError != 0 ? writeError : closed ? 0 : errno;  // 0: the C library gave none
   std::error_code ec;
   if (!written || !closed) {
     std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(fmt::format("{}: write failed", path.string()));
+    throw std::runtime_error(
+        fmt::format("{}: write failed ({})", path.string(), reason != 0 ? std::strerror(reason) : "no reason given"));
   }
   std::filesystem::rename(tmp, path, ec);
   if (ec) {

@@ -50,7 +50,8 @@ const SettingsTable<CompactionDef>& compactionTable() {
   using C = CompactionDef;
   static const SettingsTable<C> table = [] {
     SettingsTable<C> t("compaction");
-    t.number("dt", &C::dt, Range::atLeast(0.0), "t0", "time step; 0 = the fixed step from the deposit's drop")
+    t.number("dt", &C::dt, Range::closed(0.0, kMaxTimeStep), "t0",
+             "time step; 0 = the fixed step from the deposit's drop, else at least 1e-6")
         .flag("adaptive_dt", &C::adaptiveDt, "adaptive time step, never below dt")
         .number("time_limit", &C::timeLimit, Range::leftOpen(0.0, kMaxTimeLimit), "t0",
                 "simulated time after which the run stops unequilibrated (quasi-static: the fall hands over)")
@@ -173,12 +174,39 @@ void from_json(const json& j, RunConfig& c) {
 
 void RunConfig::validate() const {
   runConfigTable().validate(*this);
+  if (compaction.dt > 0.0 && compaction.dt < kMinTimeStep)
+    throw std::invalid_argument(fmt::format(
+        "compaction.dt: {} is below {:g} t0 (0 takes the fixed step); a compaction of 100 t0 would take more than "
+        "1e8 steps",
+        numberText(compaction.dt), kMinTimeStep));
   const double grains = estimatedGrainCount();
   if (grains > static_cast<double>(deposition.maxGrains))
     throw std::invalid_argument(fmt::format(
         "deposition: about {:.3g} grains for this box, more than max_grains ({}); check the box's size, or raise "
         "the limit with --max-grains (deposition.max_grains)",
         grains, deposition.maxGrains));
+}
+
+void RunConfig::validateDeposit() const {
+  const double diameter = population.maxCircumscribedDiameter();
+  const std::pair<double, const char*> lengths[] = {{box.lengthX, "box.length_x"}, {box.width, "box.width"}};
+  for (const auto& [length, name] : lengths)
+    if (length < diameter)
+      throw std::invalid_argument(fmt::format(
+          "{}: {:g} d_L is less than a grain's circumscribed diameter ({:g} d_L): no grain fits", name, length,
+          diameter));
+  if (deposition.grainCount > 0) return;
+  // drawGrains stops each size class at the count whose volume is nearest its share: none when
+  // the share is under half a grain.
+  const double volume = deposition.expectedSolidFraction * box.lengthX * box.width * box.height;
+  const double small = population.smallFraction / 100.0;
+  const bool noLarge = volume * (1.0 - small) < 0.5 * population.meanGrainVolume(population.largeSize);
+  const bool noSmall = volume * small < 0.5 * population.meanGrainVolume(population.smallSize);
+  if (noLarge && noSmall)
+    throw std::invalid_argument(fmt::format(
+        "box.height: a box of {:g} x {:g} x {:g} d_L at expected_solid_fraction {:g} holds no grain; raise the "
+        "height or give grain_count",
+        box.lengthX, box.width, box.height, deposition.expectedSolidFraction));
 }
 
 double RunConfig::estimatedGrainCount() const {

@@ -53,9 +53,17 @@ std::string toString(Protocol p);  ///< "dynamic", "quasi-static"
 /// (the slowest measured reached rest near 170 t0), and its step count stays exact in a long.
 inline constexpr double kMaxTimeLimit = 1e9;
 
+/// Time steps accepted besides 0 (the fixed step) [t0]. The fixed step moves a grain at most
+/// d_L/100 a step, some 1e-3 to 7e-3 t0 (docs/model.md, "Time step"). Above 0.1 t0 a grain falling
+/// at sqrt(g d_L) crosses a tenth of its size a step and contacts are missed (grains were thrown
+/// through the floor); below 1e-6 t0 a compaction of 100 t0 is 1e8 steps, days of work that look
+/// like a hang.
+inline constexpr double kMinTimeStep = 1e-6;
+inline constexpr double kMaxTimeStep = 0.1;
 /// Compaction under gravity and its stopping rule (docs/model.md).
 struct CompactionDef {
-  /// Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md, "Time step").
+  /// Time step [t0]; 0 = the fixed step from the deposit's drop (docs/model.md, "Time step"),
+  /// else in [kMinTimeStep, kMaxTimeStep].
   double dt = 0.0;
   /// Adaptive time step: each step is the largest that keeps every grain within a hundredth of
   /// the smallest grain's size of motion (d_L/100 for a monodisperse sample, as the fixed step)
@@ -118,6 +126,10 @@ struct RunConfig {
   /// Throws std::invalid_argument with one clear message naming the bad field, and refuses a
   /// deposit of more than deposition.max_grains grains (estimatedGrainCount()).
   void validate() const;
+  /// What core::deposit would refuse only after starting, refused up front (std::invalid_argument):
+  /// a box narrower or shorter than a grain's circumscribed diameter, or one whose height holds no
+  /// grain. For a run that deposits; a run from a packing file takes its box and grains as given.
+  void validateDeposit() const;
   /// grain_count, or the grains the box's target height holds at the expected solid fraction.
   double estimatedGrainCount() const;
   /// With deposition.grain_cap set (and no grain_count), shortens box.length_x, down to a multiple

@@ -434,7 +434,7 @@ std::string sweepName(const StudyView& study) {
 // the verdict, the figures with their fits, the profiles, the runs, the tables, the cost, the method)
 
 void addIntroduction(Document& doc, const StudyView& study, const ReportSummary& summary,
-                     const ReportOptions& options, bool figuresDrawn) {
+                     const ReportOptions& options, bool figuresDrawn, const std::string& gnuplotProblem) {
   doc.heading(1, doc.title());
   const std::time_t t = std::time(nullptr);
   char when[32];
@@ -464,9 +464,9 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
   if (!figuresDrawn)
     doc.paragraph(options.gnuplot.empty()
                       ? "Figures were not drawn (disabled); their CSV data and gnuplot scripts are in figures/."
-                      : fmt::format("gnuplot ('{}') was not found: figures are not drawn. Their CSV data and gnuplot "
+                      : fmt::format("gnuplot ('{}') {}: figures are not drawn. Their CSV data and gnuplot "
                                     "scripts are in figures/ (install gnuplot-nox and rerun `confpack report`).",
-                                    options.gnuplot.string()));
+                                    options.gnuplot.string(), gnuplotProblem));
 }
 
 // An unweighted line through two widths passes through both points: its parameters have no
@@ -1686,7 +1686,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   ReportSummary summary = countRuns(study);
 
   Document doc(fmt::format("confpack study report: {}", study.spec.name));
-  addIntroduction(doc, study, summary, options, figures.available());
+  addIntroduction(doc, study, summary, options, figures.available(), figures.problem());
   ConfinementFits fits;
   if (study.keys.count("solid_fraction")) fits.phi = confinementFits(study, "solid_fraction");
   if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
@@ -1706,6 +1706,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   summary.figures = figures.count();
   summary.figureErrors = figures.errors();
   summary.gnuplotUsed = figures.available();
+  summary.gnuplotProblem = figures.problem();
   summary.markdown = outDir / "report.md";
   summary.html = outDir / "report.html";
   core::writeFileAtomically(summary.markdown, renderMarkdown(doc));

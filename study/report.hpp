@@ -96,6 +96,7 @@ struct ReportSummary {
   std::size_t figures = 0;
   std::vector<std::string> figureErrors;  ///< "figure STEM: gnuplot failed: ..." per figure not drawn
   bool gnuplotUsed = false;
+  std::string gnuplotProblem;  ///< why a gnuplot asked for was not used (FigureWriter::problem), else empty
   std::filesystem::path html, markdown;
 };
 

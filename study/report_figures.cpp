@@ -60,7 +60,14 @@ std::string gnuplotScript(const Plot& p) {
 FigureWriter::FigureWriter(fs::path dir, fs::path gnuplot, std::chrono::milliseconds timeout)
     : dir_(std::move(dir)), gnuplot_(std::move(gnuplot)), timeout_(timeout) {
   fs::create_directories(dir_);
-  if (!gnuplot_.empty()) available_ = runProcess({gnuplot_.string(), "--version"}, {{}, {}, timeout_}).ok();
+  if (gnuplot_.empty()) return;
+  const ProcessResult probe = runProcess({gnuplot_.string(), "--version"}, {{}, {}, timeout_});
+  available_ = probe.ok();
+  // A program that ran and failed is not one that is missing: say which, with its exit status.
+  if (!available_)
+    problem_ = probe.started ? fmt::format("failed its check (`{} --version` {})", gnuplot_.string(),
+                                           probe.describe(timeout_))
+                             : fmt::format("was not found ({})", probe.error);
 }
 
 Figure FigureWriter::draw(const Plot& p) {

@@ -41,6 +41,10 @@ class FigureWriter {
   FigureWriter(std::filesystem::path dir, std::filesystem::path gnuplot,
                std::chrono::milliseconds timeout = std::chrono::seconds(120));
   bool available() const { return available_; }
+  /// Why a gnuplot that was asked for cannot be used: "was not found (...)" when it could not
+  /// start, "failed its check (`gnuplot --version` exited with status 3)" when it ran and failed;
+  /// empty when it is available or none was asked for.
+  const std::string& problem() const { return problem_; }
   std::size_t count() const { return count_; }
   /// "figure STEM: ..." for every figure gnuplot failed on.
   const std::vector<std::string>& errors() const { return errors_; }
@@ -57,6 +61,7 @@ class FigureWriter {
   std::filesystem::path gnuplot_;
   std::chrono::milliseconds timeout_;
   bool available_ = false;
+  std::string problem_;
   std::size_t count_ = 0;
   std::vector<std::string> errors_;
 };

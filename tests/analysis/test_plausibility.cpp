@@ -5,6 +5,7 @@
 #include <string>
 
 #include "analysis/plausibility.hpp"
+#include "core/packing_io.hpp"
 #include "tests/support/lattices.hpp"
 #include "tests/support/systems.hpp"
 
@@ -92,6 +93,27 @@ TEST_CASE("an overlap deeper than 0.05 of the smaller grain is implausible, grai
   CHECK(reasonOf(pin) == "plausible");
 }
 
+TEST_CASE("grains with the same centre are the deepest overlap there is, spheres or pinacoids",
+          "[analysis][plausibility]") {
+  // Issue 62, failure 1: at a centre distance of 0 the pair had no normal and was dropped, so 91
+  // spheres in one place passed as a packing without overlap, while 1e-9 apart they were refused.
+  CHECK_THAT(reasonOf(pair(0.0)), Catch::StartsWith("grain 0 and grain 1 overlap by 1 "));
+  CHECK_THAT(reasonOf(pair(1e-9)), Catch::StartsWith("grain 0 and grain 1 overlap by 1 "));
+  core::Packing many = pair(0.0);
+  many.grains.assign(91, sphere(1.0, core::Vec3(1.0, 1.0, 1.0)));
+  many.box.lengthX = many.box.width = 6.0;
+  many.box.height = 6.0;
+  CHECK_THAT(reasonOf(many), Catch::StartsWith("grain 0 and grain 1 overlap by 1 "));
+  core::Packing pin;
+  pin.box.lengthX = 6.0;
+  pin.box.width = 6.0;
+  pin.grains = {pinacoid(1.0, core::Vec3(3.0, 3.0, 1.0)), pinacoid(1.0, core::Vec3(3.0, 3.0, 1.0))};
+  CHECK_THAT(reasonOf(pin), Catch::StartsWith("grain 0 and grain 1 overlap by "));
+  CHECK_THROWS_WITH(analysis::checkPlausible(many, "one-place.json", false),
+                    Catch::StartsWith("one-place.json: implausible packing: grain 0 and grain 1 overlap by 1 "));
+  CHECK_NOTHROW(analysis::checkPlausible(many, "one-place.json", true));
+}
+
 TEST_CASE("a contact point far from its grains is implausible", "[analysis][plausibility]") {
   // Grains 3 d apart, centre to centre, with a contact between them at grain 0's surface.
   core::Packing p = pair(3.0);
@@ -125,4 +147,23 @@ TEST_CASE("a packing mixing spheres and pinacoids is refused naming the file and
       "not supported";
   CHECK_THROWS_WITH(confpack::analysis::checkPlausible(p, "mixed.json", false), message);
   CHECK_THROWS_WITH(confpack::analysis::checkPlausible(p, "mixed.json", true), message);
+}
+
+TEST_CASE("the plausibility fuzz seeds: geometric edge cases at 0 and 1e-15 get their verdicts",
+          "[analysis][plausibility]") {
+  // The seed corpus of fuzz_plausibility (fuzz/corpus/plausibility/), read as analyze reads it, so
+  // that the seeds cannot go stale and each edge case has its verdict.
+  const std::string dir = std::string(CONFPACK_SOURCE_DIR) + "/fuzz/corpus/plausibility/";
+  const std::pair<const char*, const char*> verdicts[] = {
+      {"coincident_spheres.json", "grain 0 and grain 1 overlap by 1 "},
+      {"coincident_pinacoids.json", "grain 0 and grain 1 overlap by "},
+      {"nested_spheres.json", "grain 0 and grain 1 overlap by "},
+      {"coincident_across_period.json", "grain 0 and grain 1 overlap by 1 "},
+      {"touching_1e-15.json", "plausible"},
+      {"outside_box_1e-15.json", "plausible"},
+  };
+  for (const auto& [file, verdict] : verdicts) {
+    INFO(file);
+    CHECK_THAT(reasonOf(core::readPacking(dir + file)), Catch::StartsWith(verdict));
+  }
 }

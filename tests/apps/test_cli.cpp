@@ -243,6 +243,61 @@ TEST_CASE("every subcommand refuses bad input with exit 2 (README, the exit-code
   CHECK(s.entries().size() == 4);
 }
 
+TEST_CASE("values that can be refused before any work are: exit 2, one line, the subcommand's prefix") {
+  // Issue 62, failure 8: these failed after work had started (exit 1), --dt 5 as "z must be >= 0"
+  // and --dt 1e300 after printing a 300-digit time.
+  ConfpackSession s("cli_refused_up_front");
+  const std::string out = " --out out";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"deposit --length-x 6 --height 4 --width 0.5" + out,
+       "confpack deposit: error: box.width: 0.5 d_L is less than a grain's circumscribed diameter (1.1 d_L): no grain fits"},
+      {"run --length-x 0.5 --width 4 --height 4" + out, "confpack run: error: box.length_x: 0.5 d_L is less than"},
+      {"deposit --length-x 6 --width 4 --height 1e-9" + out,
+       "confpack deposit: error: box.height: a box of 6 x 4 x 1e-09 d_L at expected_solid_fraction 0.6 holds no "
+       "grain"},
+      {"run --length-x 6 --width 4 --height 4 --dt 1e-300" + out, "confpack run: error: compaction.dt: 1e-300 is below"},
+      {"run --length-x 6 --width 4 --height 4 --dt 5" + out,
+       "confpack run: error: --dt: must be 0 or a time step of at most 0.1 t0 (got 5) (see --help)"},
+      {"run --length-x 6 --width 4 --height 4 --dt 1e300" + out, "confpack run: error: --dt: must be 0 or a time step"},
+      // The parser's own errors carry the subcommand too, as every other error of it does.
+      {"run --length-x 6 --width 4 --height 4 --no-such-flag" + out, "confpack run: error: "},
+      {"analyze", "confpack analyze: error: "},
+  };
+  requireRefused(s, cases, [&] { CHECK(s.entries().empty()); });
+  // The --compaction-options and --config route to dt is refused the same way.
+  const CommandResult viaJson = s.run("run --length-x 6 --width 4 --height 4 --compaction-options '{\"dt\": 5}'" + out);
+  CHECK(viaJson.code == 2);
+  CHECK_THAT(viaJson.err, Catch::StartsWith("confpack run: error: ") && Catch::Contains("dt"));
+  CHECK(s.entries().empty());
+}
+
+TEST_CASE("--out must be new, empty or confpack's: the root and a folder of other files are refused untouched") {
+  // Issue 62, failure 2: `run --out /` exited 0 having written into the file system's root, and a
+  // folder of the user's was filled.
+  ConfpackSession s("cli_out_rule");
+  const std::string box = "--length-x 3 --width 3 --height 2 -q";
+  const CommandResult root = s.run("deposit " + box + " --out /");
+  CHECK(root.code == 2);
+  CHECK(root.err == "confpack deposit: error: --out: '/' is the file system's root; give a new or empty folder\n");
+  CHECK_FALSE(fs::exists("/packing.json"));
+  fs::create_directory(s.dir / "mine");
+  std::ofstream(s.dir / "mine" / "notes.txt") << "mine";
+  for (const char* sub : {"deposit", "run"}) {
+    INFO(sub);
+    const CommandResult r = s.run(std::string(sub) + " " + box + " --out mine");
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK_THAT(r.err, Catch::Contains("'mine' is a folder with files confpack did not write"));
+  }
+  CHECK(fs::directory_iterator(s.dir / "mine")->path().filename() == "notes.txt");
+  CHECK(std::distance(fs::directory_iterator(s.dir / "mine"), fs::directory_iterator()) == 1);
+  // An empty folder is taken, and what confpack wrote there it may write again.
+  fs::create_directory(s.dir / "empty");
+  REQUIRE(s.run("deposit " + box + " --out empty").code == 0);
+  CHECK(fs::exists(s.dir / "empty" / ".confpack-output"));
+  CHECK(s.run("deposit " + box + " --out empty").code == 0);
+}
+
 namespace {
 
 /// Runs confpack with `args` in `dir` under an address-space limit of `limitMiB` (RLIMIT_AS):

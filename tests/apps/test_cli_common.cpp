@@ -79,6 +79,7 @@ TEST_CASE("a committed staged output appears whole, or replaces the entries it s
   }
   CHECK(entriesOf(root) == std::vector<std::string>{"run"});
   CHECK(slurp(root / "run" / "a.txt") == "first a");
+  CHECK(fs::exists(root / "run" / confpack::app::kOutputMarker));  // what makes it confpack's
   // Over an existing target: staged entries replace theirs (a staged folder replaces the old one
   // as a whole), entries not staged stay.
   std::ofstream(root / "run" / "keep.txt") << "kept";
@@ -90,7 +91,7 @@ TEST_CASE("a committed staged output appears whole, or replaces the entries it s
     out.commit();
   }
   CHECK(entriesOf(root) == std::vector<std::string>{"run"});
-  CHECK(entriesOf(root / "run") == std::vector<std::string>{"a.txt", "keep.txt", "vtk"});
+  CHECK(entriesOf(root / "run") == std::vector<std::string>{".confpack-output", "a.txt", "keep.txt", "vtk"});
   CHECK(slurp(root / "run" / "a.txt") == "second a");
   CHECK(slurp(root / "run" / "keep.txt") == "kept");
   CHECK(entriesOf(root / "run" / "vtk") == std::vector<std::string>{"new.vtu"});
@@ -99,8 +100,8 @@ TEST_CASE("a committed staged output appears whole, or replaces the entries it s
 
 TEST_CASE("a commit into an existing target that fails between two renames puts the old files back") {
   // Issue 23, failure 4: a failed move left old and new files mixed. The rename that fails is
-  // injected, in turn at every rename a commit makes (3 old entries moved aside, 4 new ones moved
-  // in): whichever fails, the target holds exactly its old files afterwards, and no staging folder
+  // injected, in turn at every rename a commit makes (3 old entries moved aside, 5 new ones moved
+  // in, the output marker among them): whichever fails, the target holds exactly its old files afterwards, and no staging folder
   // is left.
   const fs::path root = confpack::testing::freshDir("cli_common_rollback");
   auto writeOld = [&] {
@@ -119,7 +120,7 @@ TEST_CASE("a commit into an existing target that fails between two renames puts 
     CHECK(slurp(root / "run" / "keep.txt") == "kept");
     CHECK(entriesOf(root / "run" / "vtk") == std::vector<std::string>{"old.vtu"});
   };
-  constexpr int kRenames = 7;
+  constexpr int kRenames = 8;
   for (int failAt = 1; failAt <= kRenames; ++failAt) {
     CAPTURE(failAt);
     writeOld();
@@ -157,7 +158,8 @@ TEST_CASE("a commit into an existing target that fails between two renames puts 
   }
   CHECK(calls == kRenames);
   CHECK(entriesOf(root) == std::vector<std::string>{"run"});
-  CHECK(entriesOf(root / "run") == std::vector<std::string>{"a.txt", "b.txt", "c.txt", "keep.txt", "vtk"});
+  CHECK(entriesOf(root / "run") ==
+        std::vector<std::string>{".confpack-output", "a.txt", "b.txt", "c.txt", "keep.txt", "vtk"});
   CHECK(slurp(root / "run" / "a.txt") == "new a");
   CHECK(entriesOf(root / "run" / "vtk") == std::vector<std::string>{"new.vtu"});
   fs::remove_all(root);
@@ -168,7 +170,6 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
   std::ofstream(root / "file") << "keep";
   CHECK_THROWS(confpack::app::checkOutputTarget(root / "file"));
   CHECK_NOTHROW(confpack::app::checkOutputTarget(root / "absent"));
-  CHECK_NOTHROW(confpack::app::checkOutputTarget(root));
   const nlohmann::json j = {{"phi", 0.1 + 0.2}, {"name", "r0001"}, {"list", {1, 2, 3}}};
   confpack::app::writeJson(root / "r.json", j);
   CHECK(nlohmann::json::parse(slurp(root / "r.json")) == j);
@@ -177,3 +178,83 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
   fs::remove_all(root);
 }
 
+
+TEST_CASE("--out must be new, empty or confpack's own: the root and a folder of other files are refused") {
+  // Issue 62, failure 2: `run --out /` wrote into the file system's root, and a folder of the
+  // user's was filled or its entries replaced.
+  using confpack::app::checkOutputTarget;
+  const fs::path root = confpack::testing::freshDir("cli_common_out_rule");
+  CHECK_THROWS_WITH(checkOutputTarget("/"), "--out: '/' is the file system's root; give a new or empty folder");
+  fs::create_directory(root / "empty");
+  CHECK_NOTHROW(checkOutputTarget(root / "empty"));
+  fs::create_directory(root / "theirs");
+  std::ofstream(root / "theirs" / "thesis.tex") << "years of work";
+  CHECK_THROWS_WITH(checkOutputTarget(root / "theirs"),
+                    "--out: '" + (root / "theirs").string() +
+                        "' is a folder with files confpack did not write (it has no .confpack-output); give a new "
+                        "or empty folder, or the output folder of an earlier confpack command");
+  CHECK_THROWS_WITH(checkOutputTarget(root / "theirs" / "."), Catch::Contains("confpack did not write"));
+  {
+    StagedOutput out(root / "ours");
+    std::ofstream(out.dir() / "result.json") << "{}";
+    out.commit();
+  }
+  CHECK_NOTHROW(checkOutputTarget(root / "ours"));  // written by confpack: its marker is there
+  // The marker of a sweep or study folder that confpack fills itself.
+  confpack::app::markOutputFolder(root / "sweep");
+  CHECK_NOTHROW(checkOutputTarget(root / "sweep"));
+  CHECK(slurp(root / "theirs" / "thesis.tex") == "years of work");
+  fs::remove_all(root);
+}
+
+TEST_CASE("a staged output that cannot be created names the user's folder and the reason, not its staging path") {
+  // Issue 62, failure 8: /proc/x gave the raw error on ".x.partial-PID".
+  try {
+    StagedOutput out("/proc/x");
+    FAIL("a staging folder was created in /proc");
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    CHECK_THAT(what, Catch::StartsWith("cannot create output folder /proc/x: "));
+    CHECK(what.find("partial") == std::string::npos);
+  }
+}
+
+TEST_CASE("old files that cannot be removed after a complete commit are a warning naming where they are left") {
+  // Issue 62, failure 7: an immutable file of the old output made a command whose new output was
+  // all in place exit 1. The removal of the old files is injected to fail, as chattr +i makes it.
+  const fs::path root = confpack::testing::freshDir("cli_common_leftover");
+  fs::create_directories(root / "run" / "vtk");
+  std::ofstream(root / "run" / "a.txt") << "old a";
+  std::ofstream(root / "run" / "vtk" / "old.vtu") << "old frame";
+  auto immutable = [](const fs::path& p) {
+    throw fs::filesystem_error("cannot remove all", p, std::make_error_code(std::errc::operation_not_permitted));
+  };
+  std::string leftover;
+  {
+    StagedOutput out(root / "run", {}, immutable);
+    std::ofstream(out.dir() / "a.txt") << "new a";
+    fs::create_directory(out.dir() / "vtk");
+    std::ofstream(out.dir() / "vtk" / "new.vtu") << "new frame";
+    REQUIRE_NOTHROW(out.commit());
+    leftover = (out.dir() / ".replaced").string();
+    CHECK_THAT(out.warning(), Catch::Contains(": warning: the output is in place in " + (root / "run").string()) &&
+                                  Catch::Contains("(Operation not permitted)") &&
+                                  Catch::EndsWith("they are left in " + leftover));
+  }
+  CHECK(slurp(root / "run" / "a.txt") == "new a");
+  CHECK(entriesOf(root / "run" / "vtk") == std::vector<std::string>{"new.vtu"});
+  // The old files are where the warning says, whole.
+  CHECK(slurp(fs::path(leftover) / "a.txt") == "old a");
+  CHECK(slurp(fs::path(leftover) / "vtk" / "old.vtu") == "old frame");
+  // Without a failure there is no warning and nothing left beside the target.
+  {
+    StagedOutput out(root / "run");
+    std::ofstream(out.dir() / "a.txt") << "third a";
+    out.commit();
+    CHECK(out.warning().empty());
+  }
+  fs::remove_all(leftover);
+  fs::remove(fs::path(leftover).parent_path());
+  CHECK(entriesOf(root) == std::vector<std::string>{"run"});
+  fs::remove_all(root);
+}

@@ -2,6 +2,7 @@
 // result.json and the CSV profiles out; a bad file refused with exit code 2 and nothing written;
 // SIGTERM stops a long analysis.
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -127,6 +128,80 @@ TEST_CASE("confpack analyze refuses an implausible packing by name, exit 2, unle
   CHECK(s.run("analyze apart.json --out res2 -q --allow-implausible").code == 0);
   CHECK(fs::exists(s.dir / "res2" / "result.json"));
   CHECK(s.run("analyze --help").out.find("--allow-implausible") != std::string::npos);
+}
+
+TEST_CASE("grains that share one centre are refused as implausible by analyze and run --from", "[apps][cli]") {
+  // Issue 62, failure 1: 91 spheres at [1,1,1] analysed with exit 0 and overlapping_pairs 0.
+  const ConfpackSession s("cmd_analyze_one_centre");
+  core::Packing p;
+  p.box.lengthX = p.box.width = 6.0;
+  p.box.height = 6.0;
+  core::Grain g;
+  g.position = core::Vec3(1.0, 1.0, 1.0);
+  p.grains.assign(91, g);
+  core::writePacking(p, s.dir / "one-centre.json");
+  for (const char* command : {"analyze one-centre.json --out res", "run --from one-centre.json --out res"}) {
+    INFO(command);
+    const auto r = s.run(command);
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.err.find("one-centre.json: implausible packing: grain 0 and grain 1 overlap by 1 ") != std::string::npos);
+    CHECK_FALSE(fs::exists(s.dir / "res"));
+  }
+}
+
+TEST_CASE("analyze reads regular files only: a FIFO, a device or a folder is refused at once by name", "[apps][cli]") {
+  // Issue 62, failure 5: a FIFO blocked for ever, /dev/zero and /dev/urandom grew memory without
+  // bound and ignored SIGTERM. Each must be refused (exit 2) within seconds.
+  const ConfpackSession s("cmd_analyze_kinds");
+  REQUIRE(::mkfifo((s.dir / "fifo").c_str(), 0600) == 0);
+  fs::create_directory(s.dir / "folder");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"fifo", "fifo: is a FIFO, not a regular file"},
+      {"/dev/zero", "/dev/zero: is a character device, not a regular file"},
+      {"/dev/urandom", "/dev/urandom: is a character device, not a regular file"},
+      {"folder", "folder: is a folder, not a packing file"},
+  };
+  const fs::path err = s.dir.string() + ".err";
+  for (const auto& [file, message] : cases) {
+    INFO(file);
+    const pid_t pid = confpack::testing::startConfpack(s.dir, {"analyze", file, "--out", "res", "-q"}, err);
+    REQUIRE(pid >= 0);
+    int status = 0;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, &status, 0);
+        FAIL("still reading after 20 s");
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    const std::string message_ = confpack::testing::slurp(err);
+    INFO("stderr: " << message_);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 2);
+    CHECK(lineCount(message_) == 1);
+    CHECK(message_.find("confpack analyze: error: " + message) != std::string::npos);
+    CHECK_FALSE(fs::exists(s.dir / "res"));
+  }
+  fs::remove(err);
+}
+
+TEST_CASE("a --slice finer than a profile can hold is refused by name, not replaced by one slice", "[apps][cli]") {
+  // Issue 62, failure 3: --slice 1e-9 --max-cells 1e300 exited 0 with a single slice (# slice: 4).
+  const ConfpackSession s("cmd_analyze_fine_slice");
+  core::Packing p = confpack::testing::simpleCubic(5, 4, 10);
+  p.box.periodicY = false;
+  core::writePacking(p, s.dir / "p.json");
+  const auto r = s.run("analyze p.json --slice 1e-9 --max-cells 1e300 --out res");
+  INFO("stderr: " << r.err);
+  CHECK(r.code == 2);
+  CHECK(lineCount(r.err) == 1);
+  CHECK(r.err.find("confpack analyze: error: profile: slice of 1e-09 d_L over 4 d_L makes 4e+09 cells") !=
+        std::string::npos);
+  CHECK_FALSE(fs::exists(s.dir / "res"));
 }
 
 TEST_CASE("packings written by runs of either backend are plausible", "[apps][cli]") {

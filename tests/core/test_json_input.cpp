@@ -1,5 +1,7 @@
 // JSON text from users (core/json_input.hpp): bad JSON refused naming its source, with a message
 // that stays short whatever the text holds, and values and keys echoed in messages only in part.
+#include <sys/stat.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -70,6 +72,24 @@ TEST_CASE("readJsonFile names the file and its kind when it is a folder, absent 
   CHECK_THROWS_WITH(readJsonFile(dir / "absent.json", "sweep file"),
                     Catch::Contains("absent.json: cannot open the sweep file"));
   CHECK_THROWS_WITH(readJsonFile(dir / "bad.json", "sweep file"), Catch::Contains("bad.json: not valid JSON"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("readJsonFile reads regular files only, of a bounded size, and refuses the rest before reading") {
+  // Issue 62, failure 5: /dev/zero and /dev/urandom were read for ever (memory without bound, deaf
+  // to SIGTERM) and a FIFO without a writer blocked the open for ever. Each is refused at once.
+  const fs::path dir = confpack::testing::freshDir("json_input_kinds");
+  REQUIRE(::mkfifo((dir / "fifo").c_str(), 0600) == 0);
+  CHECK_THROWS_WITH(readJsonFile(dir / "fifo", "packing file"),
+                    (dir / "fifo").string() + ": is a FIFO, not a regular file: give the packing file itself");
+  CHECK_THROWS_WITH(readJsonFile("/dev/zero", "packing file"),
+                    "/dev/zero: is a character device, not a regular file: give the packing file itself");
+  CHECK_THROWS_WITH(readJsonFile("/dev/urandom", "packing file"), Catch::Contains("is a character device"));
+  // A sparse file one byte over the bound: refused by its size, none of it read.
+  { std::ofstream(dir / "huge.json") << "{"; }
+  fs::resize_file(dir / "huge.json", kMaxJsonFileBytes + 1);
+  CHECK_THROWS_WITH(readJsonFile(dir / "huge.json", "packing file"),
+                    Catch::EndsWith(": 2147483649 bytes, more than the 2147483648 bytes a packing file may have"));
   fs::remove_all(dir);
 }
 

@@ -395,6 +395,27 @@ TEST_CASE("report without gnuplot keeps the data and says so") {
   fs::remove_all(dir);
 }
 
+TEST_CASE("report with a gnuplot that fails its --version check says how, not that it was not found") {
+  // Issue 62, failure 8: a --gnuplot script that exits 3 was reported as "not found".
+  const fs::path dir = makeStudy("brokengnuplot", false);
+  const fs::path gnuplot = dir / "broken-gnuplot";
+  std::ofstream(gnuplot) << "#!/bin/sh\nexit 3\n";
+  fs::permissions(gnuplot, fs::perms::owner_all);
+  study::ReportOptions o;
+  o.gnuplot = gnuplot;
+  const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
+  CHECK_FALSE(s.gnuplotUsed);
+  const std::string problem = "failed its check (`" + gnuplot.string() + " --version` exited with status 3)";
+  CHECK(s.gnuplotProblem == problem);
+  const std::string md = slurp(s.markdown);
+  CHECK(md.find("gnuplot ('" + gnuplot.string() + "') " + problem + ": figures are not drawn") != std::string::npos);
+  CHECK(md.find("was not found") == std::string::npos);
+  // A gnuplot that is not there still reads as not found.
+  o.gnuplot = dir / "absent-gnuplot";
+  CHECK_THAT(study::writeReport(dir, dir / "report2", o).gnuplotProblem, Catch::StartsWith("was not found ("));
+  fs::remove_all(dir);
+}
+
 TEST_CASE("report with a gnuplot that fails: each figure says so by name, the rest of the report is written") {
   const fs::path dir = makeStudy("badgnuplot", false);
   const fs::path gnuplot = dir / "failing gnuplot";

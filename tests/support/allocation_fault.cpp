@@ -1,0 +1,38 @@
+#include "tests/support/allocation_fault.hpp"
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+namespace {
+// Allocations to go until the one that fails (that one takes it from 1 to 0); <= 0: disarmed.
+std::atomic<long> countdown{0};
+}  // namespace
+
+// The replaceable global allocation functions ([new.delete.single]): the array forms call these.
+void* operator new(std::size_t size) {
+  if (countdown.load(std::memory_order_relaxed) > 0 && countdown.fetch_sub(1) == 1) {
+    if (const std::new_handler handler = std::get_new_handler()) handler();
+    throw std::bad_alloc();
+  }
+  for (;;) {
+    if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+    const std::new_handler handler = std::get_new_handler();
+    if (!handler) throw std::bad_alloc();
+    handler();
+  }
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace confpack::testing {
+
+void armAllocationFault() {
+  if (const char* k = std::getenv("CONFPACK_FAIL_ALLOCATION")) countdown = std::strtol(k, nullptr, 10);
+}
+
+}  // namespace confpack::testing
