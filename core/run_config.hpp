@@ -126,7 +126,7 @@ struct RunConfig {
   /// Throws std::invalid_argument with one clear message naming the bad field, and refuses a
   /// deposit of more than deposition.max_grains grains (estimatedGrainCount()).
   void validate() const;
-  /// What core::deposit would refuse only after starting, refused up front (std::invalid_argument):
+  /// What compaction::deposit would refuse only after starting, refused up front (std::invalid_argument):
   /// a box narrower or shorter than a grain's circumscribed diameter, or one whose height holds no
   /// grain. For a run that deposits; a run from a packing file takes its box and grains as given.
   void validateDeposit() const;

@@ -2,24 +2,20 @@
 // analyze and run --from apply to what it accepts (analysis/plausibility.hpp).
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 
 #include "analysis/plausibility.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "fuzz/fuzz_checks.hpp"
+#include "fuzz/fuzz_packing_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace confpack;
-  constexpr std::string_view source = "packing.json";
-  const std::string_view text(reinterpret_cast<const char*>(data), size);
-  core::Packing packing;
-  try {
-    packing = core::packingFromJson(core::parseJsonText(text, source), source);
-  } catch (const std::invalid_argument& e) {
-    fuzz::checkRefusal(e, source);
-    return 0;
-  }
+  const std::optional<core::Packing> accepted = fuzz::acceptedPacking(data, size);
+  if (!accepted) return 0;
+  const core::Packing& packing = *accepted;
   // Written as a file and read back, an accepted packing gives the same document
   // (docs/packing-format.md: "reading it back gives the same bits").
   const nlohmann::json written = core::toJson(packing);

@@ -19,6 +19,7 @@
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "fuzz/fuzz_checks.hpp"
+#include "fuzz/fuzz_packing_input.hpp"
 
 namespace {
 
@@ -64,15 +65,9 @@ std::optional<std::string> mustBeImplausible(const core::Packing& p) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  constexpr std::string_view source = "packing.json";
-  const std::string_view text(reinterpret_cast<const char*>(data), size);
-  core::Packing packing;
-  try {
-    packing = core::packingFromJson(core::parseJsonText(text, source), source);
-  } catch (const std::invalid_argument& e) {
-    fuzz::checkRefusal(e, source);
-    return 0;
-  }
+  const std::optional<core::Packing> accepted = fuzz::acceptedPacking(data, size);
+  if (!accepted) return 0;
+  const core::Packing& packing = *accepted;
   bool mixed = false;
   for (const core::Grain& g : packing.grains) mixed = mixed || g.shape != packing.grains.front().shape;
   std::optional<std::string> why;

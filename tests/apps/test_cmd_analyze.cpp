@@ -228,12 +228,9 @@ TEST_CASE("SIGTERM stops a long analysis: one line saying where, exit 143, nothi
   const pid_t pid = confpack::testing::startConfpack(
       s.dir, {"analyze", "dep/packing.json", "--slice", "2e-5", "--out", "out", "-q"}, err);
   REQUIRE(pid >= 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  const std::string message = confpack::testing::slurp(err);
-  fs::remove(err);
+  const confpack::testing::Stopped stopped = confpack::testing::stopAfter(pid, std::chrono::milliseconds(1000), SIGTERM, err);
+  const int status = stopped.status;
+  const std::string& message = stopped.message;
   INFO(message);
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 143);

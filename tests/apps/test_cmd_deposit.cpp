@@ -28,12 +28,9 @@ TEST_CASE("SIGTERM or SIGINT stops a deposit: one line saying where, exit 128 + 
     const pid_t pid = confpack::testing::startConfpack(
         s.dir, {"deposit", "--length-x", "60", "--width", "60", "--height", "60", "--out", "out", "-q"}, err);
     REQUIRE(pid >= 0);
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    ::kill(pid, signal);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    const std::string message = confpack::testing::slurp(err);
-    fs::remove(err);
+    const confpack::testing::Stopped stopped = confpack::testing::stopAfter(pid, std::chrono::milliseconds(500), signal, err);
+    const int status = stopped.status;
+    const std::string& message = stopped.message;
     INFO(message);
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == code);

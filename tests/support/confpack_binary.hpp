@@ -7,10 +7,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstddef>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -81,6 +84,24 @@ inline pid_t startConfpack(const std::filesystem::path& dir, std::vector<std::st
   argv.push_back(nullptr);
   ::execv(CONFPACK_BINARY, argv.data());
   _exit(127);
+}
+
+/// How a confpack started with startConfpack ended after a signal: its wait status and what it
+/// wrote to its error file.
+struct Stopped {
+  int status = 0;
+  std::string message;
+};
+
+/// Sends `signal` to `pid` after `delay`, waits for it and reads (then removes) `errFile`.
+inline Stopped stopAfter(pid_t pid, std::chrono::milliseconds delay, int signal, const std::filesystem::path& errFile) {
+  std::this_thread::sleep_for(delay);
+  ::kill(pid, signal);
+  Stopped out;
+  ::waitpid(pid, &out.status, 0);
+  out.message = slurp(errFile);
+  std::filesystem::remove(errFile);
+  return out;
 }
 
 /// Number of lines (newline characters) of a captured output.
