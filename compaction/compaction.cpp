@@ -64,7 +64,8 @@ std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
 }
 
 /// The bulk's solid fraction and coordination at a check, as the final analysis measures them
-/// (force-carrying contacts of the backend's last step); NaN without a bulk region.
+/// (force-carrying contacts of the backend's last step); NaN without a bulk region or, for Z,
+/// without a grain in it.
 struct Relaxation {
   double solidFraction = std::numeric_limits<double>::quiet_NaN();
   double coordination = std::numeric_limits<double>::quiet_NaN();
@@ -75,10 +76,9 @@ Relaxation relaxation(const core::Packing& now, const analysis::BulkRegion& regi
   if (region.empty() || !now.contacts) return r;
   const analysis::CoordinationDef def;
   r.solidFraction = analysis::solidFraction(now, region).phi;
-  r.coordination =
-      analysis::coordination(now, region, analysis::forceCarryingContacts(now, *now.contacts, false, def.forceThreshold),
-                             false, def)
-          .z;
+  const analysis::Coordination c = analysis::coordination(
+      now, region, analysis::forceCarryingContacts(now, *now.contacts, false, def.forceThreshold), false, def);
+  if (c.bulkGrains > 0) r.coordination = c.z;  // as result.json: no Z without a grain to count it on
   return r;
 }
 

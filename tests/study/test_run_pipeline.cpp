@@ -30,6 +30,10 @@ TEST_CASE("settle: a pile already at rest moves by nothing and keeps its phi and
   const study::FinishedRun rest = study::runProtocol(cfg);
   REQUIRE(rest.result["equilibrium"]["reached"].get<bool>());
   CHECK_FALSE(rest.result.contains("settle"));  // a run from a deposit has nothing to record
+  // The relaxation history's last check is the final state: its phi and Z are the analysis's.
+  const nlohmann::json& last = rest.result["timing"]["history"].back();
+  CHECK(last["solid_fraction"].get<double>() == Approx(rest.result["solid_fraction"].get<double>()).epsilon(1e-12));
+  CHECK(last["Z"].get<double>() == Approx(rest.result["coordination"]["Z"].get<double>()).epsilon(1e-12));
 
   const study::FinishedRun again = settle(cfg, rest.packing);
   REQUIRE(again.result.contains("settle"));
