@@ -107,9 +107,9 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
   });
 }
 
-// --reanalyse: every finished run (or those of --runs) measured again from its packing.json, one
-// after another (a run's analysis takes seconds against its compaction's minutes to hours); runs
-// not finished are left to the sweep.
+// --reanalyse: every finished run (or those of --runs), and its settle, measured again from its
+// packing.json, one after another (a run's analysis takes seconds against its compaction's minutes
+// to hours); runs not finished are left to the sweep.
 void reanalyseRuns(const SweepState& st, const study::SweepSpec& spec, const std::vector<study::SweepRun>& runs,
                    const fs::path& out, const std::vector<std::size_t>& only) {
   std::vector<std::size_t> done;
@@ -135,6 +135,13 @@ void reanalyseRuns(const SweepState& st, const study::SweepSpec& spec, const std
       if (!st.quiet)
         fmt::print(stderr, "[{}/{}] {} phi {} -> {}\n", k + 1, done.size(), r.name, phi(again.before),
                    phi(again.after));
+      // The run's settle (settle_with), so that the report compares piles measured alike.
+      if (fs::exists(dir / study::kSettledFolder / "result.json")) {
+        const study::Reanalysed settled = study::reanalyseRun(dir / study::kSettledFolder);
+        if (!st.quiet)
+          fmt::print(stderr, "[{}/{}] {}/{} phi {} -> {}\n", k + 1, done.size(), r.name, study::kSettledFolder,
+                     phi(settled.before), phi(settled.after));
+      }
     }
   });
   fmt::print(

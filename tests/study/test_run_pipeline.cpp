@@ -115,5 +115,10 @@ TEST_CASE("settleAndWrite: a sweep's settle_with takes a finished Bullet run on 
   CHECK(settled["settle"]["from"] == "../packing.json");
   CHECK(settled["equilibrium"]["reached"].get<bool>());
   CHECK(settled["settle"]["max_displacement"].get<double>() > 0.0);
+  // Measured again (sweep --reanalyse), a settled run keeps its settle block: what the settle did
+  // cannot be recomputed from its final packing.
+  const study::Reanalysed again = study::reanalyseRun(out);
+  CHECK(again.after["settle"] == settled["settle"]);
+  CHECK(again.after["solid_fraction"] == settled["solid_fraction"]);
   fs::remove_all(dir);
 }
