@@ -1,5 +1,7 @@
 #include "analysis/coordination.hpp"
 
+#include "analysis/geometric_contacts.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -182,6 +184,13 @@ Coordination coordination(const core::Packing& packing, const BulkRegion& region
     p.z[k] = p.simple[k] + p.dbl[k] + p.triple[k];
   }
   return r;
+}
+
+Coordination bulkCoordination(const core::Packing& packing, const BulkRegion& region, const CoordinationDef& def) {
+  const bool geometric = !packing.contacts.has_value();
+  const std::vector<core::Contact> contacts = geometric ? geometricContacts(packing) : *packing.contacts;
+  return coordination(packing, region, forceCarryingContacts(packing, contacts, geometric, def.forceThreshold),
+                      geometric, def);
 }
 
 }  // namespace confpack::analysis

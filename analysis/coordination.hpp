@@ -81,4 +81,9 @@ struct Coordination {
 Coordination coordination(const core::Packing& packing, const BulkRegion& region,
                           const std::vector<CountedContact>& counted, bool geometric, const CoordinationDef& def = {});
 
+/// The coordination of `region` as analyze() measures it, for a measurement of its own (a
+/// compaction's checks, a settle's before and after): the packing's force-carrying contacts, or
+/// its geometric contacts (analysis/geometric_contacts.hpp) when it has none.
+Coordination bulkCoordination(const core::Packing& packing, const BulkRegion& region, const CoordinationDef& def = {});
+
 }  // namespace confpack::analysis

@@ -74,10 +74,8 @@ struct Relaxation {
 Relaxation relaxation(const core::Packing& now, const analysis::BulkRegion& region) {
   Relaxation r;
   if (region.empty() || !now.contacts) return r;
-  const analysis::CoordinationDef def;
   r.solidFraction = analysis::solidFraction(now, region).phi;
-  const analysis::Coordination c = analysis::coordination(
-      now, region, analysis::forceCarryingContacts(now, *now.contacts, false, def.forceThreshold), false, def);
+  const analysis::Coordination c = analysis::bulkCoordination(now, region);
   if (c.bulkGrains > 0) r.coordination = c.z;  // as result.json: no Z without a grain to count it on
   return r;
 }

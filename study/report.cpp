@@ -137,6 +137,7 @@ std::vector<RunRecord> loadStudy(const fs::path& sweepDir, SweepSpec* spec) {
     rec.run.name = (fs::path(out[i].run.name) / kSettledFolder).generic_string();
     rec.run.config.backend = settledName(out[i].run.config.backend);
     rec.status = RunStatus::Done;
+    rec.settle = true;
     rec.marker = out[i].marker;
     rec.values = flattenResult(result);
     rec.result = std::move(result);
@@ -408,13 +409,10 @@ bool unequilibrated(const RunRecord& r) {
   return r.status == RunStatus::Done && it != r.values.end() && it->second && *it->second == 0.0;
 }
 
-// A run's settle (loadStudy): a second result of a table run, not a run of its own.
-bool isSettle(const RunRecord& r) { return r.run.name.find('/') != std::string::npos; }
-
 ReportSummary countRuns(const StudyView& study) {
   ReportSummary s;
   for (const RunRecord& r : study.records) {
-    if (isSettle(r)) continue;
+    if (r.settle) continue;
     ++s.runs;
     if (r.status == RunStatus::Done) ++s.done;
     else if (r.status == RunStatus::Failed) ++s.failed;
@@ -1000,11 +998,11 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
       withReference.insert(rq.key);
     }
   std::vector<std::vector<std::string>> rows;
-  for (const SeriesKey& sk : study.seriesKeys())
+  for (const SeriesKey& sk : study.seriesKeys()) {
+    const FamilySize size = familySize(study, sk);
     for (const std::string& b : study.backends) {
       const RunCount& n = summary.runs.at({sk, b});
       if (n.total == 0) continue;
-      const FamilySize size = familySize(study, sk);
       std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total),
                                       bulkSizeText(size), widthSpanText(size)};
       for (const Column& c : columns) {
@@ -1021,6 +1019,7 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
       }
       rows.push_back(std::move(row));
     }
+  }
   doc.table(head, rows);
   if (references.given()) {
     const ReferenceValues& file = references.values();

@@ -60,6 +60,7 @@ struct RunRecord {
   nlohmann::json result;  ///< result.json (null unless done)
   nlohmann::json marker;  ///< done.json or failed.json
   std::map<std::string, std::optional<double>> values;  ///< flattened numeric leaves ("coordination/Z")
+  bool settle = false;  ///< a table run's settle (RUN/settled/): its second result, not a run of its own
 };
 
 /// The backend name under which the report shows a run's settle (RUN/settled/, a sweep's

@@ -2,18 +2,14 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <array>
-#include <chrono>
-#include <cmath>
-#include <ctime>
-#include <limits>
-#include <memory>
-#include <optional>
 #include <stdexcept>
 #include <string_view>
 
+#include "analysis/bulk_region.hpp"
+#include "analysis/coordination.hpp"
 #include "analysis/displacement.hpp"
+#include "analysis/solid_fraction.hpp"
 #include "core/build_info.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
@@ -42,18 +38,25 @@ constexpr std::array<std::string_view, 10> kCompactionKeys = {
     "backend", "seed",   "n_grains",         "equilibrium",       "timing",
     "deposit", "config", "confpack_version", "confpack_revision", "settle"};
 
-// The measurements a settle record compares before and after: phi of the bulk, Z by type.
-nlohmann::json settleSide(const analysis::Analysis& a) {
-  const nlohmann::json j = analysis::toJson(a);
-  const nlohmann::json& c = j["coordination"];
-  return {{"solid_fraction", j["solid_fraction"]}, {"Z", c["Z"]},         {"simple", c["simple"]},
-          {"double", c["double"]},                 {"triple", c["triple"]}, {"wall", c["wall"]}};
+// The measurements a settle record compares before and after, as the analysis measures them:
+// phi of the bulk, Z by type (null without a bulk region, or without a grain in it).
+nlohmann::json settleSide(const core::Packing& p) {
+  const analysis::BulkRegion region = analysis::bulkRegion(p);
+  if (region.empty()) return {{"solid_fraction", nullptr}, {"Z", nullptr}, {"simple", nullptr},
+                              {"double", nullptr}, {"triple", nullptr}, {"wall", nullptr}};
+  const analysis::Coordination c = analysis::bulkCoordination(p, region);
+  const auto perGrain = [&](double v) { return c.bulkGrains > 0 ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  return {{"solid_fraction", analysis::solidFraction(p, region).phi},
+          {"Z", perGrain(c.z)},
+          {"simple", perGrain(c.zSimple)},
+          {"double", perGrain(c.zDouble)},
+          {"triple", perGrain(c.zTriple)},
+          {"wall", perGrain(c.wallZ)}};
 }
 }  // namespace
 
 nlohmann::json settleRecord(const core::RunConfig& cfg, const compaction::Deposit& from,
-                            const compaction::CompactionOutcome& out, const analysis::Analysis& before,
-                            const analysis::Analysis& after) {
+                            const compaction::CompactionOutcome& out) {
   const analysis::Displacement moved = analysis::displacement(cfg.box, from.grains, out.packing.grains);
   return {{"from", from.source},
           {"reached", out.reached},
@@ -62,8 +65,8 @@ nlohmann::json settleRecord(const core::RunConfig& cfg, const compaction::Deposi
           {"max_displacement", moved.max},
           {"mean_displacement", moved.mean},
           {"max_displacement_grain", moved.maxGrain},
-          {"before", settleSide(before)},
-          {"after", settleSide(after)}};
+          {"before", settleSide(core::Packing{cfg.box, cfg.walls, from.grains, from.contacts})},
+          {"after", settleSide(out.packing)}};
 }
 
 nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit& deposit, const compaction::CompactionOutcome& out,
@@ -110,10 +113,7 @@ FinishedRun runProtocol(const core::RunConfig& cfg, const std::filesystem::path&
   analysis::Analysis measured = analysis::analyze(out.packing, analysisOptions());
   nlohmann::json result = makeResult(cfg, dep, out, measured);
   // A run from a packing (`run --from`) records what it did to that packing.
-  if (!dep.source.empty()) {
-    const core::Packing start{cfg.box, cfg.walls, dep.grains, dep.contacts};
-    result["settle"] = settleRecord(cfg, dep, out, analysis::analyze(start, analysisOptions()), measured);
-  }
+  if (!dep.source.empty()) result["settle"] = settleRecord(cfg, dep, out);
   return {std::move(out.packing), std::move(measured), std::move(result)};
 }
 

@@ -37,10 +37,10 @@ nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit&
 /// result.json's settle block of a run from a packing (`run --from`, docs/model.md, "Settling"):
 /// how far its grains moved to reach rest (largest and mean centre displacement [d_L]), in how
 /// many steps, and phi of the bulk and Z by type of the packing as it came (`before`, with the
-/// forces of the backend that made it) and as it ended (`after`).
+/// forces of the backend that made it: `from`'s contacts) and as it ended (`after`), measured as
+/// the analysis measures them.
 nlohmann::json settleRecord(const core::RunConfig& cfg, const compaction::Deposit& from,
-                            const compaction::CompactionOutcome& out, const analysis::Analysis& before,
-                            const analysis::Analysis& after);
+                            const compaction::CompactionOutcome& out);
 
 /// A run's result.json before and after reanalyseRun.
 struct Reanalysed {

@@ -17,7 +17,7 @@ TEST_CASE("cells along a length: the nearest whole number, at least one", "[anal
 }
 
 TEST_CASE("a slice too thin for a profile is refused by name, not replaced by one slice", "[analysis][cell_count]") {
-  // Issue 62, failure 3: --slice 1e-9 over W = 4 wrapped past an int and came out as one slice
+  // The failure this guards against: --slice 1e-9 over W = 4 wrapped past an int and came out as one slice
   // 4 d_L thick, exit 0.
   CHECK_THROWS_WITH(analysis::cellsAlong(4.0, 1e-9, "profile: slice"),
                     "profile: slice of 1e-09 d_L over 4 d_L makes 4e+09 cells, more than the 1e+08 one axis can "

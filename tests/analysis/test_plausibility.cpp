@@ -95,7 +95,7 @@ TEST_CASE("an overlap deeper than 0.05 of the smaller grain is implausible, grai
 
 TEST_CASE("grains with the same centre are the deepest overlap there is, spheres or pinacoids",
           "[analysis][plausibility]") {
-  // Issue 62, failure 1: at a centre distance of 0 the pair had no normal and was dropped, so 91
+  // The failure this guards against: at a centre distance of 0 the pair had no normal and was dropped, so 91
   // spheres in one place passed as a packing without overlap, while 1e-9 apart they were refused.
   CHECK_THAT(reasonOf(pair(0.0)), Catch::StartsWith("grain 0 and grain 1 overlap by 1 "));
   CHECK_THAT(reasonOf(pair(1e-9)), Catch::StartsWith("grain 0 and grain 1 overlap by 1 "));

@@ -108,7 +108,7 @@ TEST_CASE("phi(y) fit: a layering that does not decay within the profile gives n
 // cannot be set under it (.ci/sanitize).
 #if !defined(__SANITIZE_ADDRESS__)
 TEST_CASE("phi(y) fit: a GSL allocation that fails is std::bad_alloc, not a crash inside GSL", "[analysis][fit]") {
-  // Issue 62, failure 4: the NULL of a failed gsl_multifit_nlinear_alloc went on into
+  // The failure this guards against: the NULL of a failed gsl_multifit_nlinear_alloc went on into
   // gsl_multifit_nlinear_winit (SIGSEGV). In a child, a long bidisperse profile is fitted under an
   // address-space limit that leaves room for fitProfile's copies of the data but not for GSL's
   // workspace (its Jacobian alone is 8 doubles a point): it must throw std::bad_alloc (exit 0

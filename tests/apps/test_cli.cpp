@@ -244,7 +244,7 @@ TEST_CASE("every subcommand refuses bad input with exit 2 (README, the exit-code
 }
 
 TEST_CASE("values that can be refused before any work are: exit 2, one line, the subcommand's prefix") {
-  // Issue 62, failure 8: these failed after work had started (exit 1), --dt 5 as "z must be >= 0"
+  // The failure this guards against: these failed after work had started (exit 1), --dt 5 as "z must be >= 0"
   // and --dt 1e300 after printing a 300-digit time.
   ConfpackSession s("cli_refused_up_front");
   const std::string out = " --out out";
@@ -272,7 +272,7 @@ TEST_CASE("values that can be refused before any work are: exit 2, one line, the
 }
 
 TEST_CASE("--out must be new, empty or confpack's: the root and a folder of other files are refused untouched") {
-  // Issue 62, failure 2: `run --out /` exited 0 having written into the file system's root, and a
+  // The failure this guards against: `run --out /` exited 0 having written into the file system's root, and a
   // folder of the user's was filled.
   ConfpackSession s("cli_out_rule");
   const std::string box = "--length-x 3 --width 3 --height 2 -q";

@@ -180,7 +180,7 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
 
 
 TEST_CASE("--out must be new, empty or confpack's own: the root and a folder of other files are refused") {
-  // Issue 62, failure 2: `run --out /` wrote into the file system's root, and a folder of the
+  // The failure this guards against: `run --out /` wrote into the file system's root, and a folder of the
   // user's was filled or its entries replaced.
   using confpack::app::checkOutputTarget;
   const fs::path root = confpack::testing::freshDir("cli_common_out_rule");
@@ -208,7 +208,7 @@ TEST_CASE("--out must be new, empty or confpack's own: the root and a folder of 
 }
 
 TEST_CASE("a staged output that cannot be created names the user's folder and the reason, not its staging path") {
-  // Issue 62, failure 8: /proc/x gave the raw error on ".x.partial-PID".
+  // The failure this guards against: /proc/x gave the raw error on ".x.partial-PID".
   try {
     StagedOutput out("/proc/x");
     FAIL("a staging folder was created in /proc");
@@ -220,7 +220,7 @@ TEST_CASE("a staged output that cannot be created names the user's folder and th
 }
 
 TEST_CASE("old files that cannot be removed after a complete commit are a warning naming where they are left") {
-  // Issue 62, failure 7: an immutable file of the old output made a command whose new output was
+  // The failure this guards against: an immutable file of the old output made a command whose new output was
   // all in place exit 1. The removal of the old files is injected to fail, as chattr +i makes it.
   const fs::path root = confpack::testing::freshDir("cli_common_leftover");
   fs::create_directories(root / "run" / "vtk");

@@ -131,7 +131,7 @@ TEST_CASE("confpack analyze refuses an implausible packing by name, exit 2, unle
 }
 
 TEST_CASE("grains that share one centre are refused as implausible by analyze and run --from", "[apps][cli]") {
-  // Issue 62, failure 1: 91 spheres at [1,1,1] analysed with exit 0 and overlapping_pairs 0.
+  // The failure this guards against: 91 spheres at [1,1,1] analysed with exit 0 and overlapping_pairs 0.
   const ConfpackSession s("cmd_analyze_one_centre");
   core::Packing p;
   p.box.lengthX = p.box.width = 6.0;
@@ -152,7 +152,7 @@ TEST_CASE("grains that share one centre are refused as implausible by analyze an
 }
 
 TEST_CASE("analyze reads regular files only: a FIFO, a device or a folder is refused at once by name", "[apps][cli]") {
-  // Issue 62, failure 5: a FIFO blocked for ever, /dev/zero and /dev/urandom grew memory without
+  // The failure this guards against: a FIFO blocked for ever, /dev/zero and /dev/urandom grew memory without
   // bound and ignored SIGTERM. Each must be refused (exit 2) within seconds.
   const ConfpackSession s("cmd_analyze_kinds");
   REQUIRE(::mkfifo((s.dir / "fifo").c_str(), 0600) == 0);
@@ -190,7 +190,7 @@ TEST_CASE("analyze reads regular files only: a FIFO, a device or a folder is ref
 }
 
 TEST_CASE("a --slice finer than a profile can hold is refused by name, not replaced by one slice", "[apps][cli]") {
-  // Issue 62, failure 3: --slice 1e-9 --max-cells 1e300 exited 0 with a single slice (# slice: 4).
+  // The failure this guards against: --slice 1e-9 --max-cells 1e300 exited 0 with a single slice (# slice: 4).
   const ConfpackSession s("cmd_analyze_fine_slice");
   core::Packing p = confpack::testing::simpleCubic(5, 4, 10);
   p.box.periodicY = false;

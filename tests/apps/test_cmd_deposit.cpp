@@ -19,7 +19,7 @@ using confpack::testing::lineCount;
 
 TEST_CASE("SIGTERM or SIGINT stops a deposit: one line saying where, exit 128 + signal, nothing written",
           "[apps][cli]") {
-  // Issue 62, failure 6: a deposit went on to write its 171,313 grains after SIGTERM, exit 0.
+  // The failure this guards against: a deposit went on to write its 171,313 grains after SIGTERM, exit 0.
   // 250,000 grains take several seconds; the signal comes after half a second.
   for (const auto& [signal, code, name] : {std::tuple{SIGTERM, 143, "SIGTERM"}, std::tuple{SIGINT, 130, "SIGINT"}}) {
     INFO(name);

@@ -24,7 +24,7 @@ CommandResult runFailingAt(const ConfpackSession& s, long k, const std::string& 
 }  // namespace
 
 TEST_CASE("an allocation that fails while the command line is set up is one line and exit 1", "[apps][cli]") {
-  // Issue 62, failure 4: std::terminate with two lines on stderr (before parseAndRun's catch).
+  // The failure this guards against: std::terminate with two lines on stderr (before parseAndRun's catch).
   const FaultSession s("main_setup_out_of_memory");
   for (long k : {1L, 2L, 10L}) {
     CAPTURE(k);

@@ -76,7 +76,7 @@ TEST_CASE("readJsonFile names the file and its kind when it is a folder, absent 
 }
 
 TEST_CASE("readJsonFile reads regular files only, of a bounded size, and refuses the rest before reading") {
-  // Issue 62, failure 5: /dev/zero and /dev/urandom were read for ever (memory without bound, deaf
+  // The failure this guards against: /dev/zero and /dev/urandom were read for ever (memory without bound, deaf
   // to SIGTERM) and a FIFO without a writer blocked the open for ever. Each is refused at once.
   const fs::path dir = confpack::testing::freshDir("json_input_kinds");
   REQUIRE(::mkfifo((dir / "fifo").c_str(), 0600) == 0);

@@ -423,7 +423,7 @@ TEST_CASE("an atomic write that fails part-way leaves the old file whole and no 
   const std::string text(64 * 1024, 'x');
   {
     const FileSizeCap cap(4096);
-    // Issue 62, failure 8: the message said "write failed" without why (disk full, quota, here
+    // The failure this guards against: the message said "write failed" without why (disk full, quota, here
     // the file size limit).
     CHECK_THROWS_WITH(writeFileAtomically(dir / "f.txt", text),
                       (dir / "f.txt").string() + ": write failed (" + std::strerror(EFBIG) + ")");

@@ -396,7 +396,7 @@ TEST_CASE("report without gnuplot keeps the data and says so") {
 }
 
 TEST_CASE("report with a gnuplot that fails its --version check says how, not that it was not found") {
-  // Issue 62, failure 8: a --gnuplot script that exits 3 was reported as "not found".
+  // The failure this guards against: a --gnuplot script that exits 3 was reported as "not found".
   const fs::path dir = makeStudy("brokengnuplot", false);
   const fs::path gnuplot = dir / "broken-gnuplot";
   std::ofstream(gnuplot) << "#!/bin/sh\nexit 3\n";
