@@ -17,31 +17,6 @@ double cross2(const Vec2& a, const Vec2& b) {
   return a.x() * b.y() - a.y() * b.x();
 }
 
-double polygonArea(std::span<const Vec2> p) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
-  return 0.5 * a;
-}
-
-// Sutherland-Hodgman: subject polygon clipped by a convex CCW clip polygon.
-Polygon2 clipPolygon(Polygon2 subject, std::span<const Vec2> clipper) {
-  Polygon2 out;
-  for (std::size_t k = 0; k < clipper.size() && !subject.empty(); ++k) {
-    const Vec2& a = clipper[k];
-    const Vec2 e = clipper[(k + 1) % clipper.size()] - a;
-    out.clear();
-    for (std::size_t i = 0; i < subject.size(); ++i) {
-      const Vec2& p = subject[i];
-      const Vec2& q = subject[(i + 1) % subject.size()];
-      const double dp = cross2(e, p - a), dq = cross2(e, q - a);  // >= 0 inside
-      if (dp >= 0.0) out.push_back(p);
-      if ((dp >= 0.0) != (dq >= 0.0)) out.push_back(p + dp / (dp - dq) * (q - p));
-    }
-    std::swap(subject, out);
-  }
-  return subject;
-}
-
 // Clips segment p-q to the convex CCW polygon (Cyrus-Beck). Returns false if nothing is left.
 bool clipSegment(Vec2& p, Vec2& q, std::span<const Vec2> poly) {
   double t0 = 0.0, t1 = 1.0;
@@ -434,6 +409,30 @@ void pointsWithinReach(const WorldPolyhedron& A, const WorldPolyhedron& B, const
 }
 
 }  // namespace
+
+double polygonArea(std::span<const Vec2> p) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
+  return 0.5 * a;
+}
+
+Polygon2 clipPolygon(Polygon2 subject, std::span<const Vec2> clipper) {
+  Polygon2 out;
+  for (std::size_t k = 0; k < clipper.size() && !subject.empty(); ++k) {
+    const Vec2& a = clipper[k];
+    const Vec2 e = clipper[(k + 1) % clipper.size()] - a;
+    out.clear();
+    for (std::size_t i = 0; i < subject.size(); ++i) {
+      const Vec2& p = subject[i];
+      const Vec2& q = subject[(i + 1) % subject.size()];
+      const double dp = cross2(e, p - a), dq = cross2(e, q - a);  // >= 0 inside
+      if (dp >= 0.0) out.push_back(p);
+      if ((dp >= 0.0) != (dq >= 0.0)) out.push_back(p + dp / (dp - dq) * (q - p));
+    }
+    std::swap(subject, out);
+  }
+  return subject;
+}
 
 SupportSet supportSet(const WorldPolyhedron& w, const Vec3& dir, double eps) {
   SupportSet s;

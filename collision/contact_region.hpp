@@ -58,6 +58,12 @@ struct SupportSet {
 /// Support feature of w along dir (unit): the vertices with dir.x >= max_w dir.x - eps [d_L].
 SupportSet supportSet(const WorldPolyhedron& w, const Vec3& dir, double eps);
 
+/// Signed area of a polygon (> 0 counter-clockwise) [d_L^2].
+double polygonArea(std::span<const Vec2> p);
+
+/// Sutherland-Hodgman: `subject` clipped by the convex counter-clockwise polygon `clipper`.
+Polygon2 clipPolygon(Polygon2 subject, std::span<const Vec2> clipper);
+
 /// The contact plane's frame: n the normal, (u, v) its lateral axes.
 struct Frame {
   Vec3 n, u, v;  // n = u x v

@@ -93,6 +93,15 @@ struct WorldPolyhedron;
 std::optional<PolyhedronContact> collideWorldPolyhedra(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert,
                                                        double angleTol = kFeatureAngleTol, double pointReach = 0.0);
 
+/// The same pair read the way LMGC90's common-plane detection reads it (docs/model.md, "The
+/// paper-like contact model"; common_plane.cpp has the equations): a pair with at least 3
+/// vertices of each body within `band` x (about half a grain size) of the mid plane is face to
+/// face, its points the corners (at most 4) of the intersection of the two vertex sets' projected
+/// hulls, all with the one gap of the pair; an empty intersection gives a contact with no points.
+/// Any other pair is the exact contact (points within reach `alert`). nullopt beyond alert.
+std::optional<PolyhedronContact> collideCommonPlane(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert,
+                                                    double band);
+
 /// Contact between a placed polyhedron a and a sphere (b), or nullopt if the gap exceeds alert.
 /// Exact: the closest point of the polyhedron to the centre (if the centre is inside, the nearest
 /// face plane). Always Simple, one point midway between the surfaces; featureA is the closest

@@ -15,9 +15,11 @@ namespace {
 /// a quarter of the rows (a tenth at L_x = 20 d).
 constexpr double kSweepSplitLength = 16.0;
 
-// c of the contact law (see the header): exact closing of open gaps, bounded overlap removal.
+// c of the contact law (see the header): exact closing of open gaps; an overlap removed by a
+// bounded fraction per step ("gap") or held ("velocity").
 double gapBias(double gap, double dt, const NscdSettings& s) {
   if (gap >= 0.0) return gap / dt;
+  if (s.contactLaw == ContactLaw::Velocity) return 0.0;
   return std::max(s.gapCorrection * gap / dt, -s.maxCorrectionVelocity);
 }
 

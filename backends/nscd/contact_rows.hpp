@@ -26,6 +26,8 @@
 // theta < 1, the next predicted gap is negative and the velocity flips sign every step (a
 // period-2 oscillation that never decays at theta = 1/2). Overlaps (only from unconverged
 // sweeps or the curvature of rotations) are removed by a fraction beta per step, capped at v_corr.
+// Under contact_law "velocity" c = max(0, g_m / dt): an overlap is held, never removed
+// (nscd_settings.hpp).
 //
 // Side-wall friction (Coulomb, e_t = 0): ||r_t|| <= mu r_n; u_t = 0 if ||r_t|| < mu r_n, otherwise
 // r_t = -mu r_n u_t / ||u_t||.

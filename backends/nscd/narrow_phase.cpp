@@ -66,8 +66,9 @@ void fromPolyhedronContact(const collision::PolyhedronContact& pc, bool flip, Co
   }
 }
 
-NarrowPhase::NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction)
-    : box_(box), alertFraction_(alertFraction) {
+NarrowPhase::NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction,
+                         double commonPlaneBand)
+    : box_(box), alertFraction_(alertFraction), commonPlaneBand_(commonPlaneBand) {
   for (const core::Grain& g : grains) {
     if (!(g.size > 0.0) || !std::isfinite(g.size))
       throw std::invalid_argument("nscd: every grain size must be a positive number");
@@ -126,13 +127,22 @@ void NarrowPhase::collidePairIn(const CandidatePair& pair, const std::vector<Vec
     // differently).
     const double reach = poly_[a].boundingRadius() + poly_[b].boundingRadius() + alert;
     if ((pb - positions[a]).squaredNorm() > reach * reach) return;
+    const auto collide = [&](const collision::WorldPolyhedron& A, const collision::WorldPolyhedron& B) {
+      return commonPlaneBand_ > 0.0 ? collision::collideCommonPlane(A, B, alert, commonPlaneBand_)
+                                    : collision::collideWorldPolyhedra(A, B, alert, collision::kFeatureAngleTol, alert);
+    };
     if (pair.shiftX == 0 && pair.shiftY == 0)
-      pc = collision::collideWorldPolyhedra((*world)[a], (*world)[b], alert, collision::kFeatureAngleTol, alert);
+      pc = collide((*world)[a], (*world)[b]);
     else
-      pc = collision::collideWorldPolyhedra((*world)[a], collision::WorldPolyhedron(placed(b, pb)), alert,
-                                            collision::kFeatureAngleTol, alert);
+      pc = collide((*world)[a], collision::WorldPolyhedron(placed(b, pb)));
   } else if (!sphereA && !sphereB) {
-    pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert, collision::kFeatureAngleTol, alert);
+    const double reach = poly_[a].boundingRadius() + poly_[b].boundingRadius() + alert;
+    if (commonPlaneBand_ > 0.0 && (pb - positions[a]).squaredNorm() <= reach * reach)
+      pc = collision::collideCommonPlane(collision::WorldPolyhedron(placed(a, positions[a])),
+                                         collision::WorldPolyhedron(placed(b, pb)), alert, commonPlaneBand_);
+    else if (commonPlaneBand_ == 0.0)
+      pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert, collision::kFeatureAngleTol,
+                                       alert);
   } else if (!sphereA) {
     pc = collision::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
   } else {

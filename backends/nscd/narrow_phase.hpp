@@ -59,7 +59,10 @@ class NarrowPhase {
   static constexpr std::size_t kMinPairsPerThread = 2000;
 
   /// Throws std::invalid_argument if a grain has a size that is not a positive number.
-  NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction);
+  /// commonPlaneBand > 0 reads polyhedron pairs as LMGC90's common plane does
+  /// (collision::collideCommonPlane, with that band); 0, the default, exactly.
+  NarrowPhase(const core::BoxDef& box, const std::vector<core::Grain>& grains, double alertFraction,
+              double commonPlaneBand = 0.0);
 
   /// Interaction radius of grain i for the broad phase: bounding radius + alert distance.
   double reach(int i) const { return radius_[i] + alertFraction_ * size_[i]; }
@@ -109,6 +112,7 @@ class NarrowPhase {
 
   core::BoxDef box_;
   double alertFraction_ = 0.0;
+  double commonPlaneBand_ = 0.0;  ///< > 0: polyhedron pairs read on the common plane
   std::vector<core::ShapeKind> shape_;
   std::vector<double> radius_;  ///< sphere radius or bounding radius [d_L]
   std::vector<double> size_;    ///< d or L [d_L]

@@ -52,7 +52,8 @@ class NscdBackend final : public core::ContactBackend {
         gravity_(system.gravity),
         settings_(settings),
         n_(static_cast<int>(system.grains.size())),
-        narrow_(system.box, system.grains, settings.alertDistance),
+        narrow_(system.box, system.grains, settings.alertDistance,
+                settings.contactDetection == ContactDetection::CommonPlane ? settings.commonPlaneBand : 0.0),
         threads_(system.threads),
         broad_(system.box, n_ > 0 ? narrow_.maxReach() : 1.0, system.threads) {
     box_.validate();
@@ -77,7 +78,8 @@ class NscdBackend final : public core::ContactBackend {
       spinLever_.push_back(g.spinLever());
     }
     // The finisher's contact problem (quasiStaticStep): implicit Euler (theta = 1), so that the
-    // displacement h v is the one the linearised gaps constrain, and overlaps removed whole.
+    // displacement h v is the one the linearised gaps constrain, and overlaps removed whole (held,
+    // under contact_law "velocity").
     stepSolve_ = settings_;
     finisherSettings_ = settings_;
     SolverKind finisher = settings_.finisherSolver == FinisherSolverKind::Mprgp ? SolverKind::Mprgp : SolverKind::Ipm;

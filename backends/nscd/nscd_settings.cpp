@@ -45,6 +45,16 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
                 "fraction of an overlap removed per step")
         .number("max_correction_velocity", &S::maxCorrectionVelocity, Range::positive(), "sqrt(g d_L)",
                 "largest separation velocity the overlap correction asks for")
+        .choice("contact_law", &S::contactLaw, {{"gap", ContactLaw::Gap}, {"velocity", ContactLaw::Velocity}},
+                "gap: an overlap is corrected by gap_correction; velocity: u_n + max(0, g/dt) >= 0, an overlap is "
+                "held (LMGC90's IQS laws)")
+        .choice("contact_detection", &S::contactDetection,
+                {{"exact", ContactDetection::Exact}, {"common_plane", ContactDetection::CommonPlane}},
+                "polyhedron contacts: every point its exact gap, or the vertices within a band of the common plane "
+                "with one gap (LMGC90's reading)")
+        .number("common_plane_band", &S::commonPlaneBand, Range::positive(), "-",
+                "common_plane: vertices within max(0, g/2) + band x (half a grain size, along the normal) of the mid "
+                "plane touch")
         .number("damping", &S::damping, Range::atLeast(0.0), "sqrt(g / d_L)", "damping rate of slow grains in contact")
         .numberOrNone("damping_speed", &S::dampingSpeed, Range::positive(), "sqrt(g d_L)",
                       "grains faster than this are not damped")

@@ -36,6 +36,18 @@ enum class PreconditionerKind {
   None,                  ///< "none": Jacobi scaling only (A has a unit diagonal)
 };
 
+/// What the contact law does with an overlap (docs/model.md, "The paper-like contact model").
+enum class ContactLaw {
+  Gap,       ///< "gap": u_n + c >= 0 with c = g / dt for a gap, beta g / dt (capped) for an overlap
+  Velocity,  ///< "velocity": u_n + max(0, g / dt) >= 0: an overlap is held, never corrected
+};
+
+/// How the points and gaps of a polyhedron contact are found.
+enum class ContactDetection {
+  Exact,        ///< "exact": every point its own exact gap (collision/contact_region.hpp)
+  CommonPlane,  ///< "common_plane": the vertices within a band of the common plane, one gap for all
+};
+
 /// Options of the nscd backend. JSON keys in brackets.
 struct NscdSettings {
   /// ["theta"] Moreau-Jean theta in [0.5, 1] [-]. 0.5 integrates constant forces exactly
@@ -116,6 +128,26 @@ struct NscdSettings {
   /// may ask for [sqrt(g d_L)], > 0. Protects against an initial configuration with large
   /// overlaps exploding; irrelevant once the overlaps are small.
   double maxCorrectionVelocity = 0.05;
+  /// ["contact_law"] "gap" (default) or "velocity". "gap" is the law above. "velocity" is the
+  /// law of LMGC90's rigid-rigid IQS laws: u_n + max(0, g_m / dt) >= 0, so that an open gap
+  /// closes exactly as under "gap" while an overlap, once made (an unconverged solve, a step's
+  /// overshoot), is held and never pushed back out; gap_correction and max_correction_velocity
+  /// are then unused, also in the quasi-static finisher. Default "gap": the exact model, whose
+  /// piles do not interpenetrate.
+  ContactLaw contactLaw = ContactLaw::Gap;
+  /// ["contact_detection"] "exact" (default) or "common_plane": the points of a polyhedron pair
+  /// and their gaps. "exact" gives each point its own gap (collision/contact_region.hpp).
+  /// "common_plane" reads a pair as LMGC90's common-plane detection does
+  /// (collision::collideCommonPlane): at least 3 vertices of each grain within the band of the
+  /// mid plane make a face-to-face contact whose points, at most 4 corners of the overlap of the
+  /// two vertex sets' projections, all get the pair's one gap; an empty overlap is no contact.
+  /// Other pairs, sphere contacts and wall contacts are read exactly under both.
+  ContactDetection contactDetection = ContactDetection::Exact;
+  /// ["common_plane_band"] (common_plane) half-width of the band about the mid plane within which
+  /// a vertex counts as touching, max(0, g / 2) + band x ref, ref the smaller distance from a
+  /// grain's centre to its extreme vertex along the normal (about half a grain size) [-], > 0.
+  /// Default 0.1: LMGC90's default (its "cundall_neighbor").
+  double commonPlaneBand = 0.1;
   /// ["damping"] viscous damping rate c >= 0 of slow grains in contact [sqrt(g / d_L)]: each step
   /// the velocity and angular velocity of every grain that carried a contact impulse in the last
   /// step and moves slower than damping_speed are multiplied by exp(-c dt). Grains in free flight
