@@ -90,6 +90,11 @@ struct ReportOptions {
   /// (`--no-run-links`): names without links and the sweep folder by its name alone, for a report
   /// published without the run folders (the medium study's in docs/).
   bool runLinks = true;
+  /// The setting whose two values the report puts side by side (`--compare KEY`, its path in the
+  /// run configuration, study/report_compare.hpp): checked to have exactly two values among the
+  /// runs, std::invalid_argument otherwise. Empty: the backends, unchecked (a study of one backend
+  /// says it has nothing to compare).
+  std::string compare;
 };
 
 struct ReportSummary {
