@@ -13,7 +13,9 @@
 // family and configuration, and phi and Z are drawn against it when it is a number. Every
 // quantity of result.json per configuration (shape, x_S, W, mu_w, varied settings) is not on the page
 // but in tables/GROUP.csv: per backend the mean, standard deviation and number of the replicas,
-// and the difference of the two backends with its uncertainty, at full precision.
+// and the difference of the two backends with its uncertainty, at full precision. With
+// ReportOptions::compare the two values of another setting take the backends' place throughout
+// (study/report_compare.hpp).
 //
 // Figures: for each one a CSV with its data, a gnuplot script and, when gnuplot is installed, the
 // SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts; a
