@@ -10,6 +10,7 @@
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
 #include "study/report.hpp"
+#include "study/report_compare.hpp"
 
 namespace confpack::app {
 
@@ -20,6 +21,7 @@ struct ReportState {
   std::filesystem::path out;
   std::filesystem::path gnuplot = "gnuplot";
   std::filesystem::path reference;
+  std::string compare;
   bool noFigures = false;
   bool noRunLinks = false;
 };
@@ -28,7 +30,8 @@ void runReportCommand(const ReportState& st) {
   const std::filesystem::path out = st.out.empty() ? st.sweepDir / "report" : st.out;
   std::optional<study::ReferenceValues> reference;
   checkInput("report", [&] {
-    study::readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
+    const auto runs = study::readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
+    if (!st.compare.empty()) study::compareSetting(st.compare, runs);
     if (!st.reference.empty()) reference = study::readReferenceValues(st.reference);
     checkOutputTarget(out);
   });
@@ -39,6 +42,7 @@ void runReportCommand(const ReportState& st) {
     o.gnuplot = st.noFigures ? std::filesystem::path{} : st.gnuplot;
     o.reference = std::move(reference);
     o.runLinks = !st.noRunLinks;
+    o.compare = st.compare;
     const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
     step.next("moving the report into place");
     output.commit();
@@ -68,6 +72,10 @@ void registerReport(CLI::App& app) {
   sub->add_option("--reference", st->reference,
                   "Published values to show beside the study's (JSON, format confpack-reference; "
                   "docs/reference-values.md)");
+  sub->add_option("--compare", st->compare,
+                  "Setting whose two values to put side by side instead of the backends, by its path in config.json "
+                  "(e.g. backend_options.solver); the runs must have exactly two values of it")
+      ->type_name("KEY");
   sub->add_flag("--no-figures", st->noFigures, "Write the figure data and scripts but do not run gnuplot");
   sub->add_flag("--no-run-links", st->noRunLinks,
                 "Name the runs without links to their folders and the sweep folder by its name alone: a report to "

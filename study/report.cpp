@@ -4,10 +4,11 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
-#include <limits>
 #include <ctime>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -15,6 +16,7 @@
 #include "core/build_info.hpp"
 #include "core/packing_io.hpp"
 #include "study/csv_table.hpp"
+#include "study/report_compare.hpp"
 #include "study/report_document.hpp"
 #include "study/report_figures.hpp"
 #include "study/report_relaxation.hpp"
@@ -213,6 +215,12 @@ SeriesKey seriesOf(const ConfKey& k) { return {k.shape, k.xs, k.mu, k.settings};
 
 std::string num(double v) { return fmt::format("{:g}", v); }
 
+// "Backend" of "backend": a name at the start of a sentence.
+std::string capitalized(std::string name) {
+  if (!name.empty()) name[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(name[0])));
+  return name;
+}
+
 std::string familyOf(int shape, double xs) {
   return fmt::format("{}{}", xs > 0.0 ? "B" : "M", shape == static_cast<int>(core::ShapeKind::Sphere) ? "SP" : "PP");
 }
@@ -326,19 +334,25 @@ std::size_t tableGroupOf(const std::string& key) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The study as the sections see it: its runs grouped by configuration and backend.
+// The study as the sections see it: its runs grouped by configuration and side, the compared
+// setting's value (the backend unless --compare names another, study/report_compare.hpp).
 
 class StudyView {
  public:
-  explicit StudyView(const fs::path& sweepDir) : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
+  StudyView(const fs::path& sweepDir, const std::string& compareKey)
+      : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
     std::vector<SweepRun> runs;
-    for (const RunRecord& r : records) runs.push_back(r.run);
-    settings = variedSettings(runs);
+    for (const RunRecord& r : records)
+      if (!r.settle) runs.push_back(r.run);
+    if (!compareKey.empty()) compared = compareSetting(compareKey, runs);
+    if (!compared.keepsSettles()) std::erase_if(records, [](const RunRecord& r) { return r.settle; });
+    runSettings = variedSettings(runs);
+    settings = compared.familySettings(runs);
     settingNames = study::settingNames(settings);
     for (const RunRecord& r : records) {
-      if (std::find(backends.begin(), backends.end(), r.run.config.backend) == backends.end())
-        backends.push_back(r.run.config.backend);
-      groups[confKey(r.run.config, settings, settingNames)][r.run.config.backend].push_back(&r);
+      const std::string& side = recordSides.emplace_back(compared.sideOf(r.run));
+      if (std::find(sides.begin(), sides.end(), side) == sides.end()) sides.push_back(side);
+      groups[confKey(r.run.config, settings, settingNames)][side].push_back(&r);
       if (r.status != RunStatus::Done) continue;
       for (const auto& [k, v] : r.values) keys.insert(k);
       for (const auto& e : fs::directory_iterator(runDir(r)))
@@ -349,14 +363,17 @@ class StudyView {
   StudyView& operator=(const StudyView&) = delete;
 
   fs::path runDir(const RunRecord& r) const { return sweepDir / "runs" / r.run.name; }
-  bool pair() const { return backends.size() >= 2; }
+  bool pair() const { return sides.size() >= 2; }
+  const std::string& sideOf(const RunRecord& r) const {
+    return recordSides[static_cast<std::size_t>(&r - records.data())];
+  }
 
-  // Replica statistics of one quantity over the finished runs of (configuration, backend).
-  ReplicaStat statOf(const ConfKey& k, const std::string& backend, const std::string& key) const {
+  // Replica statistics of one quantity over the finished runs of (configuration, side).
+  ReplicaStat statOf(const ConfKey& k, const std::string& side, const std::string& key) const {
     const auto g = groups.find(k);
-    if (g == groups.end() || !g->second.count(backend)) return ReplicaStat{};
+    if (g == groups.end() || !g->second.count(side)) return ReplicaStat{};
     std::vector<double> v;
-    for (const RunRecord* r : g->second.at(backend)) {
+    for (const RunRecord* r : g->second.at(side)) {
       if (r->status != RunStatus::Done) continue;
       const auto it = r->values.find(key);
       if (it != r->values.end() && it->second) v.push_back(*it->second);
@@ -365,13 +382,13 @@ class StudyView {
   }
 
   // The sample of series `sk` that a per-family quantity is read from: among the configurations
-  // with a value of `key` for `backend`, the widest confined one, or with `biperiodicFirst` the
+  // with a value of `key` for `side`, the widest confined one, or with `biperiodicFirst` the
   // biperiodic one when there is one; null when none has a value.
-  const ConfKey* sampleOf(const SeriesKey& sk, const std::string& backend, const std::string& key,
+  const ConfKey* sampleOf(const SeriesKey& sk, const std::string& side, const std::string& key,
                           bool biperiodicFirst) const {
     const ConfKey* sample = nullptr;
     for (const auto& [k, _] : groups) {
-      if (seriesOf(k) != sk || (k.periodic && !biperiodicFirst) || statOf(k, backend, key).n == 0) continue;
+      if (seriesOf(k) != sk || (k.periodic && !biperiodicFirst) || statOf(k, side, key).n == 0) continue;
       if (!sample || (k.periodic && !sample->periodic) || (k.periodic == sample->periodic && k.width > sample->width))
         sample = &k;
     }
@@ -396,8 +413,11 @@ class StudyView {
   fs::path sweepDir;
   SweepSpec spec;
   std::vector<RunRecord> records;
-  std::vector<std::string> backends;  // in table order
-  std::vector<std::string> settings;      // varied beyond the named axes: configuration paths
+  ComparedSetting compared;               // the backends unless --compare names another setting
+  std::vector<std::string> recordSides;   // each record's side, as compared.sideOf
+  std::vector<std::string> sides;         // the compared values in table order (then a settled series)
+  std::vector<std::string> runSettings;   // varied beyond the named axes, as the runs' labels show them
+  std::vector<std::string> settings;      // of those, the families': configuration paths (familySettings)
   std::vector<std::string> settingNames;  // their short names
   std::map<ConfKey, std::map<std::string, std::vector<const RunRecord*>>> groups;
   std::set<std::string> keys;      // every quantity of a finished run
@@ -451,14 +471,23 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
     for (std::size_t i = 0; i < study.settings.size(); ++i)
       varied += fmt::format("{}{}{}", i == 0 ? "" : ", ", study.settings[i],
                             study.settingNames[i] == study.settings[i] ? "" : " (" + study.settingNames[i] + ")");
-    doc.paragraph(fmt::format("Beyond W, shape, x_S, mu_w, seed and backend this study varies {}: each family below "
-                              "is one combination of its values.",
-                              varied));
+    doc.paragraph(
+        fmt::format("Beyond W, shape, x_S, mu_w, seed and {} this study varies {}: each family below "
+                    "is one combination of its values.",
+                    study.compared.key, varied));
   }
+  const ComparedSetting& by = study.compared;
+  if (!by.backend())
+    doc.paragraph(
+        fmt::format("This report compares the runs by {}: {}, each value a series where a report of the "
+                    "backends has nscd and Bullet; its settles, if any, belong to that comparison and are "
+                    "left out.",
+                    by.key, fmt::join(study.sides, " against ")));
   doc.paragraph(
-      "The results come first: the summary per family and backend and the two backends compared, then the "
-      "figures with their fits and the profiles; the runs, the tables of every quantity, the cost and the "
-      "method follow.");
+      fmt::format("The results come first: the summary per family and {} and the two {} compared, then the "
+                  "figures with their fits and the profiles; the runs, the tables of every quantity, the cost and the "
+                  "method follow.",
+                  by.noun, by.plural));
   if (!figuresDrawn)
     doc.paragraph(options.gnuplot.empty()
                       ? "Figures were not drawn (disabled); their CSV data and gnuplot scripts are in figures/."
@@ -488,10 +517,10 @@ std::string qText(const analysis::ConfinementFit& f) {
   return f.quality ? fmt::format("{:.3g}", *f.quality) : "-";
 }
 
-// A fit of the geometrical model, per series and backend.
+// A fit of the geometrical model, per series and side (the backend unless --compare names another).
 struct FitRow {
   SeriesKey series;
-  std::string backend;
+  std::string side;
   std::optional<analysis::ConfinementFit> fit;
   std::string why;  // when no fit
   std::vector<std::array<double, 3>> points;  // 1/W, mean, sigma
@@ -508,7 +537,7 @@ struct ConfinementFits {
 std::vector<FitRow> confinementFits(const StudyView& study, const std::string& key) {
   std::vector<FitRow> out;
   for (const SeriesKey& s : study.seriesKeys())
-    for (const auto& b : study.backends) {
+    for (const auto& b : study.sides) {
       FitRow row{s, b, std::nullopt, "", {}, std::nullopt};
       std::vector<double> w, v, sigma;
       bool weighted = true;
@@ -557,13 +586,12 @@ void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, 
   std::string caption =
       fmt::format("{} against d_L/W with the fits {}_bulk - {}/W (biperiodic at 0)", q.quantity, q.quantity, q.cName);
   Plot p{q.stem, caption, "d_L / W", q.quantity, {}, {}, true};
-  const auto& backends = study.backends;
   int color = 0;
   std::map<SeriesKey, int> colors;
   for (const FitRow& f : fits) {
     if (!colors.count(f.series)) colors[f.series] = ++color;
-    const bool dashed = f.backend != backends[0];
-    Series s{fmt::format("{} {}", seriesText(f.series), f.backend), colors[f.series], dashed, false, f.points};
+    const bool dashed = f.side != study.sides[0];
+    Series s{fmt::format("{} {}", seriesText(f.series), f.side), colors[f.series], dashed, false, f.points};
     if (f.biperiodic)
       s.points.insert(s.points.begin(), {0.0, f.biperiodic->mean,
                                          f.biperiodic->n >= 2 ? f.biperiodic->std / std::sqrt(double(f.biperiodic->n))
@@ -597,16 +625,16 @@ void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, 
 void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures, const std::vector<FitRow>& fits,
                    const FitQuantity& q, References& references) {
   if (fits.empty()) return;
-  const auto& backends = study.backends;
   const std::string& quantity = q.quantity;
   const std::string& cName = q.cName;
   doc.heading(2, q.title);
   doc.paragraph(q.definition);
   addFitFigure(doc, study, figures, fits, q, references);
-  doc.paragraph("The fit per series (shape, x_S, mu_w) and backend over the confined widths:");
+  doc.paragraph(
+      fmt::format("The fit per series (shape, x_S, mu_w) and {} over the confined widths:", study.compared.noun));
   std::vector<std::vector<std::string>> rows;
   for (const FitRow& f : fits) {
-    std::vector<std::string> row = {seriesText(f.series), f.backend, std::to_string(f.points.size())};
+    std::vector<std::string> row = {seriesText(f.series), f.side, std::to_string(f.points.size())};
     if (f.fit) {
       row.push_back(bulkText(*f.fit));
       row.push_back(cText(*f.fit));
@@ -620,16 +648,16 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
     row.push_back(f.biperiodic ? statText(*f.biperiodic) : "-");
     rows.push_back(std::move(row));
   }
-  doc.table({"series", "backend", "widths", quantity + "_bulk", cName + " [d_L]",
+  doc.table({"series", study.compared.column, "widths", quantity + "_bulk", cName + " [d_L]",
              "zeta = " + cName + "/" + quantity + "_bulk", "weights", "chi²/dof", "Q", "biperiodic"},
             rows);
   // Backend differences of the fitted parameters.
   if (study.pair()) {
     std::vector<std::vector<std::string>> diffs;
     for (const FitRow& a : fits) {
-      if (a.backend != backends[0] || !a.fit) continue;
+      if (a.side != study.sides[0] || !a.fit) continue;
       for (const FitRow& b : fits)
-        if (b.backend == backends[1] && b.series == a.series && b.fit) {
+        if (b.side == study.sides[1] && b.series == a.series && b.fit) {
           const bool known = fitErrorsKnown(*a.fit) && fitErrorsKnown(*b.fit);
           const auto difference = [&](double va, double vb, double ea, double eb, int decimals) {
             return known ? fmt::format("{:+.{}f} ± {:.2g}", va - vb, decimals, std::hypot(ea, eb))
@@ -641,9 +669,10 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
         }
     }
     if (!diffs.empty()) {
-      doc.paragraph(fmt::format("Backend differences of the fitted parameters ({} − {}, uncertainty from the two "
-                                "fits' standard errors):",
-                                backends[0], backends[1]));
+      doc.paragraph(
+          fmt::format("{} differences of the fitted parameters ({} − {}, uncertainty from the two "
+                      "fits' standard errors):",
+                      capitalized(study.compared.column), study.sides[0], study.sides[1]));
       doc.table({"series", quantity + "_bulk", cName}, diffs);
     }
   }
@@ -657,8 +686,8 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
   Plot byC{"lambdaL_vs_C", "lambda_L against C of the phi(W) fit, with a line through the origin", "C [d_L]",
            "lambda_L [d_L]", {}, {}, true};
   std::vector<std::vector<std::string>> originRows;
-  for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
-    const std::string& b = study.backends[bi];
+  for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
+    const std::string& b = study.sides[bi];
     std::map<SeriesKey, Series> bySeries;  // a line per series without its x_S
     std::vector<double> cs, ls, sig;
     Series cSeries{b, static_cast<int>(bi) + 1, bi > 0, false, {}};
@@ -674,7 +703,7 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
                      static_cast<int>(bySeries.size()), bi > 0, true, {}};
       ser.points.push_back({sk.xs, st.mean, err});
       for (const FitRow& f : phiFits)
-        if (f.series == sk && f.backend == b && f.fit) {
+        if (f.series == sk && f.side == b && f.fit) {
           cs.push_back(f.fit->c);
           ls.push_back(st.mean);
           sig.push_back(err);
@@ -704,8 +733,8 @@ void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figur
   if (!byXs.series.empty()) doc.figure(figures.draw(byXs));
   if (!originRows.empty()) {
     doc.figure(figures.draw(byC));
-    doc.paragraph("Linear fit through the origin lambda_L = k C per backend:");
-    doc.table({"backend", "points", "k = lambda_L / C", "weights"}, originRows);
+    doc.paragraph(fmt::format("Linear fit through the origin lambda_L = k C per {}:", study.compared.noun));
+    doc.table({study.compared.column, "points", "k = lambda_L / C", "weights"}, originRows);
   }
 }
 
@@ -760,8 +789,8 @@ void addFitQuantities(StudySummary& out, const std::vector<FitRow>& fits, const 
   for (const FitRow& f : fits)
     if (f.fit) {
       const auto error = [&](double e) { return fitErrorsKnown(*f.fit) ? std::optional(e) : std::nullopt; };
-      bulk.values[{f.series, f.backend}] = {f.fit->bulk, error(f.fit->bulkError), bulkText(*f.fit)};
-      c.values[{f.series, f.backend}] = {f.fit->c, error(f.fit->cError), cText(*f.fit)};
+      bulk.values[{f.series, f.side}] = {f.fit->bulk, error(f.fit->bulkError), bulkText(*f.fit)};
+      c.values[{f.series, f.side}] = {f.fit->c, error(f.fit->cError), cText(*f.fit)};
     }
   if (bulk.values.empty()) return;
   out.quantities.push_back(std::move(bulk));
@@ -783,7 +812,7 @@ std::string fitQualityText(const FitRow& f) {
 StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   StudySummary out;
   if (!fits.phi.empty()) {
-    for (const FitRow& f : fits.phi) out.phiFitQuality[{f.series, f.backend}] = fitQualityText(f);
+    for (const FitRow& f : fits.phi) out.phiFitQuality[{f.series, f.side}] = fitQualityText(f);
     addFitQuantities(out, fits.phi, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
                      "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
   }
@@ -798,7 +827,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
       "from the fit of phi(y) of the widest confined sample (mean ± standard error over its replicas)",
       {}};
   for (const SeriesKey& sk : study.seriesKeys())
-    for (const std::string& b : study.backends) {
+    for (const std::string& b : study.sides) {
       const ConfKey* widest = study.sampleOf(sk, b, lambdaKey, false);
       if (!widest) continue;
       lambda.values[{sk, b}] = replicaEstimate(study.statOf(*widest, b, lambdaKey), 3);
@@ -829,7 +858,7 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
     SummaryQuantity q{
         m.name, std::string(m.definition) + ", on the biperiodic sample (or the widest confined one)", {}};
     for (const SeriesKey& sk : study.seriesKeys())
-      for (const std::string& b : study.backends) {
+      for (const std::string& b : study.sides) {
         if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;
         const ConfKey* sample = study.sampleOf(sk, b, m.key, true);
         if (!sample) continue;
@@ -843,12 +872,12 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
                                    "finished run of the family (± standard error of the mean)",
                                    {}};
   for (const SeriesKey& sk : study.seriesKeys())
-    for (const std::string& b : study.backends) {
+    for (const std::string& b : study.sides) {
       std::vector<double> v;
       RunCount& count = out.runs[{sk, b}];
-      for (const auto& [k, byBackend] : study.groups) {
-        if (seriesOf(k) != sk || !byBackend.count(b)) continue;
-        for (const RunRecord* r : byBackend.at(b)) {
+      for (const auto& [k, bySide] : study.groups) {
+        if (seriesOf(k) != sk || !bySide.count(b)) continue;
+        for (const RunRecord* r : bySide.at(b)) {
           ++count.total;
           if (r->status == RunStatus::Failed) ++count.failed;
           if (r->status != RunStatus::Done) continue;
@@ -889,12 +918,12 @@ struct FamilySize {
 
 FamilySize familySize(const StudyView& study, const SeriesKey& sk) {
   FamilySize out;
-  for (const auto& [k, byBackend] : study.groups) {
+  for (const auto& [k, bySide] : study.groups) {
     if (seriesOf(k) != sk) continue;
     double thickness = 0.0, grains = 0.0;
     int n = 0;
     bool done = false;
-    for (const auto& [backend, runs] : byBackend)
+    for (const auto& [side, runs] : bySide)
       for (const RunRecord* r : runs) {
         if (r->status != RunStatus::Done) continue;
         done = true;
@@ -943,10 +972,11 @@ void addAdequacyWarning(Document& doc, const StudyView& study, const StudySummar
     if (f.widths >= 2 && f.widthMax < kMinWidthSpan * f.widthMin)
       why.push_back(fmt::format("its fits span W = {} to {}, a factor {:.2g} (less than {:g})", num(f.widthMin),
                                 num(f.widthMax), f.widthMax / f.widthMin, kMinWidthSpan));
-    const auto first = summary.runs.find({sk, study.backends.front()});
+    const auto first = summary.runs.find({sk, study.sides.front()});
     if (first != summary.runs.end() && first->second.done > first->second.equilibrated)
-      why.push_back(fmt::format("{} of {}'s {} finished runs are not at rest", first->second.done - first->second.equilibrated,
-                                study.backends.front(), first->second.done));
+      why.push_back(fmt::format("{} of {}'s {} finished runs are not at rest",
+                                first->second.done - first->second.equilibrated, study.sides.front(),
+                                first->second.done));
     if (!why.empty()) problems.push_back(fmt::format("{}: {}.", familyName(sk), fmt::join(why, "; ")));
   }
   if (problems.empty()) return;
@@ -959,7 +989,7 @@ void addAdequacyWarning(Document& doc, const StudyView& study, const StudySummar
 }
 
 void addSummarySection(Document& doc, const StudyView& study, const StudySummary& summary, References& references) {
-  doc.heading(2, "Summary: the results per family and backend");
+  doc.heading(2, "Summary: the results per family and " + study.compared.noun);
   addAdequacyWarning(doc, study, summary);
   // The columns: each quantity, its published value beside it when the reference file gives one
   // for a family of the study, the fit quality after C; a published quantity the study has no
@@ -974,7 +1004,7 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
     return std::any_of(keys.begin(), keys.end(), [&](const SeriesKey& sk) { return references.find(sk, key); });
   };
   std::vector<Column> columns;
-  std::vector<std::string> head = {"family", "backend", "runs at equilibrium / total", "bulk d_L / grains",
+  std::vector<std::string> head = {"family", study.compared.column, "runs at equilibrium / total", "bulk d_L / grains",
                                    "widths fitted"};
   std::set<std::string> withReference;
   for (const SummaryQuantity& q : summary.quantities) {
@@ -1000,7 +1030,7 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
   std::vector<std::vector<std::string>> rows;
   for (const SeriesKey& sk : study.seriesKeys()) {
     const FamilySize size = familySize(study, sk);
-    for (const std::string& b : study.backends) {
+    for (const std::string& b : study.sides) {
       const RunCount& n = summary.runs.at({sk, b});
       if (n.total == 0) continue;
       std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total),
@@ -1037,7 +1067,8 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
   }
   std::vector<std::string> definitions = {
       "runs at equilibrium: finished runs whose forces and moments balance (equilibrium reached), out of all the "
-      "runs of the family and backend",
+      "runs of the family and " +
+          study.compared.noun,
       "bulk d_L / grains: the thickness of the bulk region (3 d_L from the floor and from the free surface) and the "
       "grains in it, the least over the family's configurations (mean over each one's runs)",
       "widths fitted: the confined widths W the fits phi(W) and Z(W) span"};
@@ -1064,12 +1095,12 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
 // whether any lies between grains rather than through the floor and walls, and the share of free
 // motions (mechanisms k / n_dof). Empty when none has the block (frictional walls, results from
 // before the block existed).
-std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const std::string& backend) {
+std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const std::string& side) {
   int runs = 0, stressed = 0, stressedBetweenGrains = 0;
   double perConstraint = 0.0, freeShare = 0.0;
-  for (const auto& [k, byBackend] : study.groups) {
-    if (seriesOf(k) != sk || !byBackend.count(backend)) continue;
-    for (const RunRecord* r : byBackend.at(backend)) {
+  for (const auto& [k, bySide] : study.groups) {
+    if (seriesOf(k) != sk || !bySide.count(side)) continue;
+    for (const RunRecord* r : bySide.at(side)) {
       if (r->status != RunStatus::Done) continue;
       const auto value = [&](const char* key) {
         const auto it = r->values.find(key);
@@ -1089,9 +1120,9 @@ std::string rigiditySentence(const StudyView& study, const SeriesKey& sk, const 
   if (runs == 0) return "";
   const std::string free = fmt::format("{:.2g} % of their motions free (mechanisms, mean)", 100.0 * freeShare / runs);
   if (stressed == 0)
-    return fmt::format(" {}'s {} packing{}: no self-stress (the geometry fixes the contact forces), {}.", backend, runs,
+    return fmt::format(" {}'s {} packing{}: no self-stress (the geometry fixes the contact forces), {}.", side, runs,
                        runs == 1 ? "" : "s", free);
-  return fmt::format(" {}'s {} packings: {} with self-stresses, {:.2g} per constraint (mean), {}; {}.", backend, runs,
+  return fmt::format(" {}'s {} packings: {} with self-stresses, {:.2g} per constraint (mean), {}; {}.", side, runs,
                      stressed, perConstraint / runs,
                      stressedBetweenGrains == 0
                          ? std::string("all through the floor or the walls, none between grains alone")
@@ -1134,31 +1165,31 @@ std::string differenceMadeOf(const Comparison& stopped, const Comparison& settle
 
 // The sentences of one backend's runs of a family: equilibrium, rigidity, failed and missing runs.
 std::string runsText(const StudyView& study, const StudySummary& summary, const SeriesKey& sk,
-                     const std::string& backend) {
+                     const std::string& side) {
   std::string text;
-  const auto found = summary.runs.find({sk, backend});
+  const auto found = summary.runs.find({sk, side});
   if (found == summary.runs.end()) return text;
   const RunCount& n = found->second;
   if (n.done > 0 && n.equilibrated == 0)
-    text += fmt::format(" None of {}'s {} finished runs reached equilibrium: this compares unequilibrated piles.",
-                        backend, n.done);
+    text += fmt::format(" None of {}'s {} finished runs reached equilibrium: this compares unequilibrated piles.", side,
+                        n.done);
   else if (n.unequilibrated > 0)
     text += fmt::format(
         " {} of {}'s {} finished runs did not reach equilibrium: the comparison is partly of "
         "unequilibrated piles.",
-        n.unequilibrated, backend, n.done);
-  text += rigiditySentence(study, sk, backend);
+        n.unequilibrated, side, n.done);
+  text += rigiditySentence(study, sk, side);
   // Failed runs said apart from missing ones, which a study still running has many of.
   const std::size_t missing = n.total - n.done - n.failed;
   const auto are = [](std::size_t k) { return k == 1 ? "is" : "are"; };
   if (n.failed > 0 && missing > 0)
     text += fmt::format(" {} of {}'s {} runs did not finish: {} failed, {} {} missing (not run or interrupted).",
-                        n.total - n.done, backend, n.total, n.failed, missing, are(missing));
+                        n.total - n.done, side, n.total, n.failed, missing, are(missing));
   else if (n.failed > 0)
-    text += fmt::format(" {} of {}'s {} runs failed.", n.failed, backend, n.total);
+    text += fmt::format(" {} of {}'s {} runs failed.", n.failed, side, n.total);
   else if (missing > 0)
-    text += fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, backend, n.total,
-                        are(missing));
+    text +=
+        fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, side, n.total, are(missing));
   return text;
 }
 
@@ -1176,16 +1207,17 @@ std::string comparisonText(const std::string& a, const std::string& b, const std
 }
 
 void addVerdictSection(Document& doc, const StudyView& study, const StudySummary& summary) {
-  doc.heading(2, "Cross-solver verdict");
+  doc.heading(2, study.compared.backend() ? std::string("Cross-solver verdict")
+                                          : fmt::format("Verdict: {} against {}", study.sides[0], study.sides[1]));
   if (!study.pair()) {
     doc.paragraph("This study ran a single backend: there is nothing to compare.");
     return;
   }
-  const std::string& a = study.backends[0];
-  const std::string& b = study.backends[1];
+  const std::string& a = study.sides[0];
+  const std::string& b = study.sides[1];
   // b's piles brought to rest by a (a sweep's settle_with), when the study has them.
   const std::string settled = settledName(b);
-  const bool withSettled = std::find(study.backends.begin(), study.backends.end(), settled) != study.backends.end();
+  const bool withSettled = std::find(study.sides.begin(), study.sides.end(), settled) != study.sides.end();
   doc.paragraph(
       fmt::format("{} against {}: the difference {} − {}, its combined standard error sqrt(SE1² + SE2²), "
                   "and whether it is larger than twice that error.",
@@ -1225,7 +1257,7 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       }
       rows.push_back(std::move(row));
     }
-    for (const std::string& backend : {a, b}) text += runsText(study, summary, sk, backend);
+    for (const std::string& side : {a, b}) text += runsText(study, summary, sk, side);
     if (withSettled) text += runsText(study, summary, sk, settled);
     if (!text.empty()) sentences.push_back(fmt::format("For {}:{}", familyName(sk), text));
   }
@@ -1261,8 +1293,8 @@ void addSettingSections(Document& doc, const StudyView& study, FigureWriter& fig
         doc.paragraph(fmt::format(
             "{} is a setting of the run configuration this study varies. Each point is a configuration's mean over "
             "its replicas with the standard error of that mean; each line joins the configurations that differ in "
-            "{} alone: solid for the first backend, dashed for the second.",
-            study.settings[i], name));
+            "{} alone: solid for the first {}, dashed for the second.",
+            study.settings[i], name, study.compared.noun));
         headed = true;
       }
       Plot p{fmt::format("{}_vs_{}", symbol, stem), fmt::format("{} against {}", symbol, name), name, symbol, {}, {},
@@ -1274,13 +1306,16 @@ void addSettingSections(Document& doc, const StudyView& study, FigureWriter& fig
         ConfKey rest = k;
         rest.settings.erase(rest.settings.begin() + static_cast<std::ptrdiff_t>(i));
         if (!colors.count(rest)) colors.emplace(rest, static_cast<int>(colors.size()) + 1);
-        for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
-          const ReplicaStat st = study.statOf(k, study.backends[bi], key);
+        for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
+          const ReplicaStat st = study.statOf(k, study.sides[bi], key);
           if (st.n == 0) continue;
-          Series& line = lines[{rest, study.backends[bi]}];
+          Series& line = lines[{rest, study.sides[bi]}];
           if (line.name.empty())
-            line = Series{fmt::format("{} W={} {}", seriesText(seriesOf(rest)), widthText(rest), study.backends[bi]),
-                          colors.at(rest), bi > 0, true, {}};
+            line = Series{fmt::format("{} W={} {}", seriesText(seriesOf(rest)), widthText(rest), study.sides[bi]),
+                          colors.at(rest),
+                          bi > 0,
+                          true,
+                          {}};
           line.points.push_back(
               {*k.settings[i].number, st.mean, standardError(st)});
         }
@@ -1313,20 +1348,19 @@ void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& f
 // series and column, the configurations of the series as lines. figureIndex numbers the figures.
 void addProfileFigures(Document& doc, const StudyView& study, FigureWriter& figures, const std::string& name,
                        int& figureIndex) {
-  const auto& backends = study.backends;
   const std::string base = fs::path(name).stem().string();
   for (const SeriesKey& sk : study.seriesKeys()) {
     std::map<std::string, std::vector<Series>> byColumn;
     std::vector<std::string> columnOrder;
     std::string xLabel;
     int color = 0;
-    for (const auto& [k, byBackend] : study.groups) {
+    for (const auto& [k, bySide] : study.groups) {
       if (seriesOf(k) != sk) continue;
       ++color;
-      for (std::size_t bi = 0; bi < backends.size(); ++bi) {
-        if (!byBackend.count(backends[bi])) continue;
+      for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
+        if (!bySide.count(study.sides[bi])) continue;
         std::vector<CsvTable> tables;
-        for (const RunRecord* r : byBackend.at(backends[bi]))
+        for (const RunRecord* r : bySide.at(study.sides[bi]))
           if (r->status == RunStatus::Done)
             if (auto t = readCsv(study.runDir(*r) / name)) tables.push_back(std::move(*t));
         if (tables.empty()) continue;
@@ -1335,7 +1369,8 @@ void addProfileFigures(Document& doc, const StudyView& study, FigureWriter& figu
         // At most four value columns per profile keep the figures readable.
         for (std::size_t c = 1; c < avg.columns.size() && c <= 4; ++c) {
           if (!byColumn.count(avg.columns[c])) columnOrder.push_back(avg.columns[c]);
-          Series s{fmt::format("W={} {} (n={})", widthText(k), backends[bi], tables.size()), color, bi > 0, true, {}};
+          Series s{
+              fmt::format("W={} {} (n={})", widthText(k), study.sides[bi], tables.size()), color, bi > 0, true, {}};
           s.markers = false;
           for (const auto& row : avg.rows)
             if (std::isfinite(row[c])) s.points.push_back({row[0], row[c], 0.0});
@@ -1395,8 +1430,8 @@ void addProfileSections(Document& doc, const StudyView& study, FigureWriter& fig
   int figureIndex = 0;
   for (const ProfileKind& k : shown) {
     doc.heading(2, k.title);
-    doc.paragraph(k.definition + " Each line is a width, averaged over its replicas: solid for the first "
-                  "backend, dashed for the second.");
+    doc.paragraph(k.definition + " Each line is a width, averaged over its replicas: solid for the first " +
+                  study.compared.noun + ", dashed for the second.");
     addProfileFigures(doc, study, figures, k.file, figureIndex);
   }
 }
@@ -1411,23 +1446,23 @@ void addRelaxationSections(Document& doc, const StudyView& study, FigureWriter& 
   for (const SeriesKey& sk : study.seriesKeys()) {
     RelaxationFamily family{familyName(sk), fmt::format("relaxation_{:02d}", families.size() + 1), {}};
     int color = 0;
-    for (const auto& [k, byBackend] : study.groups) {
+    for (const auto& [k, bySide] : study.groups) {
       if (seriesOf(k) != sk) continue;
       ++color;
-      for (std::size_t bi = 0; bi < study.backends.size(); ++bi) {
-        if (!byBackend.count(study.backends[bi])) continue;
+      for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
+        if (!bySide.count(study.sides[bi])) continue;
         RelaxationLine line{{}, color, bi > 0, {}};
-        for (const RunRecord* r : byBackend.at(study.backends[bi]))
+        for (const RunRecord* r : bySide.at(study.sides[bi]))
           if (r->status == RunStatus::Done && r->result.contains("timing") && r->result["timing"].contains("history"))
             line.histories.push_back(r->result["timing"]["history"]);
         if (line.histories.empty()) continue;
-        line.label = fmt::format("W={} {} (n={})", widthText(k), study.backends[bi], line.histories.size());
+        line.label = fmt::format("W={} {} (n={})", widthText(k), study.sides[bi], line.histories.size());
         family.lines.push_back(std::move(line));
       }
     }
     families.push_back(std::move(family));
   }
-  addRelaxationSection(doc, figures, families);
+  addRelaxationSection(doc, figures, families, study.compared.noun);
 }
 
 std::string relativeLink(const fs::path& target, const fs::path& reportDir) {
@@ -1461,7 +1496,7 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
     }
     if (r.status == RunStatus::Pending || r.status == RunStatus::Incomplete) note = "missing: not run or interrupted";
     std::vector<std::string> row = {runLinks ? link(r.run.name, relativeLink(study.runDir(r), reportDir)) : r.run.name,
-                                    r.run.label(study.settings),
+                                    r.run.label(study.runSettings),
                                     status,
                                     value("solid_fraction", "{:.4f}"),
                                     value("timing/wall_s", "{:.1f}"),
@@ -1491,9 +1526,9 @@ std::string exact(double v) { return fmt::format("{:.17g}", v); }
 void writeQuantityTable(const fs::path& path, const StudyView& study, const std::vector<std::string>& keys) {
   std::vector<std::string> head = {"key", "family", "x_S", "W", "mu_w", "biperiodic"};
   for (const std::string& path : study.settings) head.push_back(path);  // the varied settings, by path
-  for (const auto& b : study.backends)
+  for (const auto& b : study.sides)
     for (const char* what : {"_mean", "_std", "_n"}) head.push_back(b + what);
-  const std::string diffName = study.pair() ? study.backends[0] + "_minus_" + study.backends[1] : "";
+  const std::string diffName = study.pair() ? study.sides[0] + "_minus_" + study.sides[1] : "";
   if (study.pair()) {
     head.push_back(diffName);
     head.push_back(diffName + "_uncertainty");
@@ -1505,7 +1540,7 @@ void writeQuantityTable(const fs::path& path, const StudyView& study, const std:
                                       exact(k.mu), k.periodic ? "1" : "0"};
       for (const SettingValue& v : k.settings) row.push_back(v.text);
       std::vector<ReplicaStat> stats;
-      for (const auto& b : study.backends) {
+      for (const auto& b : study.sides) {
         const ReplicaStat& st = stats.emplace_back(study.statOf(k, b, key));
         row.push_back(st.n ? exact(st.mean) : "");
         row.push_back(st.n >= 2 ? exact(st.std) : "");
@@ -1546,12 +1581,11 @@ void addQuantityTables(Document& doc, const StudyView& study, const fs::path& re
   for (const std::string& path : study.settings) varied += ", " + path;
   std::string text = fmt::format(
       "Every quantity of result.json per configuration: {}. One row per quantity (key) and configuration (family, "
-      "x_S, W, mu_w, biperiodic 1 or 0{}); per backend the mean, the sample standard deviation and the number n of "
+      "x_S, W, mu_w, biperiodic 1 or 0{}); per {} the mean, the sample standard deviation and the number n of "
       "replicas that finished",
-      files, varied);
+      files, varied, study.compared.noun);
   if (study.pair())
-    text += fmt::format(", then {} − {} with its uncertainty sqrt(s1²/n1 + s2²/n2)", study.backends[0],
-                        study.backends[1]);
+    text += fmt::format(", then {} − {} with its uncertainty sqrt(s1²/n1 + s2²/n2)", study.sides[0], study.sides[1]);
   text += "; full precision.";
   if (!notApplicable.empty()) {
     std::string list;
@@ -1565,14 +1599,14 @@ void addQuantityTables(Document& doc, const StudyView& study, const fs::path& re
 void addCostSection(Document& doc, const StudyView& study) {
   doc.heading(2, "Cost");
   std::vector<std::vector<std::string>> rows;
-  for (const std::string& b : study.backends) {
+  for (const std::string& b : study.sides) {
     std::vector<double> wall, steps, perStep;
     const auto collect = [](const RunRecord& r, const std::string& key, std::vector<double>& into) {
       const auto it = r.values.find(key);
       if (it != r.values.end() && it->second) into.push_back(*it->second);
     };
     for (const RunRecord& r : study.records) {
-      if (r.status != RunStatus::Done || r.run.config.backend != b) continue;
+      if (r.status != RunStatus::Done || study.sideOf(r) != b) continue;
       collect(r, "timing/wall_s", wall);
       collect(r, "timing/steps", steps);
       collect(r, "timing/iterations_per_step", perStep);
@@ -1587,9 +1621,9 @@ void addCostSection(Document& doc, const StudyView& study) {
   }
   const bool timed = std::any_of(study.keys.begin(), study.keys.end(),
                                  [](const std::string& k) { return tableGroups()[tableGroupOf(k)].file == "cost"; });
-  doc.paragraph(std::string("Compaction per backend over its finished runs (wall time in seconds)") +
+  doc.paragraph(fmt::format("Compaction per {} over its finished runs (wall time in seconds)", study.compared.noun) +
                 (timed ? "; every timing quantity per configuration is in tables/cost.csv." : "."));
-  doc.table({"backend", "finished runs", "total wall [s]", "mean wall per run [s]", "mean steps",
+  doc.table({study.compared.column, "finished runs", "total wall [s]", "mean wall per run [s]", "mean steps",
              "mean solver iterations per step"},
             rows);
 }
@@ -1668,16 +1702,19 @@ void addMethodSection(Document& doc, const StudyView& study, bool runLinks) {
       "Fits of the geometrical model (docs/model.md): linear least squares in 1/W over the confined widths, "
       "weighted by the replicas' standard errors of the mean when every width has two or more differing replicas, "
       "unweighted otherwise; the biperiodic value is a check of the fitted bulk value.",
-      "Backend differences are first minus second backend; (*) marks a difference larger than twice its "
-      "uncertainty. Both backends of one (configuration, seed) compact the same deposit. Units: lengths in large-grain "
-      "diameters d_L, times in sqrt(d_L/g), wall time in seconds.",
+      fmt::format(
+          "{} differences are first minus second {}; (*) marks a difference larger than twice its "
+          "uncertainty.{} Units: lengths in large-grain diameters d_L, times in sqrt(d_L/g), wall time in "
+          "seconds.",
+          capitalized(study.compared.column), study.compared.noun,
+          study.compared.backend() ? " Both backends of one (configuration, seed) compact the same deposit." : ""),
   });
 }
 
 }  // namespace
 
 ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, const ReportOptions& options) {
-  const StudyView study(sweepDir);
+  const StudyView study(sweepDir, options.compare);
   fs::create_directories(outDir);
   FigureWriter figures(outDir / "figures", options.gnuplot, options.figureTimeout);
   ReportSummary summary = countRuns(study);

@@ -13,7 +13,9 @@
 // family and configuration, and phi and Z are drawn against it when it is a number. Every
 // quantity of result.json per configuration (shape, x_S, W, mu_w, varied settings) is not on the page
 // but in tables/GROUP.csv: per backend the mean, standard deviation and number of the replicas,
-// and the difference of the two backends with its uncertainty, at full precision.
+// and the difference of the two backends with its uncertainty, at full precision. With
+// ReportOptions::compare the two values of another setting take the backends' place throughout
+// (study/report_compare.hpp).
 //
 // Figures: for each one a CSV with its data, a gnuplot script and, when gnuplot is installed, the
 // SVG it makes (gnuplot-nox). Without gnuplot the report says so and keeps the CSV and scripts; a
@@ -90,6 +92,11 @@ struct ReportOptions {
   /// (`--no-run-links`): names without links and the sweep folder by its name alone, for a report
   /// published without the run folders (the medium study's in docs/).
   bool runLinks = true;
+  /// The setting whose two values the report puts side by side (`--compare KEY`, its path in the
+  /// run configuration, study/report_compare.hpp): checked to have exactly two values among the
+  /// runs, std::invalid_argument otherwise. Empty: the backends, unchecked (a study of one backend
+  /// says it has nothing to compare).
+  std::string compare;
 };
 
 struct ReportSummary {

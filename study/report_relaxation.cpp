@@ -83,14 +83,16 @@ std::vector<double> relaxationTimes(const RelaxationFamily& family, int points) 
   return t;
 }
 
-void addRelaxationSection(Document& doc, FigureWriter& figures, const std::vector<RelaxationFamily>& families) {
+void addRelaxationSection(Document& doc, FigureWriter& figures, const std::vector<RelaxationFamily>& families,
+                          const std::string& side) {
   doc.heading(2, "Relaxation histories");
-  doc.paragraph(
+  doc.paragraph(fmt::format(
       "How each pile came to rest: phi of the bulk region, its coordination Z and the largest force ratio of the "
       "equilibrium test at every check of the compaction, against the simulated time t (t0), averaged over the "
-      "replicas (a run that ended holds its last value). A quantity still moving at the end of a backend's lines "
+      "replicas (a run that ended holds its last value). A quantity still moving at the end of a {}'s lines "
       "was not at rest when its runs stopped. The quasi-static finisher's steps take no simulated time: its "
-      "checks stack at the end of the fall. Solid: first backend; dashed: the others.");
+      "checks stack at the end of the fall. Solid: first {}; dashed: the others.",
+      side, side));
   bool any = false;
   for (const RelaxationFamily& family : families) {
     const std::vector<double> times = relaxationTimes(family);

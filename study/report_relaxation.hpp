@@ -42,7 +42,8 @@ std::vector<double> relaxationTimes(const RelaxationFamily& family, int points =
 
 /// Adds the section: a short definition, then per family three figures against t (phi of the
 /// bulk, Z, log10 of the largest force ratio). Families without a history are left out; a study
-/// with none says so.
-void addRelaxationSection(Document& doc, FigureWriter& figures, const std::vector<RelaxationFamily>& families);
+/// with none says so. `side` names what a family's lines compare ("backend", "value of solver").
+void addRelaxationSection(Document& doc, FigureWriter& figures, const std::vector<RelaxationFamily>& families,
+                          const std::string& side = "backend");
 
 }  // namespace confpack::study

@@ -228,3 +228,26 @@ TEST_CASE("report: a hand-edited sweep.json that no longer holds is refused by f
   CHECK(sweep.err == "confpack report: error: sweep/sweep.json: sweep: missing (the sweep file that made the table)\n");
   CHECK_FALSE(fs::exists(s.dir / "sweep" / "report"));
 }
+
+TEST_CASE(
+    "report --compare: a key without two values is refused by name, exit 2, nothing written, and one with two "
+    "is compared") {
+  ConfpackSession s("cmd_report_compare");
+  makeSweep(s.dir / "sw");  // nscd alone, seeds 1 and 2
+  const auto one = s.run("report sw --no-figures --compare backend");
+  CHECK(one.code == 2);
+  CHECK(one.err ==
+        "confpack report: error: --compare backend: the runs have 1 value of backend (nscd); a comparison needs "
+        "exactly two\n");
+  CHECK_FALSE(fs::exists(s.dir / "sw" / "report"));
+  const auto none = s.run("report sw --no-figures --compare backend_options.solver");
+  CHECK(none.code == 2);
+  CHECK(lineCount(none.err) == 1);
+  CHECK(none.err.find("no run's configuration has backend_options.solver") != std::string::npos);
+  CHECK_FALSE(fs::exists(s.dir / "sw" / "report"));
+  // The two seeds are two values: legal, if not a comparison anyone needs.
+  REQUIRE(s.run("report sw --no-figures --compare seed").code == 0);
+  const std::string md = slurp(s.dir / "sw" / "report" / "report.md");
+  CHECK(md.find("| family | seed | runs at equilibrium / total |") != std::string::npos);
+  CHECK(md.find("## Verdict: 1 against 2") != std::string::npos);
+}
