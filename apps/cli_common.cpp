@@ -285,6 +285,24 @@ CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow) {
                       "numbers would look like results)");
 }
 
+namespace {
+// A new --out is refused before any work when its nearest existing parent is not a folder a
+// folder can be made in (a read-only mount, /proc, a file): a probe folder made there and
+// removed at once, since permissions alone do not tell (root may write everywhere but /proc).
+void checkCanCreateIn(const fs::path& target) {
+  std::error_code ec;
+  fs::path parent = target.parent_path();
+  while (!parent.empty() && !fs::exists(parent, ec) && parent != parent.parent_path()) parent = parent.parent_path();
+  if (!fs::is_directory(parent, ec))
+    throw std::invalid_argument(fmt::format("--out: '{}' is not a folder, so '{}' cannot be made in it",
+                                            parent.string(), target.string()));
+  const fs::path probe = parent / fmt::format(".confpack-probe-{}", ::getpid());
+  if (!fs::create_directory(probe, ec) && ec)
+    throw std::invalid_argument(fmt::format("--out: cannot create '{}': {}", target.string(), ec.message()));
+  fs::remove(probe, ec);
+}
+}  // namespace
+
 void checkOutputTarget(const fs::path& out) {
   std::error_code ec;
   if (out.empty()) throw std::invalid_argument("--out: an output directory is required");
@@ -293,7 +311,10 @@ void checkOutputTarget(const fs::path& out) {
     throw std::invalid_argument(
         fmt::format("--out: '{}' is the file system's root; give a new or empty folder", out.string()));
   const fs::file_status status = fs::status(out, ec);
-  if (!fs::exists(status)) return;
+  if (!fs::exists(status)) {
+    checkCanCreateIn(absolute);
+    return;
+  }
   if (!fs::is_directory(status))
     throw std::invalid_argument(fmt::format("--out: '{}' exists and is not a directory", out.string()));
   if (fs::exists(out / kOutputMarker, ec)) return;

@@ -17,6 +17,7 @@
 #include "tests/support/scratch.hpp"
 
 namespace fs = std::filesystem;
+using confpack::app::checkOutputTarget;
 using confpack::app::StagedOutput;
 using confpack::testing::slurp;
 
@@ -204,6 +205,19 @@ TEST_CASE("--out must be new, empty or confpack's own: the root and a folder of 
   confpack::app::markOutputFolder(root / "sweep");
   CHECK_NOTHROW(checkOutputTarget(root / "sweep"));
   CHECK(slurp(root / "theirs" / "thesis.tex") == "years of work");
+  fs::remove_all(root);
+}
+
+TEST_CASE("a new --out that cannot be made is refused before any work, naming the folder and the reason") {
+  // The failure this guards against: run --out /proc/x did all its work, then failed (exit 1) when it
+  // created its output.
+  CHECK_THROWS_WITH(checkOutputTarget("/proc/x"), Catch::StartsWith("--out: cannot create '/proc/x': "));
+  CHECK_THROWS_WITH(checkOutputTarget("/proc/x/y/z"), Catch::StartsWith("--out: cannot create '/proc/x/y/z': "));
+  const fs::path root = confpack::testing::freshDir("cli_common_probe");
+  { std::ofstream(root / "file") << "x"; }
+  CHECK_THROWS_WITH(checkOutputTarget(root / "file" / "out"), Catch::Contains("is not a folder"));
+  CHECK_NOTHROW(checkOutputTarget(root / "new" / "deeper"));
+  CHECK(!fs::exists(root / "new"));  // the probe leaves nothing behind
   fs::remove_all(root);
 }
 
