@@ -160,16 +160,26 @@ std::string& programName() {
 std::string_view currentCommand;
 thread_local const char* currentStep = "reading the command line";
 
-// Address space set aside at start and given back when an allocation first fails, just before
-// std::bad_alloc is thrown. The unwinding that follows allocates: nlohmann::json's destructor
-// keeps the children of the value it destroys on a stack, a vector as long as its largest array
-// (1 MB for the packing of a 68,000-grain deposit), and a bad_alloc thrown by a destructor during
-// unwinding terminates the program (SIGABRT) with the staging folder left behind. 16 MB covers
-// the destruction of arrays of a million elements; untouched, it costs no physical memory.
+// Address space set aside at start, in two parts, for when an allocation first fails. The first
+// part is given back and the allocation retried: it succeeds from that room, and the work fails
+// at its next safe point (core::requestStopForMemory). An allocation can fail where a throw ends
+// the program: nlohmann::json's destructor (noexcept) keeps the children of the value it destroys
+// on a stack, a vector as long as its largest array (1 MB for the packing of a 68,000-grain
+// deposit). The second part is given back when an allocation fails again, just before
+// std::bad_alloc is thrown: the unwinding that follows allocates too, and a bad_alloc thrown by a
+// destructor during unwinding terminates the program (SIGABRT) with the staging folder left
+// behind. 16 MB each covers the destruction of arrays of a million elements; untouched, it costs
+// no physical memory.
 constexpr std::size_t kUnwindingReserve = std::size_t{16} << 20;
+std::atomic<void*> retryReserve{nullptr};
 std::atomic<void*> unwindingReserve{nullptr};
 
-void releaseReserveAndFail() {
+void releaseReserveOrFail() {
+  if (void* reserve = retryReserve.exchange(nullptr)) {
+    std::free(reserve);
+    core::requestStopForMemory();
+    return;  // operator new retries
+  }
   std::free(unwindingReserve.exchange(nullptr));
   throw std::bad_alloc();
 }
@@ -210,8 +220,9 @@ int parseAndRun(CLI::App& app, int argc, char** argv) {
   programName() = app.get_name();
   core::installStopHandlers();
   if (unwindingReserve.load() == nullptr) {
+    retryReserve = std::malloc(kUnwindingReserve);
     unwindingReserve = std::malloc(kUnwindingReserve);
-    std::set_new_handler(releaseReserveAndFail);
+    std::set_new_handler(releaseReserveOrFail);
   }
   // Out of memory is a failure of the work wherever it happens (exit 1), never bad input. By the
   // time this handler runs, the unwinding has released what the failed work held; the line is

@@ -1,19 +1,33 @@
 #include "tests/support/allocation_fault.hpp"
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
 
 namespace {
 // Allocations to go until the one that fails (that one takes it from 1 to 0); <= 0: disarmed.
 std::atomic<long> countdown{0};
+// Every operator new since the start, for CONFPACK_COUNT_ALLOCATIONS.
+std::atomic<long> made{0};
+const char* countFile = nullptr;
+
+void writeCount() {
+  if (std::FILE* f = std::fopen(countFile, "w")) {
+    std::fprintf(f, "%ld\n", made.load());
+    std::fclose(f);
+  }
+}
 }  // namespace
 
 // The replaceable global allocation functions ([new.delete.single]): the array forms call these.
 void* operator new(std::size_t size) {
+  made.fetch_add(1, std::memory_order_relaxed);
   if (countdown.load(std::memory_order_relaxed) > 0 && countdown.fetch_sub(1) == 1) {
-    if (const std::new_handler handler = std::get_new_handler()) handler();
-    throw std::bad_alloc();
+    // As a real failure: the new handler, which throws or returns to have the allocation retried.
+    const std::new_handler handler = std::get_new_handler();
+    if (!handler) throw std::bad_alloc();
+    handler();
   }
   for (;;) {
     if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
@@ -33,6 +47,10 @@ namespace confpack::testing {
 
 void armAllocationFault() {
   if (const char* k = std::getenv("CONFPACK_FAIL_ALLOCATION")) countdown = std::strtol(k, nullptr, 10);
+  if ((countFile = std::getenv("CONFPACK_COUNT_ALLOCATIONS")) != nullptr) {
+    made = 0;
+    std::atexit(writeCount);
+  }
 }
 
 }  // namespace confpack::testing

@@ -4,15 +4,14 @@
 // allocation_fault.cpp, whose replaced operator new counts). Once armed, the k-th operator new of
 // any thread, counted from the arming, fails as a real one does: the new handler is called (the
 // command line's releases its reserve and throws std::bad_alloc), else std::bad_alloc is thrown.
-// Every other allocation succeeds. tests/apps/test_main.cpp fails the command line's setup. Run
-// over k for a whole command (a shell loop over CONFPACK_FAIL_ALLOCATION), some k still end in
-// std::terminate: the allocation that fails is then made inside nlohmann::json's destructor
-// (noexcept; it keeps the children of the value it destroys on a vector), so a sweep over a fixed
-// sample of k cannot stand as a regression test yet.
+// Every other allocation succeeds. With CONFPACK_COUNT_ALLOCATIONS=FILE it writes, at exit, the
+// number of allocations made since the arming to FILE, so that a test can spread its failure
+// points over a whole command (tests/apps/test_allocation_sweep.cpp).
 
 namespace confpack::testing {
 
-/// Reads k from the environment variable CONFPACK_FAIL_ALLOCATION (unset or 0: nothing fails).
+/// Reads k from the environment variable CONFPACK_FAIL_ALLOCATION (unset or 0: nothing fails),
+/// and CONFPACK_COUNT_ALLOCATIONS (see above).
 void armAllocationFault();
 
 }  // namespace confpack::testing
