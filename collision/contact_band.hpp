@@ -1,5 +1,5 @@
 #pragma once
-// Contact type by a distance band (docs/model.md, "Contact type by a tolerance band"): the reading
+// Contact type by a distance band (docs/model.md, "Two readings of a packing"): the reading
 // of a contact's type by LMGC90's points, beside the exact classifier of polyhedron_contact.hpp.
 //
 // Contact plane. n is the unit normal from a to b (pairs: the narrow phase's, pairNormal; a wall:
