@@ -26,6 +26,11 @@ void AnalysisOptions::validate() const {
     throw std::invalid_argument(fmt::format("analysis: max_cells must be >= 1 (got {})", maxCells));
   if (!(density > 0.0) || !std::isfinite(density))
     throw std::invalid_argument(fmt::format("analysis: density must be positive (got {})", density));
+  checkInflation(inflate);
+  if (!(typeBand == 0.0 || (typeBand > 0.0 && typeBand <= kMaxTypeBand)))
+    throw std::invalid_argument(
+        fmt::format("analysis: type_band must be 0 (off) or a fraction in (0, {}] of the grain size (got {})",
+                    kMaxTypeBand, typeBand));
 }
 
 double estimatedCells(const core::BoxDef& box, double grains, const AnalysisOptions& options, std::string* what) {
@@ -57,9 +62,30 @@ void checkCells(const core::BoxDef& box, double grains, const AnalysisOptions& o
         "analysis: about {:.3g} cells ({}), more than max_cells ({:g}); {}", cells, what, options.maxCells, remedy));
 }
 
+namespace {
+
+// The equilibrium test with zero velocities, when asked for and the packing carries forces.
+std::optional<EquilibriumReport> equilibriumAtRest(const core::Packing& packing, const AnalysisOptions& options) {
+  if (!options.equilibrium || !packing.contacts) return std::nullopt;
+  return equilibrium(packing, {}, options.gravity, options.density, options.forceRatio, options.momentRatio,
+                     options.kineticRatio, options.region);
+}
+
+}  // namespace
+
 Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
   options.validate();
   checkCells(packing.box, static_cast<double>(packing.grains.size()), options);
+  if (options.inflate != 1.0) {
+    AnalysisOptions inflated = options;
+    inflated.inflate = 1.0;
+    inflated.equilibrium = false;
+    inflated.homogeneity.sizeThreshold *= options.inflate;
+    Analysis a = analyze(inflate(packing, options.inflate), inflated);
+    a.inflate = options.inflate;
+    a.equilibrium = equilibriumAtRest(packing, options);  // the forces act on the grains as they are
+    return a;
+  }
   Analysis a;
   a.grains = static_cast<int>(packing.grains.size());
   bool large = false, small = false;
@@ -92,13 +118,16 @@ Analysis analyze(const core::Packing& packing, const AnalysisOptions& options) {
   const std::vector<CountedContact> counted =
       forceCarryingContacts(packing, contacts, a.geometricContacts, options.coordination.forceThreshold);
   a.coordination = coordination(packing, a.region, counted, a.geometricContacts, options.coordination);
+  if (options.typeBand > 0.0) {
+    a.typeBand = options.typeBand;
+    a.coordinationBand = coordination(packing, a.region, bandTypedContacts(packing, counted, options.typeBand),
+                                      a.geometricContacts, options.coordination);
+  }
   a.rigidity = contactRigidity(packing, counted);
   a.fabric = fabric(packing, a.region, counted, options.fabric);
   a.nematic = nematic(packing, a.region, options.boundaryDistance);
   a.homogeneity = homogeneity(packing, a.region, options.homogeneity);
-  if (options.equilibrium && packing.contacts)
-    a.equilibrium = equilibrium(packing, {}, options.gravity, options.density, options.forceRatio, options.momentRatio,
-                                options.kineticRatio, options.region);
+  a.equilibrium = equilibriumAtRest(packing, options);
   return a;
 }
 
@@ -120,6 +149,7 @@ nlohmann::json toJson(const Analysis& a) {
   using nlohmann::json;
   json j;
   j["n_grains"] = a.grains;
+  j["inflate"] = a.inflate;
   j["mean_size"] = a.meanSize;
   j["bidisperse"] = a.bidisperse;
   j["free_surface"] = a.region.freeSurface;
@@ -146,6 +176,19 @@ nlohmann::json toJson(const Analysis& a) {
                        {"hyperstaticity", orNull(c.hyperstaticity)},
                        {"geometric_contacts", a.geometricContacts},
                        {"mean_normal_force", c.meanNormalForce}};
+  if (a.coordinationBand) {
+    // The band's types beside the exact ones; Z and the rattlers are the same contacts'.
+    const Coordination& b = *a.coordinationBand;
+    j["coordination_band"] = {{"band", a.typeBand},
+                              {"Z", perGrain(b.z)},
+                              {"simple", perGrain(b.zSimple)},
+                              {"double", perGrain(b.zDouble)},
+                              {"triple", perGrain(b.zTriple)},
+                              {"constraints", perGrain(b.zSimple + 2 * b.zDouble + 3 * b.zTriple)},
+                              {"hyperstaticity", orNull(b.hyperstaticity)}};
+  } else {
+    j["coordination_band"] = nullptr;
+  }
 
   if (a.rigidity)
     j["rigidity"] = {{"contacts", a.rigidity->contacts},

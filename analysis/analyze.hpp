@@ -10,6 +10,14 @@
 // velocities taken as zero ("velocities": "assumed_zero" in the block): the force and moment
 // balances are then exact, the kinetic ratio is 0 by assumption. Without contacts the block is
 // null (there are no forces to balance).
+// Two readings (docs/model.md, "Two readings of a packing"), the exact one the default and always
+// reported: `inflate` S > 1 analyses instead the packing with every grain scaled by S about its
+// centroid (analysis/inflate.hpp), every block of it (phi from the scaled volumes, the
+// interpenetration, the contacts, found geometrically, and their types) but the equilibrium test,
+// which weighs the forces on the grains as they are; the homogeneity's size threshold is scaled
+// with the grains, so that a grain keeps its size class. `typeBand` B > 0 adds the coordination
+// with the contact types read by a tolerance band of B x the grain size (analysis/coordination.hpp)
+// beside the exact one.
 // Profile fit: only with side walls (a biperiodic box has no wall profile); bidisperse law when
 // the packing holds both large and small grains (homogeneity's size threshold).
 #include <filesystem>
@@ -24,6 +32,7 @@
 #include "analysis/geometric_contacts.hpp"
 #include "analysis/geometric_model.hpp"
 #include "analysis/homogeneity.hpp"
+#include "analysis/inflate.hpp"
 #include "analysis/interpenetration.hpp"
 #include "analysis/nematic.hpp"
 #include "analysis/profile_fit.hpp"
@@ -55,6 +64,12 @@ struct AnalysisOptions {
   /// 6.4 min (554 MB) at 1e9. The default slice on 30,400 grains across W = 40 is 6e7 cells, and
   /// 263,000 grains (1.6e9 cells) took 13 s.
   double maxCells = 2e8;
+  /// Every grain scaled by this about its centroid before the analysis (analysis/inflate.hpp) [-],
+  /// in [1, kMaxInflation]. 1: the packing as it is, the exact reading a solver's packing needs.
+  double inflate = 1.0;
+  /// Contact types read also by a tolerance band of this fraction of the grain size
+  /// (analysis/coordination.hpp) [-], in (0, kMaxTypeBand]; 0: off, the exact types only.
+  double typeBand = 0.0;
 
   void validate() const;  ///< throws std::invalid_argument naming the bad field
 };
@@ -71,9 +86,12 @@ struct Analysis {
   ProfileFit profileFit;                   ///< ok = false with a reason when absent
   std::optional<double> profileIntegralC;  ///< 2 int (phi_bulk - phi(y)) dy with the fitted phi_bulk
   Interpenetration interpenetration;
+  double inflate = 1.0;  ///< the grains' scale factor of this reading [-] (1: as they are)
   bool geometricContacts = false;
   Coordination coordination;
-  std::optional<Rigidity> rigidity;  ///< between frictionless walls (rigidity.hpp)
+  double typeBand = 0.0;                         ///< the band of coordinationBand [grain size], 0: none
+  std::optional<Coordination> coordinationBand;  ///< the types by the tolerance band (options.typeBand > 0)
+  std::optional<Rigidity> rigidity;              ///< between frictionless walls (rigidity.hpp)
   Fabric fabric;
   Nematic nematic;
   Homogeneity homogeneity;
@@ -100,10 +118,10 @@ void checkCells(const core::BoxDef& box, double grains, const AnalysisOptions& o
 /// options.maxCells (estimatedCells), before any work.
 Analysis analyze(const core::Packing& packing, const AnalysisOptions& options = {});
 
-/// The result.json blocks (docs/model.md, "Results"): n_grains, free_surface, bulk_region,
-/// solid_fraction, coordination, rigidity, interpenetration_percent, anisotropy, fabric, nematic,
-/// profile_fit, equilibrium (null when not evaluated). Quantities that do not apply are null, not
-/// absent.
+/// The result.json blocks (docs/model.md, "Results"): n_grains, inflate, free_surface, bulk_region,
+/// solid_fraction, coordination, coordination_band (null when off), rigidity,
+/// interpenetration_percent, anisotropy, fabric, nematic, profile_fit, equilibrium (null when not
+/// evaluated). Quantities that do not apply are null, not absent.
 nlohmann::json toJson(const Analysis& a);
 
 /// analyze() + toJson().

@@ -12,6 +12,7 @@
 
 #include "analysis/grain_volumes.hpp"
 #include "analysis/solid_fraction.hpp"
+#include "collision/contact_band.hpp"
 #include "collision/polyhedron_contact.hpp"
 
 namespace confpack::analysis {
@@ -88,6 +89,27 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
     out.push_back(m);
   }
   return out;
+}
+
+std::vector<CountedContact> bandTypedContacts(const core::Packing& packing, std::vector<CountedContact> counted,
+                                              double band) {
+  if (!(band > 0.0 && band <= kMaxTypeBand))
+    throw std::invalid_argument(fmt::format(
+        "coordination: type_band must be a fraction in (0, {}] of the grain size (got {})", kMaxTypeBand, band));
+  for (CountedContact& c : counted) {
+    const core::Grain& ga = packing.grains[c.a];
+    if (ga.shape != core::ShapeKind::Pinacoid) continue;
+    const PlacedGrain pa(ga);
+    if (core::isWall(c.b)) {
+      const auto wall = static_cast<core::WallId>(c.b);
+      c.type = collision::classifyPlaneContactBand(pa.placed, packing.box.wallPoint(wall),
+                                                   core::BoxDef::wallNormal(wall), band * ga.size);
+    } else if (const core::Grain& gb = packing.grains[c.b]; gb.shape == core::ShapeKind::Pinacoid) {
+      const PlacedGrain pb(gb, ga.position + c.branch);
+      c.type = collision::classifyContactBand(pa.placed, pb.placed, band * std::min(ga.size, gb.size));
+    }
+  }
+  return counted;
 }
 
 Coordination coordination(const core::Packing& packing, const BulkRegion& region,

@@ -12,6 +12,11 @@
 // collision::classifyContact(a, b) on the two grains' poses (b at its minimum image), so both
 // backends are classified identically, whatever number of points they used. Pinacoid-wall:
 // collision::classifyPlaneContact.
+// Contact type by a tolerance band B (bandTypedContacts, beside the exact type, never instead):
+// collision::classifyContactBand with the band width
+//   w = B x min(d_a, d_b)   (a pair),   w = B x d_a   (a wall),
+// d the grain's size: every vertex within w of the contact plane touches, and the number of
+// distinct positions they touch at gives the type (collision/contact_band.hpp).
 //
 // Counting (bulk grains: centre in the bulk region). Each force-carrying grain-grain contact adds
 // one to each of its grains that is in the bulk, so
@@ -51,12 +56,23 @@ struct CountedContact {
   std::vector<core::Vec3> points;
 };
 
+/// Widest tolerance band accepted, as a fraction of the grain size [-]: half the size already
+/// spans most of a pinacoid's thickness (0.71 L across its trapezoids for G = E = L), and any
+/// wider band would read every contact as triple.
+inline constexpr double kMaxTypeBand = 0.5;
+
 /// The force-carrying contacts (definition above), merged by pair and classified.
 /// `geometric`: all contacts count whatever their force. Throws std::invalid_argument for a grain
 /// index out of range.
 std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
                                                   const std::vector<core::Contact>& contacts, bool geometric,
                                                   double forceThreshold = 1e-3);
+
+/// `counted` with each pinacoid contact's type read by the tolerance band `band` (definition
+/// above) instead of the exact rule; sphere contacts stay Simple. Throws std::invalid_argument
+/// unless 0 < band <= kMaxTypeBand.
+std::vector<CountedContact> bandTypedContacts(const core::Packing& packing, std::vector<CountedContact> counted,
+                                              double band);
 
 struct CoordinationProfile {
   std::vector<double> y;                       ///< slice centres [d_L]

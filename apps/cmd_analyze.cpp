@@ -10,6 +10,8 @@
 // stderr, exit code 2 and no output directory. SIGINT or SIGTERM stops the analysis at its next
 // grain, slice, fit iteration, cell or pair (analysis polls core::stopSignal()): one line saying
 // where, exit 130 or 143, nothing written.
+// --inflate S and --type-band B ask for the published readings beside the exact one, the default
+// (analysis/analyze.hpp); result.json records both in analysis_options and the inflation as `inflate`.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -48,7 +50,9 @@ nlohmann::json optionsJson(const analysis::AnalysisOptions& o) {
           {"gap_tolerance_rel", o.geometricContacts.relTolerance},
           {"nematic_boundary_distance", o.boundaryDistance},
           {"size_threshold", o.homogeneity.sizeThreshold},
-          {"max_cells", o.maxCells}};
+          {"max_cells", o.maxCells},
+          {"inflate", o.inflate},
+          {"type_band", o.typeBand > 0.0 ? nlohmann::json(o.typeBand) : nlohmann::json(nullptr)}};
 }
 
 void runAnalyze(AnalyzeState& st) {
@@ -92,7 +96,8 @@ void runAnalyze(AnalyzeState& st) {
                                        ? fmt::format(", {} self-stresses, {} mechanisms",
                                                      result.rigidity->selfStresses(), result.rigidity->mechanisms())
                                        : "";
-      fmt::print("analyze: {} grains, phi = {}, Z = {}{}{} -> {}\n", result.grains,
+      fmt::print("analyze: {} grains{}, phi = {}, Z = {}{}{} -> {}\n", result.grains,
+                 result.inflate != 1.0 ? fmt::format(" inflated by {:g}", result.inflate) : "",
                  phi.is_number() ? fmt::format("{:.5f}", phi.get<double>()) : "n/a",
                  z.is_number() ? fmt::format("{:.3f}", z.get<double>()) : "n/a", rigidity,
                  result.geometricContacts ? " (geometric contacts)" : "", output.target().string());
@@ -138,6 +143,17 @@ void registerAnalyze(CLI::App& app) {
                   "Geometric contacts (files without contacts): absolute gap tolerance [d_L]")
       ->capture_default_str()
       ->check(nonNegativeNumber());
+  // The two published readings beside the exact one (docs/model.md, "Two readings of a packing").
+  sub->add_option("--inflate", o.inflate,
+                  "Analyse the packing with every grain scaled by S about its centroid (phi, interpenetration, "
+                  "contacts and their types of the inflated grains)")
+      ->capture_default_str()
+      ->check(realIn(1.0, analysis::kMaxInflation, false, false,
+                     fmt::format("a factor in [1, {}]", analysis::kMaxInflation), "S"));
+  sub->add_option("--type-band", o.typeBand,
+                  "Also read the contact types by a tolerance band of B x the grain size (coordination_band)")
+      ->check(realIn(0.0, analysis::kMaxTypeBand, true, false,
+                     fmt::format("a fraction in (0, {}]", analysis::kMaxTypeBand), "B"));
   sub->callback([st] { runAnalyze(*st); });
 }
 

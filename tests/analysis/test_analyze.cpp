@@ -1,6 +1,7 @@
 // The aggregate analysis (result.json blocks, docs/model.md "Results") and its CSV profiles.
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -149,4 +150,31 @@ TEST_CASE("an analysis with far more cells than max_cells is refused before any 
   CHECK_THROWS_WITH(analysis::analyze(p, o), Catch::StartsWith("analysis: about 4e+04 cells"));
   o.maxCells = 40000;
   CHECK(analysis::analyze(p, o).grains == 200);
+}
+
+TEST_CASE("type_band adds coordination_band beside the exact coordination, which it leaves alone",
+          "[analysis][analyze][coordination]") {
+  const core::Packing p = simpleCubic(6, 5, 12);
+  analysis::AnalysisOptions o;
+  o.typeBand = 0.1;
+  const nlohmann::json exact = analysis::analyzePacking(p);
+  const nlohmann::json j = analysis::analyzePacking(p, o);
+  CHECK(exact["coordination_band"].is_null());
+  CHECK(j["coordination"] == exact["coordination"]);
+  // Spheres touch at a point whatever the band: the band's types are the exact ones.
+  const nlohmann::json& b = j["coordination_band"];
+  CHECK(b["band"] == 0.1);
+  CHECK(b["Z"].get<double>() == Approx(6.0));
+  CHECK(b["simple"].get<double>() == Approx(6.0));
+  CHECK(b["double"].get<double>() == 0.0);
+  CHECK(b["triple"].get<double>() == 0.0);
+  CHECK(b["constraints"].get<double>() == Approx(6.0));
+  CHECK(b["hyperstaticity"].is_null());
+  for (double band : {-0.1, 0.500001, std::nan(""), HUGE_VAL}) {
+    INFO("type_band = " << band);
+    o.typeBand = band;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("type_band"));
+  }
+  o.typeBand = 0.5;
+  CHECK_NOTHROW(o.validate());
 }

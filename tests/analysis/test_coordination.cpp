@@ -70,3 +70,58 @@ TEST_CASE("force threshold and merged contacts", "[analysis][coordination]") {
   CHECK_THROWS_AS(analysis::forceCarryingContacts(p, contacts, false), std::invalid_argument);
 }
 
+
+TEST_CASE("contact types by a tolerance band: a face tilted by 3 degrees is triple in the band, not exactly",
+          "[analysis][coordination]") {
+  using confpack::testing::pinacoid;
+  core::Packing p;
+  p.box.lengthX = 6.0;
+  p.box.width = 4.0;
+  p.box.periodicY = true;
+  // b's bottom trapezoid on a's top trapezoid (plane y + z = 1/2 in a's frame, L = G = E = 1), b
+  // then turned by 3 degrees about the x axis through the middle of the contact.
+  const core::Vec3 xa(3.0, 2.0, 5.0);
+  const core::Vec3 pivot = xa + core::Vec3(0.0, 0.25, 0.25);
+  const core::Quat tilt(Eigen::AngleAxisd(3.0 * std::numbers::pi / 180.0, core::Vec3::UnitX()));
+  p.grains = {pinacoid(1.0, xa), pinacoid(1.0, pivot + tilt * (xa + core::Vec3(0.0, 0.5, 0.5) - pivot), tilt)};
+  const auto counted = analysis::forceCarryingContacts(p, analysis::geometricContacts(p), true);
+  REQUIRE(counted.size() == 1);
+  CHECK(counted[0].type != core::ContactType::Triple);
+  const auto band = analysis::bandTypedContacts(p, counted, 0.1);
+  REQUIRE(band.size() == 1);
+  CHECK(band[0].type == core::ContactType::Triple);
+  // The same contacts counted: one triple contact per grain in the band, none exactly.
+  const analysis::BulkRegion region{10.0, 3.0, 7.0};
+  const analysis::Coordination exact = analysis::coordination(p, region, counted, true);
+  const analysis::Coordination byBand = analysis::coordination(p, region, band, true);
+  CHECK(exact.z == 1.0);
+  CHECK(byBand.z == 1.0);
+  CHECK(exact.zTriple == 0.0);
+  CHECK(byBand.zTriple == 1.0);
+  for (double b : {0.0, -0.1, 0.51, std::nan("")})
+    CHECK_THROWS_WITH(analysis::bandTypedContacts(p, counted, b), Catch::Contains("type_band"));
+}
+
+TEST_CASE("contact types by a tolerance band: a pinacoid's face a few degrees off the floor is triple",
+          "[analysis][coordination]") {
+  using confpack::testing::pinacoid;
+  core::Packing p;
+  p.box.lengthX = 6.0;
+  p.box.width = 4.0;
+  p.box.periodicY = true;
+  // Upside down on its top ridge (vertices (+-l, 0, 1/2) in the body frame): a Double wall contact
+  // either way. Its bottom trapezoid y < 0 (normal (0, -1, -1)/sqrt 2) turned down onto the floor
+  // and tilted by 3 degrees: Triple in the band only.
+  const core::Quat flip(Eigen::AngleAxisd(std::numbers::pi, core::Vec3::UnitX()));
+  const core::Quat down = core::Quat::FromTwoVectors(core::Vec3(0, -1, -1).normalized(), -core::Vec3::UnitZ());
+  const core::Quat tilt(Eigen::AngleAxisd(3.0 * std::numbers::pi / 180.0, core::Vec3::UnitX()));
+  p.grains = {pinacoid(1.0, core::Vec3(1.5, 2.0, 0.5), flip), pinacoid(1.0, core::Vec3(4.5, 2.0, 2.0), tilt * down)};
+  p.grains[1] = confpack::testing::withBottomAt(p.grains[1], 0.0);
+  const auto counted = analysis::forceCarryingContacts(p, analysis::geometricContacts(p), true);
+  REQUIRE(counted.size() == 2);
+  const auto band = analysis::bandTypedContacts(p, counted, 0.1);
+  CHECK(counted[0].type == core::ContactType::Double);
+  CHECK(band[0].type == core::ContactType::Double);
+  CHECK(counted[1].type != core::ContactType::Triple);
+  CHECK(band[1].type == core::ContactType::Triple);
+}

@@ -204,6 +204,51 @@ TEST_CASE("a --slice finer than a profile can hold is refused by name, not repla
   CHECK_FALSE(fs::exists(s.dir / "res"));
 }
 
+TEST_CASE("analyze --inflate and --type-band are recorded in result.json, and refused out of range by name, exit 2",
+          "[apps][cli]") {
+  const ConfpackSession s("cmd_analyze_readings");
+  core::writePacking(confpack::testing::simpleCubic(6, 5, 12), s.dir / "p.json");
+  REQUIRE(s.run("analyze p.json --out res --inflate 1.2 --type-band 0.1 -q").code == 0);
+  std::ifstream in(s.dir / "res" / "result.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  CHECK(j["inflate"] == 1.2);
+  CHECK(j["analysis_options"]["inflate"] == 1.2);
+  CHECK(j["analysis_options"]["type_band"] == 0.1);
+  CHECK(j["coordination_band"]["band"] == 0.1);
+  CHECK(j["coordination"]["geometric_contacts"] == true);
+  // The inflated lattice: every grain overlaps its six neighbours, phi about 1.2^3 pi / 6.
+  CHECK(j["coordination"]["Z"].get<double>() == Approx(6.0));
+  CHECK(j["solid_fraction"].get<double>() == Approx(1.728 * std::numbers::pi / 6).epsilon(0.01));
+  CHECK(j["interpenetration_percent"]["exact"].get<double>() > 0.0);
+  // The default: the exact reading, no band.
+  REQUIRE(s.run("analyze p.json --out plain -q").code == 0);
+  std::ifstream plainIn(s.dir / "plain" / "result.json");
+  const nlohmann::json plain = nlohmann::json::parse(plainIn);
+  CHECK(plain["inflate"] == 1.0);
+  CHECK(plain["analysis_options"]["type_band"].is_null());
+  CHECK(plain["coordination_band"].is_null());
+
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--inflate 0.99", "--inflate: must be a factor in [1, 1.5] (got 0.99)"},
+      {"--inflate 1.6", "--inflate: must be a factor in [1, 1.5] (got 1.6)"},
+      {"--inflate nan", "--inflate: must be a factor in [1, 1.5] (got 'nan', not a finite number)"},
+      {"--inflate inf", "--inflate: must be a factor in [1, 1.5] (got 'inf', not a finite number)"},
+      {"--type-band 0", "--type-band: must be a fraction in (0, 0.5] (got 0)"},
+      {"--type-band -0.1", "--type-band: must be a fraction in (0, 0.5] (got -0.1)"},
+      {"--type-band 0.6", "--type-band: must be a fraction in (0, 0.5] (got 0.6)"},
+      {"--type-band nan", "--type-band: must be a fraction in (0, 0.5] (got 'nan', not a finite number)"},
+  };
+  for (const auto& [option, message] : cases) {
+    INFO(option);
+    const auto r = s.run("analyze p.json --out bad " + option);
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.err == "confpack analyze: error: " + message + " (see --help)\n");
+    CHECK_FALSE(fs::exists(s.dir / "bad"));
+  }
+}
+
 TEST_CASE("packings written by runs of either backend are plausible", "[apps][cli]") {
   const ConfpackSession s("cmd_analyze_real_runs");
   for (const char* backend : {"nscd", "bullet"}) {

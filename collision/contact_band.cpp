@@ -1,0 +1,179 @@
+#include "collision/contact_band.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "collision/contact_region.hpp"
+#include "collision/polyhedron_distance.hpp"
+#include "collision/world_polyhedron.hpp"
+
+namespace confpack::collision {
+
+namespace {
+
+double cross2(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+void checkWidth(double width, const char* who) {
+  if (!(width > 0.0) || !std::isfinite(width))
+    throw std::invalid_argument(fmt::format("{}: band width must be positive and finite (got {})", who, width));
+}
+
+Vec3 unitOrThrow(const Vec3& n, const char* who) {
+  const double len = n.norm();
+  if (!(len > 0.0) || !std::isfinite(len))
+    throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
+  return n / len;
+}
+
+// Convex hull of pts, counter-clockwise (Andrew's monotone chain); collinear and repeated points
+// are dropped, so a hull of one point or of points on one line has 1 or 2 vertices.
+Polygon2 convexHull(Polygon2 pts) {
+  std::sort(pts.begin(), pts.end(),
+            [](const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); });
+  if (pts.size() == 2 && pts[0] == pts[1]) return {pts[0]};
+  if (pts.size() < 3) return pts;
+  std::vector<Vec2> hull;
+  auto turnsLeft = [&](const Vec2& p) {
+    const std::size_t k = hull.size();
+    return cross2(hull[k - 1] - hull[k - 2], p - hull[k - 2]) > 0.0;
+  };
+  for (const Vec2& p : pts) {  // lower chain
+    while (hull.size() >= 2 && !turnsLeft(p)) hull.pop_back();
+    hull.push_back(p);
+  }
+  const std::size_t lower = hull.size() + 1;
+  for (std::size_t i = pts.size() - 1; i-- > 0;) {  // upper chain
+    while (hull.size() >= lower && !turnsLeft(pts[i])) hull.pop_back();
+    hull.push_back(pts[i]);
+  }
+  hull.pop_back();  // the last point repeats the first
+  Polygon2 out;
+  for (const Vec2& p : hull) out.push_back(p);
+  return out;
+}
+
+double segmentDistance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const double len2 = d.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * d)).norm();
+}
+
+// Whether p lies in hull h (1, 2 or more vertices, counter-clockwise), within tol.
+bool insideHull(const Vec2& p, const Polygon2& h, double tol) {
+  if (h.size() == 1) return (p - h[0]).norm() <= tol;
+  if (h.size() == 2) return segmentDistance(p, h[0], h[1]) <= tol;
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    const Vec2& a = h[i];
+    const Vec2 e = h[(i + 1) % h.size()] - a;
+    if (cross2(e, p - a) < -tol * e.norm()) return false;
+  }
+  return true;
+}
+
+// The hull's sides: none for a point, one for a segment, a closed loop otherwise.
+std::size_t sideCount(const Polygon2& h) {
+  return h.size() < 2 ? 0 : (h.size() == 2 ? 1 : h.size());
+}
+
+// The vertices of H_a ∩ H_b: each hull's vertices inside the other and the crossings of their
+// sides (the vertices of an intersection of convex sets are of these two kinds).
+Polygon2 hullIntersection(const Polygon2& ha, const Polygon2& hb, double tol) {
+  Polygon2 out;
+  for (const Vec2& p : ha)
+    if (insideHull(p, hb, tol)) out.push_back(p);
+  for (const Vec2& p : hb)
+    if (insideHull(p, ha, tol)) out.push_back(p);
+  for (std::size_t i = 0; i < sideCount(ha); ++i) {
+    const Vec2& p = ha[i];
+    const Vec2 r = ha[(i + 1) % ha.size()] - p;
+    for (std::size_t j = 0; j < sideCount(hb); ++j) {
+      const Vec2& q = hb[j];
+      const Vec2 s = hb[(j + 1) % hb.size()] - q;
+      const double denom = cross2(r, s);
+      // Parallel sides meet only along a segment, whose ends are vertices inside the other hull.
+      if (std::abs(denom) <= kParallelEdgeSin * r.norm() * s.norm()) continue;
+      const double t = cross2(q - p, s) / denom, u = cross2(q - p, r) / denom;
+      if (t >= 0.0 && t <= 1.0 && u >= 0.0 && u <= 1.0) out.push_back(p + t * r);
+    }
+  }
+  return out;
+}
+
+// The type by the number of distinct positions in pts (positions closer than tol are one):
+// 0 or 1 -> Simple; 2, or more within tol of one line -> Double; otherwise Triple.
+ContactType typeOfPositions(const Polygon2& pts, double tol) {
+  // The two farthest positions span the line, if any, that all others lie on.
+  double widest = 0.0;
+  std::size_t i0 = 0, i1 = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t j = i + 1; j < pts.size(); ++j)
+      if ((pts[j] - pts[i]).norm() > widest) {
+        widest = (pts[j] - pts[i]).norm();
+        i0 = i;
+        i1 = j;
+      }
+  if (widest <= tol) return ContactType::Simple;
+  const Vec2 axis = (pts[i1] - pts[i0]) / widest;
+  for (const Vec2& p : pts)
+    if (std::abs(cross2(axis, p - pts[i0])) > tol) return ContactType::Triple;
+  return ContactType::Double;
+}
+
+// The projections on the frame's plane of the vertices of w with sign * n.x >= sign * level.
+Polygon2 touchingProjections(const WorldPolyhedron& w, const Frame& fr, double level, double sign) {
+  Polygon2 out;
+  for (const Vec3& x : w.v)
+    if (sign * fr.n.dot(x) >= sign * level) out.push_back(fr.lateral(x));
+  return out;
+}
+
+ContactType bandType(const WorldPolyhedron& A, const WorldPolyhedron& B, const Vec3& normal, double width) {
+  const double plane = 0.5 * (A.maxAlong(normal) + B.minAlong(normal));
+  const Frame fr = frameFor(normal);
+  const double tol = kRelativeLengthTol * (A.radius + B.radius);
+  const Polygon2 ha = convexHull(touchingProjections(A, fr, plane - width, 1.0));
+  const Polygon2 hb = convexHull(touchingProjections(B, fr, plane + width, -1.0));
+  return typeOfPositions(hullIntersection(ha, hb, tol), tol);
+}
+
+}  // namespace
+
+ContactType classifyContactBand(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double width) {
+  checkWidth(width, "classifyContactBand");
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument("classifyContactBand: PlacedPolyhedron.shape is null");
+  const WorldPolyhedron A(a), B(b);
+  Vec3 normal = Vec3::UnitZ();
+  double gap = 0.0;
+  pairNormal(A, B, kInf, normal, gap);
+  return bandType(A, B, normal, width);
+}
+
+ContactType classifyContactBand(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal,
+                                double width) {
+  checkWidth(width, "classifyContactBand");
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument("classifyContactBand: PlacedPolyhedron.shape is null");
+  const WorldPolyhedron A(a, false), B(b, false);
+  return bandType(A, B, unitOrThrow(normal, "classifyContactBand"), width);
+}
+
+ContactType classifyPlaneContactBand(const PlacedPolyhedron& a, const Vec3& planePoint, const Vec3& inwardNormal,
+                                     double width) {
+  checkWidth(width, "classifyPlaneContactBand");
+  if (a.shape == nullptr) throw std::invalid_argument("classifyPlaneContactBand: PlacedPolyhedron.shape is null");
+  const Vec3 n = -unitOrThrow(inwardNormal, "classifyPlaneContactBand");  // from the grain into the wall
+  const WorldPolyhedron A(a, false);
+  const double plane = 0.5 * (A.maxAlong(n) + n.dot(planePoint));
+  const Frame fr = frameFor(n);
+  return typeOfPositions(convexHull(touchingProjections(A, fr, plane - width, 1.0)), kRelativeLengthTol * A.radius);
+}
+
+}  // namespace confpack::collision
