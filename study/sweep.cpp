@@ -864,6 +864,221 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
   return out.str();
 }
 
+namespace {
+
+// What one run of the sweep came to: its result, or its error, or an interruption; t0 its start.
+struct RunOutcome {
+  json result;
+  std::string error;
+  bool interrupted = false;
+  std::chrono::steady_clock::time_point t0;
+};
+
+// The workers of runSweep: each takes the next run of `todo`, claims it, runs it and records it
+// done or failed, until none is left or a stop signal came. Verbs: work (the loop of a worker);
+// the counts, read once all workers have ended.
+class SweepWorkers {
+ public:
+  SweepWorkers(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
+               std::map<std::size_t, DepositSlot>& slots, const fs::path& dir, const std::vector<std::string>& varied,
+               const SweepRunFn& run, const SweepDepositFn& makeDeposit, const LivenessFn& alive,
+               ProgressPrinter& printer)
+      : runs_(runs),
+        todo_(todo),
+        slots_(slots),
+        dir_(dir),
+        varied_(varied),
+        run_(run),
+        makeDeposit_(makeDeposit),
+        alive_(alive),
+        printer_(printer),
+        total_(todo.size()) {}
+
+  void work() {
+    for (;;) {
+      if (core::stopSignal() != 0) return;  // no new run after SIGINT/SIGTERM
+      const std::size_t k = next_.fetch_add(1);
+      if (k >= total_) return;
+      const SweepRun& r = runs_[todo_[k]];
+      // Another task may have been handed this run too (an array submitted again while one of its
+      // tasks ran): only the holder of the run's claim works in its folder, and the claim is given
+      // up when this iteration ends, marker written or interrupted.
+      const std::optional<RunClaim> claim = claimRun(r);
+      if (!claim) continue;
+      RunOutcome outcome = execute(r);
+      release(r);
+      if (outcome.interrupted) return;
+      record(r, std::move(outcome));
+    }
+  }
+
+  std::atomic<std::size_t> finishedCount{0};
+  std::atomic<std::size_t> failedCount{0};
+  std::atomic<std::size_t> heldCount{0};           // claimed by another live process
+  std::atomic<std::size_t> doneMeanwhileCount{0};  // finished by another process before we claimed it
+
+ private:
+  // The run's claim, or none (reported, and the run's deposit released) if another process holds
+  // it, it cannot be taken, or the run was finished meanwhile.
+  std::optional<RunClaim> claimRun(const SweepRun& r) {
+    ClaimHolder holder;
+    std::optional<RunClaim> claim;
+    std::string claimError;
+    try {
+      claim = RunClaim::acquire(claimsDir(dir_), r.name, &holder, alive_);
+    } catch (const std::exception& e) {
+      claimError = e.what();
+    }
+    if (claim && runStatus(dir_ / "runs" / r.name) != RunStatus::Done) return claim;
+    release(r);
+    if (!claimError.empty()) {
+      // No marker: the folder may be another process's.
+      const std::size_t n = finishedCount.fetch_add(1) + 1;
+      failedCount.fetch_add(1);
+      printer_.finished(
+          fmt::format("[{}/{}] {} {} FAILED: cannot claim it: {}", n, total_, r.name, r.config.backend, claimError));
+    } else if (!claim) {
+      heldCount.fetch_add(1);
+      printer_.finished(fmt::format("{} {} skipped: {} runs it", r.name, r.config.backend, describe(holder)));
+    } else {
+      doneMeanwhileCount.fetch_add(1);
+      printer_.finished(fmt::format("{} {} skipped: finished meanwhile by another task", r.name, r.config.backend));
+    }
+    return std::nullopt;
+  }
+
+  // Runs `r` in a fresh folder with its config.json, from its group's deposit.
+  RunOutcome execute(const SweepRun& r) {
+    const fs::path runDir = dir_ / "runs" / r.name;
+    RunOutcome out;
+    out.t0 = std::chrono::steady_clock::now();
+    try {
+      // Anything left in an unfinished folder may be half written: start from nothing.
+      fs::remove_all(runDir);
+      fs::create_directories(runDir);
+      json cfg;
+      core::to_json(cfg, r.config);
+      core::writeFileAtomically(runDir / "config.json", cfg.dump(2));
+      const std::shared_ptr<const compaction::Deposit> deposit = depositFor(r);
+      const std::string tag = fmt::format("{} {}", r.name, r.config.backend);
+      out.result = run_(r.config, runDir, *deposit,
+                        [&](double fraction, const std::string& status) { printer_.update(tag, fraction, status); });
+      printer_.remove(tag);
+    } catch (const core::Interrupted&) {
+      // Not a failure: the run's folder has no marker, so the next invocation redoes it.
+      out.interrupted = true;
+    } catch (const std::exception& e) {
+      out.error = e.what();
+      if (out.error.empty()) out.error = "unknown error";
+    } catch (...) {
+      out.error = "unknown error";
+    }
+    return out;
+  }
+
+  // The run's marker (done.json, or failed.json) and its log line.
+  void record(const SweepRun& r, RunOutcome outcome) {
+    const fs::path runDir = dir_ / "runs" / r.name;
+    const json& result = outcome.result;
+    std::string& error = outcome.error;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - outcome.t0).count();
+    const std::size_t n = finishedCount.fetch_add(1) + 1;
+    const std::string w =
+        r.config.box.periodicY ? "bi" + trimNumber(r.config.box.width) : trimNumber(r.config.box.width);
+    // A run resumed from a checkpoint has run before: the marker and the log line give its
+    // whole wall time, the earlier invocations' (up to their last checkpoint) and this one's.
+    static const json::json_pointer kEarlier("/timing/checkpoint/earlier_s");
+    const double earlier = result.is_object() && result.contains(kEarlier) && result.at(kEarlier).is_number()
+                               ? result.at(kEarlier).get<double>()
+                               : 0.0;
+    const bool resumed = earlier > 0.0;
+    const double runSeconds = seconds + earlier;
+    if (error.empty()) error = writeDoneMarker(r, result, runSeconds, resumed ? std::optional(seconds) : std::nullopt);
+    if (error.empty()) {
+      std::string phi = "phi=?";
+      if (result.contains("solid_fraction") && result.at("solid_fraction").is_number())
+        phi = fmt::format("phi={:.3f}", result.at("solid_fraction").get<double>());
+      const bool unequilibrated = result.contains("equilibrium") && result.at("equilibrium").is_object() &&
+                                  result.at("equilibrium").value("reached", true) == false;
+      printer_.finished(fmt::format("[{}/{}] {} {} W={} {} {:.0f} s{}{}", n, total_, r.name, r.config.backend, w, phi,
+                                    runSeconds, resumed ? fmt::format(" ({:.0f} s since its resume)", seconds) : "",
+                                    unequilibrated ? " (NOT equilibrated)" : ""));
+      return;
+    }
+    failedCount.fetch_add(1);
+    try {
+      core::writeFileAtomically(runDir / kFailedMarker, json{{"name", r.name},
+                                                             {"status", "failed"},
+                                                             {"error", error},
+                                                             {"wall_s", seconds},
+                                                             {"finished", utcTimestamp()}}
+                                                            .dump(2));
+    } catch (...) {
+      // The folder lacks done.json either way, so the next invocation redoes the run.
+    }
+    printer_.finished(fmt::format("[{}/{}] {} {} W={} FAILED after {:.0f} s: {}", n, total_, r.name, r.config.backend,
+                                  w, seconds, error));
+  }
+
+  // The marker is the last thing written, atomically: its presence means result.json and
+  // everything else of the run is complete. Returns the error of writing it, or nothing.
+  std::string writeDoneMarker(const SweepRun& r, const json& result, double runSeconds,
+                              std::optional<double> sinceResume) {
+    json done = {{"name", r.name},
+                 {"status", "done"},
+                 {"wall_s", runSeconds},
+                 {"finished", utcTimestamp()},
+                 {"label", r.label(varied_)}};
+    if (sinceResume) done["wall_s_since_resume"] = *sinceResume;
+    if (result.contains("solid_fraction")) done["solid_fraction"] = result.at("solid_fraction");
+    if (result.contains("equilibrium") && result.at("equilibrium").contains("reached"))
+      done["equilibrium_reached"] = result.at("equilibrium").at("reached");
+    try {
+      core::writeFileAtomically(dir_ / "runs" / r.name / kDoneMarker, done.dump(2));
+    } catch (const std::exception& e) {
+      return fmt::format("cannot write {}: {}", kDoneMarker, e.what());
+    }
+    return {};
+  }
+
+  // The deposit of r's group: read back or made (and written) by its first run.
+  std::shared_ptr<const compaction::Deposit> depositFor(const SweepRun& r) {
+    DepositSlot& slot = slots_.at(r.depositIndex);
+    std::lock_guard lock(slot.mutex);
+    if (!slot.deposit) {
+      const fs::path file = dir_ / "deposits" / (r.depositName() + ".json");
+      if (fs::exists(file)) {
+        slot.deposit = std::make_shared<const compaction::Deposit>(readDeposit(file));
+      } else {
+        auto made = std::make_shared<const compaction::Deposit>(makeDeposit_(r.config));
+        writeDeposit(*made, r.config.box, file);
+        slot.deposit = std::move(made);
+      }
+    }
+    return slot.deposit;
+  }
+
+  void release(const SweepRun& r) {
+    DepositSlot& slot = slots_.at(r.depositIndex);
+    std::lock_guard lock(slot.mutex);
+    if (--slot.remaining == 0) slot.deposit.reset();
+  }
+
+  const std::vector<SweepRun>& runs_;
+  const std::vector<std::size_t>& todo_;
+  std::map<std::size_t, DepositSlot>& slots_;
+  const fs::path& dir_;
+  const std::vector<std::string>& varied_;
+  const SweepRunFn& run_;
+  const SweepDepositFn& makeDeposit_;
+  const LivenessFn alive_;
+  ProgressPrinter& printer_;
+  const std::size_t total_;
+  std::atomic<std::size_t> next_{0};
+};
+
+}  // namespace
+
 SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOptions& opt, const SweepRunFn& run,
                       const SweepDepositFn& makeDeposit) {
   if (opt.jobs < 1) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (got {})", opt.jobs));
@@ -897,175 +1112,33 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
                                  spec.name, runs.size(), slice.size(), opt.taskIndex, opt.taskCount,
                                  summary.alreadyDone, todo.size(), opt.jobs, opt.jobs > 1 ? "s" : ""));
 
-  std::atomic<std::size_t> next{0};
-  std::atomic<std::size_t> finishedCount{0};
-  std::atomic<std::size_t> failedCount{0};
-  std::atomic<std::size_t> heldCount{0};          // claimed by another live process
-  std::atomic<std::size_t> doneMeanwhileCount{0};  // finished by another process before we claimed it
   const LivenessFn alive = opt.alive ? opt.alive : LivenessFn(holderLiveness);
   const std::size_t total = todo.size();
-
-  auto depositFor = [&](const SweepRun& r) -> std::shared_ptr<const compaction::Deposit> {
-    DepositSlot& slot = slots.at(r.depositIndex);
-    std::lock_guard lock(slot.mutex);
-    if (!slot.deposit) {
-      const fs::path file = dir / "deposits" / (r.depositName() + ".json");
-      if (fs::exists(file)) {
-        slot.deposit = std::make_shared<const compaction::Deposit>(readDeposit(file));
-      } else {
-        auto made = std::make_shared<const compaction::Deposit>(makeDeposit(r.config));
-        writeDeposit(*made, r.config.box, file);
-        slot.deposit = std::move(made);
-      }
-    }
-    return slot.deposit;
-  };
-
-  auto release = [&](const SweepRun& r) {
-    DepositSlot& slot = slots.at(r.depositIndex);
-    std::lock_guard lock(slot.mutex);
-    if (--slot.remaining == 0) slot.deposit.reset();
-  };
-
-  auto worker = [&]() {
-    for (;;) {
-      if (core::stopSignal() != 0) return;  // no new run after SIGINT/SIGTERM
-      const std::size_t k = next.fetch_add(1);
-      if (k >= total) return;
-      const SweepRun& r = runs[todo[k]];
-      const fs::path runDir = dir / "runs" / r.name;
-      // Another task may have been handed this run too (an array submitted again while one of its
-      // tasks ran): only the holder of the run's claim works in its folder, and the claim is given
-      // up when this iteration ends, marker written or interrupted.
-      ClaimHolder holder;
-      std::optional<RunClaim> claim;
-      std::string claimError;
-      try {
-        claim = RunClaim::acquire(claimsDir(dir), r.name, &holder, alive);
-      } catch (const std::exception& e) {
-        claimError = e.what();
-      }
-      if (!claim || runStatus(runDir) == RunStatus::Done) {
-        release(r);
-        if (!claimError.empty()) {
-          // No marker: the folder may be another process's.
-          const std::size_t n = finishedCount.fetch_add(1) + 1;
-          failedCount.fetch_add(1);
-          printer.finished(fmt::format("[{}/{}] {} {} FAILED: cannot claim it: {}", n, total, r.name,
-                                       r.config.backend, claimError));
-        } else if (!claim) {
-          heldCount.fetch_add(1);
-          printer.finished(fmt::format("{} {} skipped: {} runs it", r.name, r.config.backend, describe(holder)));
-        } else {
-          doneMeanwhileCount.fetch_add(1);
-          printer.finished(fmt::format("{} {} skipped: finished meanwhile by another task", r.name, r.config.backend));
-        }
-        continue;
-      }
-      const auto t0 = std::chrono::steady_clock::now();
-      json result;
-      std::string error;
-      bool interrupted = false;
-      try {
-        // Anything left in an unfinished folder may be half written: start from nothing.
-        fs::remove_all(runDir);
-        fs::create_directories(runDir);
-        json cfg;
-        core::to_json(cfg, r.config);
-        core::writeFileAtomically(runDir / "config.json", cfg.dump(2));
-        const std::shared_ptr<const compaction::Deposit> deposit = depositFor(r);
-        const std::string tag = fmt::format("{} {}", r.name, r.config.backend);
-        result = run(r.config, runDir, *deposit,
-                     [&](double fraction, const std::string& status) { printer.update(tag, fraction, status); });
-        printer.remove(tag);
-      } catch (const core::Interrupted&) {
-        // Not a failure: the run's folder has no marker, so the next invocation redoes it.
-        interrupted = true;
-      } catch (const std::exception& e) {
-        error = e.what();
-        if (error.empty()) error = "unknown error";
-      } catch (...) {
-        error = "unknown error";
-      }
-      release(r);
-      if (interrupted) return;
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      const std::size_t n = finishedCount.fetch_add(1) + 1;
-      const std::string w = r.config.box.periodicY ? "bi" + trimNumber(r.config.box.width)
-                                                   : trimNumber(r.config.box.width);
-      // A run resumed from a checkpoint has run before: the marker and the log line give its
-      // whole wall time, the earlier invocations' (up to their last checkpoint) and this one's.
-      static const json::json_pointer kEarlier("/timing/checkpoint/earlier_s");
-      const double earlier = result.is_object() && result.contains(kEarlier) && result.at(kEarlier).is_number()
-                                 ? result.at(kEarlier).get<double>()
-                                 : 0.0;
-      const bool resumed = earlier > 0.0;
-      const double runSeconds = seconds + earlier;
-      if (error.empty()) {
-        // The marker is the last thing written, atomically: its presence means result.json and
-        // everything else of the run is complete.
-        json done = {{"name", r.name},
-                     {"status", "done"},
-                     {"wall_s", runSeconds},
-                     {"finished", utcTimestamp()},
-                     {"label", r.label(varied)}};
-        if (resumed) done["wall_s_since_resume"] = seconds;
-        if (result.contains("solid_fraction")) done["solid_fraction"] = result.at("solid_fraction");
-        if (result.contains("equilibrium") && result.at("equilibrium").contains("reached"))
-          done["equilibrium_reached"] = result.at("equilibrium").at("reached");
-        try {
-          core::writeFileAtomically(runDir / kDoneMarker, done.dump(2));
-        } catch (const std::exception& e) {
-          error = fmt::format("cannot write {}: {}", kDoneMarker, e.what());
-        }
-      }
-      if (error.empty()) {
-        std::string phi = "phi=?";
-        if (result.contains("solid_fraction") && result.at("solid_fraction").is_number())
-          phi = fmt::format("phi={:.3f}", result.at("solid_fraction").get<double>());
-        const bool unequilibrated = result.contains("equilibrium") && result.at("equilibrium").is_object() &&
-                                    result.at("equilibrium").value("reached", true) == false;
-        printer.finished(fmt::format("[{}/{}] {} {} W={} {} {:.0f} s{}{}", n, total, r.name, r.config.backend, w, phi,
-                                     runSeconds, resumed ? fmt::format(" ({:.0f} s since its resume)", seconds) : "",
-                                     unequilibrated ? " (NOT equilibrated)" : ""));
-      } else {
-        failedCount.fetch_add(1);
-        try {
-          core::writeFileAtomically(runDir / kFailedMarker,
-                                    json{{"name", r.name}, {"status", "failed"}, {"error", error},
-                                         {"wall_s", seconds}, {"finished", utcTimestamp()}}
-                                        .dump(2));
-        } catch (...) {
-          // The folder lacks done.json either way, so the next invocation redoes the run.
-        }
-        printer.finished(fmt::format("[{}/{}] {} {} W={} FAILED after {:.0f} s: {}", n, total, r.name,
-                                     r.config.backend, w, seconds, error));
-      }
-    }
-  };
-
+  SweepWorkers workers(runs, todo, slots, dir, varied, run, makeDeposit, alive, printer);
   {
     std::vector<std::jthread> pool;
-    const int workers = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(opt.jobs), std::max<std::size_t>(total, 1)));
-    for (int i = 1; i < workers; ++i) pool.emplace_back(worker);
-    worker();  // the calling thread is one of the workers
+    const int count =
+        static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(opt.jobs), std::max<std::size_t>(total, 1)));
+    for (int i = 1; i < count; ++i) pool.emplace_back([&workers] { workers.work(); });
+    workers.work();  // the calling thread is one of the workers
   }
 
-  if (core::stopSignal() != 0 && finishedCount.load() + heldCount.load() + doneMeanwhileCount.load() < total)
-    throw core::Interrupted(core::stopSignal(), fmt::format("after {} of {} runs; the others run when the sweep is started again",
-                                                            finishedCount.load(), total));
-  summary.failed = failedCount.load();
-  summary.ran = finishedCount.load() - summary.failed;
-  summary.heldElsewhere = heldCount.load();
-  summary.alreadyDone += doneMeanwhileCount.load();
+  const std::size_t finishedCount = workers.finishedCount.load();
+  if (core::stopSignal() != 0 && finishedCount + workers.heldCount.load() + workers.doneMeanwhileCount.load() < total)
+    throw core::Interrupted(
+        core::stopSignal(),
+        fmt::format("after {} of {} runs; the others run when the sweep is started again", finishedCount, total));
+  summary.failed = workers.failedCount.load();
+  summary.ran = finishedCount - summary.failed;
+  summary.heldElsewhere = workers.heldCount.load();
+  summary.alreadyDone += workers.doneMeanwhileCount.load();
   summary.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!opt.quiet)
-    printer.finished(fmt::format("sweep {}: {} finished, {} failed, {} skipped (already done){} in {:.0f} s", spec.name,
-                                 summary.ran, summary.failed, summary.alreadyDone,
-                                 summary.heldElsewhere > 0
-                                     ? fmt::format(", {} left to other live tasks", summary.heldElsewhere)
-                                     : std::string(),
-                                 summary.wallSeconds));
+    printer.finished(fmt::format(
+        "sweep {}: {} finished, {} failed, {} skipped (already done){} in {:.0f} s", spec.name, summary.ran,
+        summary.failed, summary.alreadyDone,
+        summary.heldElsewhere > 0 ? fmt::format(", {} left to other live tasks", summary.heldElsewhere) : std::string(),
+        summary.wallSeconds));
   return summary;
 }
 

@@ -69,8 +69,12 @@ using core::blasLock;
 class DynamicOpenMpTeams {
  public:
 #ifdef _OPENMP
-  DynamicOpenMpTeams() : saved_(omp_get_dynamic()) { omp_set_dynamic(1); }
-  ~DynamicOpenMpTeams() { omp_set_dynamic(saved_); }
+  DynamicOpenMpTeams() : saved_(omp_get_dynamic()) {
+    omp_set_dynamic(1);
+  }
+  ~DynamicOpenMpTeams() {
+    omp_set_dynamic(saved_);
+  }
 
  private:
   int saved_;
@@ -80,8 +84,8 @@ class DynamicOpenMpTeams {
 /// One normal unknown: the Jacobian pieces of its bodies (b < 0: the static world).
 struct IpmRow {
   Vec3 n, axn, bxn;
-  double bias = 0.0;   // c of the contact law
-  int a = 0, b = -1;   // local body indices
+  double bias = 0.0;  // c of the contact law
+  int a = 0, b = -1;  // local body indices
 };
 
 /// Largest alpha > 0 (infinity if none) with v + alpha dv >= 0 componentwise.
@@ -92,13 +96,13 @@ double stepToBoundary(const Eigen::VectorXd& v, const Eigen::VectorXd& dv) {
   return alpha;
 }
 
-}  // namespace
-
-struct IpmSolver::Impl {
+/// The problem of a solve's rows (Jacobians, body map, masses), the Newton matrix M + J^T D J and
+/// its factorisation, and the polish's Delassus matrix and its factorisation.
+struct IpmProblem {
   // A factorisation that fails (not positive definite to round-off) is reported through info(),
   // which the solve handles; CHOLMOD would also print it on stderr, in the middle of a run's
   // progress.
-  Impl() {
+  IpmProblem() {
     cholesky.cholmod().print = 0;
     delassusCholesky.cholmod().print = 0;
   }
@@ -116,7 +120,7 @@ struct IpmSolver::Impl {
   // The polish's Delassus matrix W_AA of the closed contacts and its factorisation.
   Eigen::SparseMatrix<double> delassus;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> delassusCholesky;
-  std::vector<int> position;  // row k -> its index among the closed ones, or -1
+  std::vector<int> position;     // row k -> its index among the closed ones, or -1
   std::vector<char> factorised;  // the closed set delassusCholesky holds (empty: none)
   double proximal = 0.0;         // eps of solveFactorised, kProximalWeight of W_AA's largest diagonal entry
 
@@ -329,33 +333,19 @@ struct IpmSolver::Impl {
   }
 };
 
-IpmSolver::IpmSolver() : impl_(std::make_unique<Impl>()) {}
-IpmSolver::~IpmSolver() = default;
-IpmSolver::IpmSolver(IpmSolver&&) noexcept = default;
-IpmSolver& IpmSolver::operator=(IpmSolver&&) noexcept = default;
+/// The velocities as the rows see them: b = J v + c from the bodies' velocities, and
+/// v = v_base + M^-1 J^T r with the rows' inverse masses (the solvers' own update), v_base the
+/// velocities without normal impulses (v_free plus the tangential impulses).
+struct RowVelocities {
+  std::span<NormalRow> normalRows;
+  std::span<FrictionRow> frictionRows;
+  int world = 0;                   // the static world's body index
+  std::vector<BodyVelocity>& vel;  // the solve's velocities
+  std::vector<BodyVelocity> base;  // v_base
 
-int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodies,
-                     std::vector<BodyVelocity>& vel, const NscdSettings& settings) {
-  Impl& s = *impl_;
-  const DynamicOpenMpTeams dynamicTeams;
-  const std::span<NormalRow> normalRows = rows.normalRows();
-  const std::span<FrictionRow> frictionRows = rows.frictionRows();
-  const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
-  residual_ = 0.0;
-  if (m == 0) {
-    rows.storeNormalImpulses([](std::size_t) { return 0.0; });
-    return 0;
-  }
-  const int world = static_cast<int>(bodies.size()) - 1;
-  Eigen::VectorXd warm, scale;  // the rows' warm-start impulses; W_nn^-1/2, the unit MPRGP measures the residual in
-  s.load(rows, bodies, warm, scale);
-  const Eigen::Index N = s.size(), M = static_cast<Eigen::Index>(m);
-
-  // v_base: the velocities without normal impulses (v_free plus the tangential impulses).
-  std::vector<BodyVelocity> base(vel.begin(), vel.end());
-  // b = J v_base + c, from the bodies' velocities.
-  auto contactVelocities = [&](const std::vector<BodyVelocity>& v, Eigen::VectorXd& out) {
-    out.resize(M);
+  void contactVelocities(const std::vector<BodyVelocity>& v, Eigen::VectorXd& out) const {
+    const std::size_t nN = normalRows.size();
+    out.resize(static_cast<Eigen::Index>(nN + frictionRows.size()));
     for (std::size_t k = 0; k < nN; ++k) {
       const NormalRow& row = normalRows[k];
       const BodyVelocity& va = v[static_cast<std::size_t>(row.a)];
@@ -367,9 +357,10 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
       const BodyVelocity& va = v[static_cast<std::size_t>(row.a)];
       out[static_cast<Eigen::Index>(nN + f)] = normalVelocity(row, va) + row.bias;
     }
-  };
-  // vel = base + M^-1 J^T r (the solvers' own update, with the rows' inverse masses).
-  auto applyImpulses = [&](const Eigen::VectorXd& r) {
+  }
+  // vel = base + M^-1 J^T r.
+  void applyImpulses(const Eigen::VectorXd& r) {
+    const std::size_t nN = normalRows.size();
     vel.assign(base.begin(), base.end());
     for (std::size_t k = 0; k < nN; ++k) {
       const NormalRow& row = normalRows[k];
@@ -387,163 +378,11 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
       vel[static_cast<std::size_t>(row.a)].v -= (rk * row.invMa) * row.n;
       vel[static_cast<std::size_t>(row.a)].w -= rk * row.iaAxn;
     }
-  };
-
-  Eigen::VectorXd lam, rhs2, b, x, sl, r, rd, rp, rc, d, rhs, jt, dx, ds, dr, dxa, dsa, dra, mx, g, clean;
-  int iterations = 0;
-  double tangentChange = 0.0;
-  const int outerCap = frictionRows.empty() ? 1 : settings.maxIterations;
-  double innerTolerance = frictionRows.empty() ? settings.tolerance : std::max(settings.tolerance, 1e-4);
-  bool analysed = false;
-  for (int outer = 0; outer < outerCap; ++outer) {
-    contactVelocities(base, b);
-    const double bNorm = scale.cwiseProduct(b).norm();
-    // Starting point: x = 0, s and r pushed into the interior by delta (in MPRGP's scaled units,
-    // where impulses and velocities share a unit): contacts the warm start closed start with a
-    // small s and their impulse, the others with their free velocity and a small impulse.
-    const double delta = 1e-2 * std::max({scale.cwiseProduct(b).cwiseAbs().maxCoeff(),
-                                          warm.cwiseQuotient(scale).maxCoeff(), 1e-300});
-    x.setZero(N);
-    sl.resize(M);
-    r.resize(M);
-    for (Eigen::Index k = 0; k < M; ++k) {
-      sl[k] = std::max(b[k], delta / scale[k]);
-      r[k] = std::max(warm[k], delta * scale[k]);
-    }
-    // The residual of the contact law at impulses `imp` >= 0 (those > 0 are the closed contacts);
-    // leaves vel = base + M^-1 J^T imp and the contact velocities in g.
-    auto lawResidual = [&](const Eigen::VectorXd& imp) {
-      applyImpulses(imp);
-      contactVelocities(vel, g);
-      double sum = 0.0;
-      for (Eigen::Index k = 0; k < M; ++k) {
-        const double gp = imp[k] > 0.0 ? g[k] : std::min(g[k], 0.0);
-        sum += scale[k] * scale[k] * gp * gp;
-      }
-      return bNorm > 0.0 ? std::sqrt(sum) / bNorm : 0.0;
-    };
-    // The polish: from the contacts closed in `imp`, the impulses that close exactly those,
-    // W_AA r_A = -b_A, by a sparse Cholesky factorisation of the Delassus matrix of the closed
-    // contacts and proximal-point sweeps (solveFactorised); then the active set corrected
-    // (negative impulses opened, penetrating open contacts closed) and again, until nothing
-    // changes. The sweeps start from zero, which gives the least impulses that close the set:
-    // no self-stress in a hyperstatic loop (two spheres between two walls carry nothing
-    // sideways). Where that wanders (a round changes more than 1 % of the set: pinacoid face
-    // contacts, whose points share a face's load in ways the least impulses make negative), the
-    // polish starts again with sweeps from `imp`, the interior point's positive split. Keeps in
-    // `imp` and returns the best residual it met.
-    auto polishRounds = [&](Eigen::VectorXd& imp, double best, bool fromImp, bool& wandered) {
-      std::vector<char> active(static_cast<std::size_t>(M));
-      for (Eigen::Index k = 0; k < M; ++k) active[static_cast<std::size_t>(k)] = imp[k] > 0.0;
-      if (fromImp) lam = imp;  // else each round starts its sweeps from zero
-      wandered = false;
-      for (int round = 0; round < kPolishRounds && iterations < settings.maxIterations; ++round) {
-        ++iterations;
-        if (!fromImp) lam.setZero(M);
-        if (!s.solveClosed(active, b, lam)) break;
-        const auto closedBefore = std::count(active.begin(), active.end(), char{1});
-        std::ptrdiff_t flips = 0;
-        for (Eigen::Index k = 0; k < M; ++k)
-          if (active[static_cast<std::size_t>(k)] && lam[k] <= 0.0) {
-            lam[k] = 0.0;
-            active[static_cast<std::size_t>(k)] = false;
-            ++flips;
-          }
-        const double res = lawResidual(lam);
-        if (res < best) {
-          best = res;
-          imp = lam;
-        }
-        if (best < innerTolerance) break;
-        for (Eigen::Index k = 0; k < M; ++k)
-          if (!active[static_cast<std::size_t>(k)] && g[k] < 0.0) {
-            active[static_cast<std::size_t>(k)] = true;
-            ++flips;
-          }
-        if (flips == 0) break;
-        if (flips > std::max<std::ptrdiff_t>(kPolishFlips, closedBefore / 100)) {
-          wandered = true;
-          break;
-        }
-      }
-      return best;
-    };
-    auto polish = [&](Eigen::VectorXd& imp, double impResidual) {
-      bool wandered = false;
-      double best = polishRounds(imp, impResidual, false, wandered);
-      if (wandered && best >= innerTolerance) best = polishRounds(imp, best, true, wandered);
-      return best;
-    };
-    double polishedAt = std::numeric_limits<double>::infinity();
-    // After a tangential pass the closed set hardly changes: the polish from the last impulses
-    // first, the interior-point iterations only if it does not reach the tolerance.
-    if (outer > 0) {
-      clean = warm;
-      residual_ = polish(clean, lawResidual(clean));
-      polishedAt = residual_;
-    }
-    while (outer == 0 || residual_ >= innerTolerance) {
-      clean.resize(M);  // closed: the impulse outweighs the contact velocity
-      for (Eigen::Index k = 0; k < M; ++k) clean[k] = r[k] / (scale[k] * scale[k]) > sl[k] ? r[k] : 0.0;
-      residual_ = lawResidual(clean);
-      if (residual_ < innerTolerance || iterations >= settings.maxIterations) break;
-      if (residual_ < kPolishFrom && residual_ < 1e-2 * polishedAt && analysed) {
-        polishedAt = residual_;
-        residual_ = polish(clean, residual_);
-        if (residual_ < innerTolerance) break;
-      }
-      ++iterations;
-      const double mu = sl.dot(r) / static_cast<double>(M);
-      s.applyM(x, mx);
-      s.applyJt(r, jt);
-      rd = mx - jt;
-      s.applyJ(x, rp);
-      rp += b - sl;
-      d = r.cwiseQuotient(sl);
-      s.assemble(d);
-      {
-        const auto lock = blasLock();
-        if (!analysed) {
-          s.cholesky.analyzePattern(s.newton);
-          analysed = true;
-        }
-        s.cholesky.factorize(s.newton);
-      }
-      if (s.cholesky.info() != Eigen::Success) {  // not positive definite to round-off: the polish's turn
-        if (polishedAt > residual_) residual_ = polish(clean, residual_);
-        break;
-      }
-      auto newtonStep = [&](const Eigen::VectorXd& target, Eigen::VectorXd& stepX, Eigen::VectorXd& stepS,
-                            Eigen::VectorXd& stepR) {
-        s.applyJt(target.cwiseQuotient(sl) - d.cwiseProduct(rp), jt);
-        rhs = jt - rd;
-        {
-          const auto lock = blasLock();
-          stepX = s.cholesky.solve(rhs);
-        }
-        s.applyJ(stepX, stepS);
-        stepS += rp;
-        stepR = (target - r.cwiseProduct(stepS)).cwiseQuotient(sl);
-      };
-      // Predictor (affine scaling), then the corrector with Mehrotra's centring sigma.
-      rc = -sl.cwiseProduct(r);
-      newtonStep(rc, dxa, dsa, dra);
-      const double alphaAff = std::min({1.0, stepToBoundary(sl, dsa), stepToBoundary(r, dra)});
-      const double muAff = (sl + alphaAff * dsa).dot(r + alphaAff * dra) / static_cast<double>(M);
-      const double sigma = std::pow(muAff / mu, 3);
-      rc -= dsa.cwiseProduct(dra);
-      rc.array() += sigma * mu;
-      newtonStep(rc, dx, ds, dr);
-      const double step = std::min(1.0, kStepFraction * std::min(stepToBoundary(sl, ds), stepToBoundary(r, dr)));
-      x += step * dx;
-      sl += step * ds;
-      r += step * dr;
-    }
-    residual_ = lawResidual(clean);  // vel = base + M^-1 J^T clean
-    r = clean;
-    if (frictionRows.empty()) break;
-    // Block Gauss-Seidel with the tangential impulses of the wall points, as MPRGP's solve.
-    const bool normalsConverged = innerTolerance <= settings.tolerance;
+  }
+  // One projected pass over the tangential impulses of the wall points with the normal impulses
+  // `r`, moving vel and v_base alike; returns the relative change of the impulses.
+  double tangentPass(const Eigen::VectorXd& r) {
+    const std::size_t nN = normalRows.size();
     double sumDelta2 = 0.0, sumR2 = 0.0;
     for (std::size_t f = 0; f < frictionRows.size(); ++f) {
       FrictionRow& row = frictionRows[f];
@@ -556,15 +395,292 @@ int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodi
       sumDelta2 += d1 * d1 + d2 * d2;
       sumR2 += row.rn * row.rn + row.rt1 * row.rt1 + row.rt2 * row.rt2;
     }
-    tangentChange = sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : 0.0;
-    ++iterations;
-    warm = r;
-    if ((tangentChange < settings.tolerance && normalsConverged) || iterations >= settings.maxIterations) break;
-    innerTolerance = std::max(settings.tolerance, std::min(innerTolerance, 0.1 * tangentChange));
+    return sumR2 > 0.0 ? std::sqrt(sumDelta2 / sumR2) : 0.0;
+  }
+};
+
+/// The interior point: velocity changes x, contact velocities s (sl) and impulses r.
+struct InteriorPoint {
+  Eigen::VectorXd x, sl, r;
+};
+
+/// The Newton system's right-hand sides and steps: residuals r_d, r_p, the complementarity
+/// target r_c, D = r / s, the predictor's steps (dxa, dsa, dra) and the corrector's, and their scratch.
+struct NewtonScratch {
+  Eigen::VectorXd rd, rp, rc, d, rhs, jt, mx;
+  Eigen::VectorXd dx, ds, dr, dxa, dsa, dra;
+};
+
+/// One solve of IpmSolver: block Gauss-Seidel between the normal problem (interior point, then
+/// polish) and the tangential pass; its phases share the iterate and the scratch.
+class IpmSolve {
+ public:
+  IpmSolve(IpmProblem& problem, ContactRows& rows, const std::vector<BodyInverseMass>& bodies,
+           std::vector<BodyVelocity>& vel, const NscdSettings& settings)
+      : problem_(problem),
+        settings_(settings),
+        rows_{rows.normalRows(), rows.frictionRows(), static_cast<int>(bodies.size()) - 1, vel,
+              std::vector<BodyVelocity>(vel.begin(), vel.end())},
+        m_(static_cast<Eigen::Index>(rows.normalRows().size() + rows.frictionRows().size())) {
+    problem_.load(rows, bodies, warm_, scale_);
+  }
+
+  int run(ContactRows& rows);
+  double residual() const { return residual_; }
+
+ private:
+  void startingPoint();
+  void interiorPoint(int outer, double& polishedAt);
+  bool factoriseNewton();
+  void newtonStep(const Eigen::VectorXd& target, Eigen::VectorXd& stepX, Eigen::VectorXd& stepS,
+                  Eigen::VectorXd& stepR);
+  void predictorCorrector(double mu);
+  double lawResidual(const Eigen::VectorXd& imp);
+  double polishRounds(Eigen::VectorXd& imp, double best, bool fromImp, bool& wandered);
+  double polish(Eigen::VectorXd& imp, double impResidual);
+
+  IpmProblem& problem_;
+  const NscdSettings& settings_;
+  RowVelocities rows_;
+  Eigen::Index m_ = 0;            // normal unknowns
+  Eigen::VectorXd warm_, scale_;  // the rows' warm-start impulses; W_nn^-1/2, the unit MPRGP measures the residual in
+  Eigen::VectorXd b_;             // b = J v_base + c
+  double bNorm_ = 0.0;            // ||S b||, the scale of the residual
+  InteriorPoint point_;
+  NewtonScratch newton_;
+  Eigen::VectorXd g_;      // the contact velocities of lawResidual's impulses
+  Eigen::VectorXd clean_;  // the iterate's impulses on the contacts taken as closed, 0 on the others
+  Eigen::VectorXd lam_;    // the polish's impulses
+  int iterations_ = 0;
+  double innerTolerance_ = 0.0;
+  bool analysed_ = false;  // the Newton matrix's pattern is analysed
+  double residual_ = 0.0;
+};
+
+int IpmSolve::run(ContactRows& rows) {
+  double tangentChange = 0.0;
+  const bool friction = !rows_.frictionRows.empty();
+  const int outerCap = friction ? settings_.maxIterations : 1;
+  innerTolerance_ = friction ? std::max(settings_.tolerance, 1e-4) : settings_.tolerance;
+  for (int outer = 0; outer < outerCap; ++outer) {
+    rows_.contactVelocities(rows_.base, b_);
+    bNorm_ = scale_.cwiseProduct(b_).norm();
+    startingPoint();
+    double polishedAt = std::numeric_limits<double>::infinity();
+    // After a tangential pass the closed set hardly changes: the polish from the last impulses
+    // first, the interior-point iterations only if it does not reach the tolerance.
+    if (outer > 0) {
+      clean_ = warm_;
+      residual_ = polish(clean_, lawResidual(clean_));
+      polishedAt = residual_;
+    }
+    interiorPoint(outer, polishedAt);
+    residual_ = lawResidual(clean_);  // vel = base + M^-1 J^T clean
+    point_.r = clean_;
+    if (!friction) break;
+    // Block Gauss-Seidel with the tangential impulses of the wall points, as MPRGP's solve.
+    const bool normalsConverged = innerTolerance_ <= settings_.tolerance;
+    tangentChange = rows_.tangentPass(point_.r);
+    ++iterations_;
+    warm_ = point_.r;
+    if ((tangentChange < settings_.tolerance && normalsConverged) || iterations_ >= settings_.maxIterations) break;
+    innerTolerance_ = std::max(settings_.tolerance, std::min(innerTolerance_, 0.1 * tangentChange));
   }
   residual_ = std::max(residual_, tangentChange);
+  const Eigen::VectorXd& r = point_.r;
+  const std::size_t nN = rows_.normalRows.size();
   rows.storeNormalImpulses([&](std::size_t k) { return r[static_cast<Eigen::Index>(k)]; });
-  for (std::size_t f = 0; f < frictionRows.size(); ++f) frictionRows[f].rn = r[static_cast<Eigen::Index>(nN + f)];
+  for (std::size_t f = 0; f < rows_.frictionRows.size(); ++f)
+    rows_.frictionRows[f].rn = r[static_cast<Eigen::Index>(nN + f)];
+  return iterations_;
+}
+
+// Starting point: x = 0, s and r pushed into the interior by delta (in MPRGP's scaled units,
+// where impulses and velocities share a unit): contacts the warm start closed start with a
+// small s and their impulse, the others with their free velocity and a small impulse.
+void IpmSolve::startingPoint() {
+  const double delta =
+      1e-2 * std::max({scale_.cwiseProduct(b_).cwiseAbs().maxCoeff(), warm_.cwiseQuotient(scale_).maxCoeff(), 1e-300});
+  point_.x.setZero(problem_.size());
+  point_.sl.resize(m_);
+  point_.r.resize(m_);
+  for (Eigen::Index k = 0; k < m_; ++k) {
+    point_.sl[k] = std::max(b_[k], delta / scale_[k]);
+    point_.r[k] = std::max(warm_[k], delta * scale_[k]);
+  }
+}
+
+// Mehrotra's iterations from the starting point until the impulses they imply (clean_) meet the
+// contact law to the inner tolerance, with the polish tried whenever the residual has fallen a
+// hundredfold below kPolishFrom since it was last tried.
+void IpmSolve::interiorPoint(int outer, double& polishedAt) {
+  InteriorPoint& p = point_;
+  while (outer == 0 || residual_ >= innerTolerance_) {
+    clean_.resize(m_);  // closed: the impulse outweighs the contact velocity
+    for (Eigen::Index k = 0; k < m_; ++k) clean_[k] = p.r[k] / (scale_[k] * scale_[k]) > p.sl[k] ? p.r[k] : 0.0;
+    residual_ = lawResidual(clean_);
+    if (residual_ < innerTolerance_ || iterations_ >= settings_.maxIterations) break;
+    if (residual_ < kPolishFrom && residual_ < 1e-2 * polishedAt && analysed_) {
+      polishedAt = residual_;
+      residual_ = polish(clean_, residual_);
+      if (residual_ < innerTolerance_) break;
+    }
+    ++iterations_;
+    const double mu = p.sl.dot(p.r) / static_cast<double>(m_);
+    if (!factoriseNewton()) {  // not positive definite to round-off: the polish's turn
+      if (polishedAt > residual_) residual_ = polish(clean_, residual_);
+      break;
+    }
+    predictorCorrector(mu);
+  }
+}
+
+// The residuals r_d, r_p and D at the iterate, and the factorisation of M + J^T D J; false if it
+// failed.
+bool IpmSolve::factoriseNewton() {
+  const InteriorPoint& p = point_;
+  NewtonScratch& n = newton_;
+  problem_.applyM(p.x, n.mx);
+  problem_.applyJt(p.r, n.jt);
+  n.rd = n.mx - n.jt;
+  problem_.applyJ(p.x, n.rp);
+  n.rp += b_ - p.sl;
+  n.d = p.r.cwiseQuotient(p.sl);
+  problem_.assemble(n.d);
+  {
+    const auto lock = blasLock();
+    if (!analysed_) {
+      problem_.cholesky.analyzePattern(problem_.newton);
+      analysed_ = true;
+    }
+    problem_.cholesky.factorize(problem_.newton);
+  }
+  return problem_.cholesky.info() == Eigen::Success;
+}
+
+// The Newton step for the complementarity target `target`, through the factorisation.
+void IpmSolve::newtonStep(const Eigen::VectorXd& target, Eigen::VectorXd& stepX, Eigen::VectorXd& stepS,
+                          Eigen::VectorXd& stepR) {
+  NewtonScratch& n = newton_;
+  problem_.applyJt(target.cwiseQuotient(point_.sl) - n.d.cwiseProduct(n.rp), n.jt);
+  n.rhs = n.jt - n.rd;
+  {
+    const auto lock = blasLock();
+    stepX = problem_.cholesky.solve(n.rhs);
+  }
+  problem_.applyJ(stepX, stepS);
+  stepS += n.rp;
+  stepR = (target - point_.r.cwiseProduct(stepS)).cwiseQuotient(point_.sl);
+}
+
+// Predictor (affine scaling), then the corrector with Mehrotra's centring sigma, and the step
+// along it: the largest in [0, 1] that keeps s, r >= 0, times kStepFraction.
+void IpmSolve::predictorCorrector(double mu) {
+  InteriorPoint& p = point_;
+  NewtonScratch& n = newton_;
+  n.rc = -p.sl.cwiseProduct(p.r);
+  newtonStep(n.rc, n.dxa, n.dsa, n.dra);
+  const double alphaAff = std::min({1.0, stepToBoundary(p.sl, n.dsa), stepToBoundary(p.r, n.dra)});
+  const double muAff = (p.sl + alphaAff * n.dsa).dot(p.r + alphaAff * n.dra) / static_cast<double>(m_);
+  const double sigma = std::pow(muAff / mu, 3);
+  n.rc -= n.dsa.cwiseProduct(n.dra);
+  n.rc.array() += sigma * mu;
+  newtonStep(n.rc, n.dx, n.ds, n.dr);
+  const double step = std::min(1.0, kStepFraction * std::min(stepToBoundary(p.sl, n.ds), stepToBoundary(p.r, n.dr)));
+  p.x += step * n.dx;
+  p.sl += step * n.ds;
+  p.r += step * n.dr;
+}
+
+// The residual of the contact law at impulses `imp` >= 0 (those > 0 are the closed contacts);
+// leaves vel = base + M^-1 J^T imp and the contact velocities in g_.
+double IpmSolve::lawResidual(const Eigen::VectorXd& imp) {
+  rows_.applyImpulses(imp);
+  rows_.contactVelocities(rows_.vel, g_);
+  double sum = 0.0;
+  for (Eigen::Index k = 0; k < m_; ++k) {
+    const double gp = imp[k] > 0.0 ? g_[k] : std::min(g_[k], 0.0);
+    sum += scale_[k] * scale_[k] * gp * gp;
+  }
+  return bNorm_ > 0.0 ? std::sqrt(sum) / bNorm_ : 0.0;
+}
+
+// The polish: from the contacts closed in `imp`, the impulses that close exactly those,
+// W_AA r_A = -b_A, by a sparse Cholesky factorisation of the Delassus matrix of the closed
+// contacts and proximal-point sweeps (solveFactorised); then the active set corrected
+// (negative impulses opened, penetrating open contacts closed) and again, until nothing
+// changes. The sweeps start from zero, which gives the least impulses that close the set:
+// no self-stress in a hyperstatic loop (two spheres between two walls carry nothing
+// sideways). Where that wanders (a round changes more than 1 % of the set: pinacoid face
+// contacts, whose points share a face's load in ways the least impulses make negative), the
+// polish starts again with sweeps from `imp`, the interior point's positive split. Keeps in
+// `imp` and returns the best residual it met.
+double IpmSolve::polishRounds(Eigen::VectorXd& imp, double best, bool fromImp, bool& wandered) {
+  std::vector<char> active(static_cast<std::size_t>(m_));
+  for (Eigen::Index k = 0; k < m_; ++k) active[static_cast<std::size_t>(k)] = imp[k] > 0.0;
+  if (fromImp) lam_ = imp;  // else each round starts its sweeps from zero
+  wandered = false;
+  for (int round = 0; round < kPolishRounds && iterations_ < settings_.maxIterations; ++round) {
+    ++iterations_;
+    if (!fromImp) lam_.setZero(m_);
+    if (!problem_.solveClosed(active, b_, lam_)) break;
+    const auto closedBefore = std::count(active.begin(), active.end(), char{1});
+    std::ptrdiff_t flips = 0;
+    for (Eigen::Index k = 0; k < m_; ++k)
+      if (active[static_cast<std::size_t>(k)] && lam_[k] <= 0.0) {
+        lam_[k] = 0.0;
+        active[static_cast<std::size_t>(k)] = false;
+        ++flips;
+      }
+    const double res = lawResidual(lam_);
+    if (res < best) {
+      best = res;
+      imp = lam_;
+    }
+    if (best < innerTolerance_) break;
+    for (Eigen::Index k = 0; k < m_; ++k)
+      if (!active[static_cast<std::size_t>(k)] && g_[k] < 0.0) {
+        active[static_cast<std::size_t>(k)] = true;
+        ++flips;
+      }
+    if (flips == 0) break;
+    if (flips > std::max<std::ptrdiff_t>(kPolishFlips, closedBefore / 100)) {
+      wandered = true;
+      break;
+    }
+  }
+  return best;
+}
+
+double IpmSolve::polish(Eigen::VectorXd& imp, double impResidual) {
+  bool wandered = false;
+  double best = polishRounds(imp, impResidual, false, wandered);
+  if (wandered && best >= innerTolerance_) best = polishRounds(imp, best, true, wandered);
+  return best;
+}
+
+}  // namespace
+
+struct IpmSolver::Impl {
+  IpmProblem problem;
+};
+
+IpmSolver::IpmSolver() : impl_(std::make_unique<Impl>()) {}
+IpmSolver::~IpmSolver() = default;
+IpmSolver::IpmSolver(IpmSolver&&) noexcept = default;
+IpmSolver& IpmSolver::operator=(IpmSolver&&) noexcept = default;
+
+int IpmSolver::solve(ContactRows& rows, const std::vector<BodyInverseMass>& bodies, std::vector<BodyVelocity>& vel,
+                     const NscdSettings& settings) {
+  const DynamicOpenMpTeams dynamicTeams;
+  residual_ = 0.0;
+  if (rows.rowCount() == 0) {
+    rows.storeNormalImpulses([](std::size_t) { return 0.0; });
+    return 0;
+  }
+  IpmSolve solve(impl_->problem, rows, bodies, vel, settings);
+  const int iterations = solve.run(rows);
+  residual_ = solve.residual();
   return iterations;
 }
 

@@ -17,13 +17,13 @@
 // depend on the number of threads: one thread and two give bitwise identical runs.
 #include "backends/nscd/mprgp_solver.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <span>
-
-#include <omp.h>
 
 namespace confpack::nscd {
 
@@ -74,12 +74,12 @@ void MprgpSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount)
   gatherRows_.resize(m);
   for (std::size_t k = 0; k < nN; ++k) {
     const NormalRow& row = normalRows[k];
-    const double s = scale_[k];
+    const double s = scratch_.scale[k];
     gatherRows_[k] = {s * row.n, s * row.axn, s * row.bxn, s * row.bias, row.a, row.b};
   }
   for (std::size_t f = 0; f < frictionRows.size(); ++f) {
     const FrictionRow& row = frictionRows[f];
-    const double s = scale_[nN + f];
+    const double s = scratch_.scale[nN + f];
     gatherRows_[nN + f] = {s * row.n, s * row.axn, Vec3::Zero(), s * row.bias, row.a, world};
   }
   // Spheres: the lever arm is along the normal, so l x n vanishes (to round-off) and a row moves
@@ -103,13 +103,14 @@ void MprgpSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount)
   bodyCursor_.assign(bodyEntryStart_.begin(), bodyEntryStart_.end() - 1);
   for (std::size_t k = 0; k < nN; ++k) {
     const NormalRow& row = normalRows[k];
-    const double s = scale_[k];
+    const double s = scratch_.scale[k];
     bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(k)};
-    if (row.b != world) bodyEntries_[bodyCursor_[row.b]++] = {(s * row.invMb) * row.n, s * row.ibBxn, static_cast<int>(k)};
+    if (row.b != world)
+      bodyEntries_[bodyCursor_[row.b]++] = {(s * row.invMb) * row.n, s * row.ibBxn, static_cast<int>(k)};
   }
   for (std::size_t f = 0; f < frictionRows.size(); ++f) {
     const FrictionRow& row = frictionRows[f];
-    const double s = scale_[nN + f];
+    const double s = scratch_.scale[nN + f];
     bodyEntries_[bodyCursor_[row.a]++] = {-(s * row.invMa) * row.n, -s * row.iaAxn, static_cast<int>(nN + f)};
   }
   sweepMass_.resize(m);
@@ -118,13 +119,14 @@ void MprgpSolver::buildMprgpRows(const ContactRows& rows, std::size_t bodyCount)
   if (!linearOnly_) {
     sweepAngular_.resize(m);
     for (std::size_t k = 0; k < nN; ++k)
-      sweepAngular_[k] = {scale_[k] * normalRows[k].iaAxn, scale_[k] * normalRows[k].ibBxn};
+      sweepAngular_[k] = {scratch_.scale[k] * normalRows[k].iaAxn, scratch_.scale[k] * normalRows[k].ibBxn};
     for (std::size_t f = 0; f < frictionRows.size(); ++f)
-      sweepAngular_[nN + f] = {scale_[nN + f] * frictionRows[f].iaAxn, Vec3::Zero()};
+      sweepAngular_[nN + f] = {scratch_.scale[nN + f] * frictionRows[f].iaAxn, Vec3::Zero()};
   }
   if (linearOnly_) {
     linearEntries_.resize(bodyEntries_.size());
-    for (std::size_t e = 0; e < bodyEntries_.size(); ++e) linearEntries_[e] = {bodyEntries_[e].linear, bodyEntries_[e].k};
+    for (std::size_t e = 0; e < bodyEntries_.size(); ++e)
+      linearEntries_[e] = {bodyEntries_[e].linear, bodyEntries_[e].k};
   }
 }
 
@@ -149,34 +151,35 @@ void MprgpSolver::applyLinearImpulses(const std::vector<double>& y, std::vector<
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && y.size() >= kParallelMin)
   for (std::ptrdiff_t i = 0; i < bodies; ++i) {
     Vec3 dv = Vec3::Zero();
-    for (int e = bodyEntryStart_[i]; e < bodyEntryStart_[i + 1]; ++e) dv += y[linearEntries_[e].k] * linearEntries_[e].linear;
+    for (int e = bodyEntryStart_[i]; e < bodyEntryStart_[i + 1]; ++e)
+      dv += y[linearEntries_[e].k] * linearEntries_[e].linear;
     out[i] = dv;
   }
 }
 
 void MprgpSolver::addImpulses(const std::vector<double>& y, std::vector<BodyVelocity>& vel, int threads) {
   if (linearOnly_) {
-    dvLinear_.resize(vel.size());
-    applyLinearImpulses(y, dvLinear_, threads);
-    for (std::size_t b = 0; b < vel.size(); ++b) vel[b].v += dvLinear_[b];
+    scratch_.dvLinear.resize(vel.size());
+    applyLinearImpulses(y, scratch_.dvLinear, threads);
+    for (std::size_t b = 0; b < vel.size(); ++b) vel[b].v += scratch_.dvLinear[b];
     return;
   }
-  dv_.resize(vel.size());
-  applyImpulses(y, dv_, threads);
+  scratch_.dv.resize(vel.size());
+  applyImpulses(y, scratch_.dv, threads);
   for (std::size_t b = 0; b < vel.size(); ++b) {
-    vel[b].v += dv_[b].v;
-    vel[b].w += dv_[b].w;
+    vel[b].v += scratch_.dv[b].v;
+    vel[b].w += scratch_.dv[b].w;
   }
 }
 
 double MprgpSolver::contactVelocities(const std::vector<BodyVelocity>& vel, std::vector<double>& out, int threads) {
   if (linearOnly_)
-    return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
+    return blockedSum(out.size(), threads, scratch_.partial, [&](std::size_t k) {
       const LinearRow& row = linearRows_[k];
       out[k] = row.n.dot(vel[row.b].v - vel[row.a].v) + row.bias;
       return 0.0;
     });
-  return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
+  return blockedSum(out.size(), threads, scratch_.partial, [&](std::size_t k) {
     const GatherRow& row = gatherRows_[k];
     const BodyVelocity& va = vel[row.a];
     const BodyVelocity& vb = vel[row.b];
@@ -186,15 +189,15 @@ double MprgpSolver::contactVelocities(const std::vector<BodyVelocity>& vel, std:
 }
 
 // Row k's scaled relative normal velocity S H^T dv for the body velocity changes dv in
-// dvLinear_ (spheres) or dv_.
+// scratch_.dvLinear (spheres) or scratch_.dv.
 inline double MprgpSolver::dvAlongRow(std::size_t k) const {
   if (linearOnly_) {
     const LinearRow& row = linearRows_[k];
-    return row.n.dot(dvLinear_[row.b] - dvLinear_[row.a]);
+    return row.n.dot(scratch_.dvLinear[row.b] - scratch_.dvLinear[row.a]);
   }
   const GatherRow& row = gatherRows_[k];
-  const BodyVelocity& va = dv_[row.a];
-  const BodyVelocity& vb = dv_[row.b];
+  const BodyVelocity& va = scratch_.dv[row.a];
+  const BodyVelocity& vb = scratch_.dv[row.b];
   return normalVelocity(row, va, vb);
 }
 
@@ -204,13 +207,13 @@ inline double MprgpSolver::dvAlongRow(std::size_t k) const {
 double MprgpSolver::applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount,
                                   int threads) {
   if (linearOnly_) {
-    dvLinear_.resize(bodyCount);
-    applyLinearImpulses(x, dvLinear_, threads);
+    scratch_.dvLinear.resize(bodyCount);
+    applyLinearImpulses(x, scratch_.dvLinear, threads);
   } else {
-    dv_.resize(bodyCount);
-    applyImpulses(x, dv_, threads);
+    scratch_.dv.resize(bodyCount);
+    applyImpulses(x, scratch_.dv, threads);
   }
-  return blockedSum(out.size(), threads, partial_, [&](std::size_t k) {
+  return blockedSum(out.size(), threads, scratch_.partial, [&](std::size_t k) {
     out[k] = dvAlongRow(k);
     return out[k] * x[k];
   });
@@ -229,7 +232,7 @@ double MprgpSolver::applyOperator(const std::vector<double>& x, std::vector<doub
 // times a step there).
 double MprgpSolver::scaledOperatorBound(std::size_t bodyCount) {
   const std::size_t m = gatherRows_.size();
-  rowSum_.assign(m, 0.0);
+  scratch_.rowSum.assign(m, 0.0);
   for (std::size_t body = 0; body + 1 < bodyCount; ++body) {  // the world (last) has no entries
     const int first = bodyEntryStart_[body], last = bodyEntryStart_[body + 1];
     for (int f = first; f < last; ++f) {
@@ -242,10 +245,10 @@ double MprgpSolver::scaledOperatorBound(std::size_t bodyCount) {
       double sum = 0.0;
       for (int e = first; e < last; ++e)
         sum += std::abs(linear.dot(bodyEntries_[e].linear) + angular.dot(bodyEntries_[e].angular));
-      rowSum_[static_cast<std::size_t>(j)] += sum;
+      scratch_.rowSum[static_cast<std::size_t>(j)] += sum;
     }
   }
-  return m > 0 ? *std::max_element(rowSum_.begin(), rowSum_.end()) : 0.0;
+  return m > 0 ? *std::max_element(scratch_.rowSum.begin(), scratch_.rowSum.end()) : 0.0;
 }
 
 double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& vel, double omega) {
@@ -254,7 +257,7 @@ double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVeloc
   const std::span<FrictionRow> frictionRows = rows.frictionRows();
   for (std::size_t f = 0; f < frictionRows.size(); ++f) {
     FrictionRow& row = frictionRows[f];
-    row.rn = scale_[nN + f] * y_[nN + f];
+    row.rn = scratch_.scale[nN + f] * scratch_.y[nN + f];
     const auto [d1, d2] = updateTangent(row, vel[row.a], omega);
     sumDelta2 += d1 * d1 + d2 * d2;
     sumR2 += row.rn * row.rn + row.rt1 * row.rt1 + row.rt2 * row.rt2;
@@ -266,7 +269,7 @@ double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVeloc
 // algorithm": y <- P(y - alpha_cg p), the conjugate gradient step that was too
 // long for y >= 0, projected on it. Kept only if it lowers f, which changes by exactly
 // g.d + 1/2 d.A d for the step d; then y, g move by d, A d and the function returns true. Otherwise
-// nothing moves and Dostal's expansion follows (A p is still in ap_). One application of A, as
+// nothing moves and Dostal's expansion follows (A p is still in scratch_.ap). One application of A, as
 // Dostal's expansion, whose fresh gradient costs one too.
 // Unlike Dostal's expansion, conjugate gradients do not restart after it: the next direction is
 // phi - gamma p with gamma = phi.A p / p.A p (`phiAp` returns phi.A p), restricted to the new free
@@ -275,17 +278,17 @@ double MprgpSolver::frictionTangentPass(ContactRows& rows, std::vector<BodyVeloc
 // and fewer than restarting after the projected step would (docs/performance.md, "nscd settings:
 // the measurements behind the defaults").
 bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp) {
-  const std::size_t m = y_.size();
-  const double gDotD = blockedSum(m, threads, partial_, [&](std::size_t k) {
-    step_[k] = std::max(0.0, y_[k] - alphaCg * p_[k]) - y_[k];
-    return g_[k] * step_[k];
+  const std::size_t m = scratch_.y.size();
+  const double gDotD = blockedSum(m, threads, scratch_.partial, [&](std::size_t k) {
+    scratch_.step[k] = std::max(0.0, scratch_.y[k] - alphaCg * scratch_.p[k]) - scratch_.y[k];
+    return scratch_.g[k] * scratch_.step[k];
   });
-  const double dAd = applyOperator(step_, aStep_, bodyCount, threads);
+  const double dAd = applyOperator(scratch_.step, scratch_.aStep, bodyCount, threads);
   if (!(gDotD + 0.5 * dAd < 0.0)) return false;
-  phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
-    y_[k] = std::max(0.0, y_[k] - alphaCg * p_[k]);  // not y + d: exactly zero at the bound
-    g_[k] += aStep_[k];
-    return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
+  phiAp = blockedSum(m, threads, scratch_.partial, [&](std::size_t k) {
+    scratch_.y[k] = std::max(0.0, scratch_.y[k] - alphaCg * scratch_.p[k]);  // not y + d: exactly zero at the bound
+    scratch_.g[k] += scratch_.aStep[k];
+    return scratch_.y[k] > 0.0 ? scratch_.g[k] * scratch_.ap[k] : 0.0;
   });
   return true;
 }
@@ -301,14 +304,14 @@ bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int thr
 // rows come in blocks that share no grain (ContactRows::build()), and only those run on two threads.
 double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
                                  std::optional<double> alphaCg) {
-  const std::size_t m = y_.size();
+  const std::size_t m = scratch_.y.size();
   // Raw pointers: with the vectors as members, the compiler reloads their data pointers after
   // every store of a double.
-  double* y = y_.data();
-  double* g = g_.data();
-  const double* p = p_.data();
-  const double* ap = ap_.data();
-  double* z = z_.data();
+  double* y = scratch_.y.data();
+  double* g = scratch_.g.data();
+  const double* p = scratch_.p.data();
+  const double* ap = scratch_.ap.data();
+  double* z = scratch_.z.data();
   const SweepMass* mass = sweepMass_.data();
   const int world = static_cast<int>(bodyCount) - 1;
   // The forward sweep reads row k's own y_k and g_k only, so the conjugate gradient step can be
@@ -367,8 +370,8 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
     }
   };
   if (linearOnly_) {
-    dvLinear_.assign(bodyCount, Vec3::Zero());
-    Vec3* dv = dvLinear_.data();
+    scratch_.dvLinear.assign(bodyCount, Vec3::Zero());
+    Vec3* dv = scratch_.dvLinear.data();
     const LinearRow* rows = linearRows_.data();
     sweeps([=](std::size_t k) {
       const LinearRow& row = rows[k];
@@ -379,8 +382,8 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
       if (row.b != world) dv[row.b] += (delta * mass[k].invMb) * row.n;
     });
   } else {
-    dv_.assign(bodyCount, BodyVelocity{});
-    BodyVelocity* dv = dv_.data();
+    scratch_.dv.assign(bodyCount, BodyVelocity{});
+    BodyVelocity* dv = scratch_.dv.data();
     const GatherRow* rows = gatherRows_.data();
     const SweepAngular* angular = sweepAngular_.data();
     sweeps([=](std::size_t k) {
@@ -430,134 +433,16 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
                        int maxThreads) {
   residual_ = 0.0;
   if (rows.rowCount() == 0) return 0;
-  const std::span<const NormalRow> normalRows = rows.normalRows();
+  const std::size_t nN = rows.normalRows().size();
   const std::span<FrictionRow> frictionRows = rows.frictionRows();
-  const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
+  const std::size_t m = nN + frictionRows.size();
   // The team is timed against one thread and kept only while it is faster (ThreadChoice): on this
   // shared 2-core machine at load ~6, two threads made an 8,000-sphere solve 25-40x slower (every
   // pass ends at a barrier, and a descheduled thread stalls it); results are the same bits either way.
   if (threadChoice_.maxThreads() != maxThreads) threadChoice_ = ThreadChoice(maxThreads);
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
-  for (std::vector<double>* v : {&scale_, &y_, &y0_, &g_, &p_, &ap_, &step_, &aStep_, &z_}) v->resize(m);
-  for (std::size_t k = 0; k < nN; ++k) {
-    scale_[k] = std::sqrt(normalRows[k].invW);
-    y_[k] = normalRows[k].r / scale_[k];
-  }
-  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
-    scale_[nN + f] = std::sqrt(frictionRows[f].invWnn);
-    y_[nN + f] = frictionRows[f].rn / scale_[nN + f];
-  }
-  buildMprgpRows(rows, vel.size());
-  // warmStart() left the velocities without the normal impulses of the warm start y: applied
-  // here, body by body over the scatter entries (on the team, the same bits for any team).
-  if (rows.warmNormalsInSolve()) addImpulses(y_, vel, threads);
-  y0_ = y_;  // `vel` holds the velocities of y0_; iterations move y only (see syncVelocities)
-  const double bound = operatorBound_ = scaledOperatorBound(vel.size());
-  const double alphaBar = bound > 0.0 ? 1.95 / bound : 1.0;  // safe: bound >= ||A||
-  const double invAlphaBar = 1.0 / alphaBar;
-  constexpr double kGamma = 1.0;                               // Dostal's recommended Gamma
-
-  // vel <- velocities of y (vel + M^-1 H S (y - y0)), then y0 = y.
-  auto syncVelocities = [&] {
-    for (std::size_t k = 0; k < m; ++k) step_[k] = y_[k] - y0_[k];
-    addImpulses(step_, vel, threads);
-    y0_ = y_;
-  };
-  const bool preconditioned = settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel;
-  // The norms that steer the next iteration come from one blocked pass (measure() below). After a
-  // conjugate gradient step the same pass first makes the new direction p = phi - gamma p, or
-  // p = z - gamma p with the preconditioner (gamma = `conjugate`), which saves a pass over y, g
-  // and p per iteration. With the preconditioner it also makes A p without applying A: the sweeps
-  // leave the body velocity changes of z, so A z is one gather, done in that pass, and
-  // A p = A z - gamma A p. That holds unless restricting p to the free set zeroed an entry (the
-  // free set changed): then A is applied afresh. A restart is the same with gamma = 0.
-  double conjugate = std::numeric_limits<double>::quiet_NaN();  // NaN: p is already up to date
-  bool apReady = false;
-  double pApReady = 0.0;
-  auto freeGradientToP = [&] {  // p = M_F^-1 phi (or phi): restart of the conjugate gradients
-    if (preconditioned) {
-      precondition(rows, vel.size(), threads);
-      conjugate = 0.0;  // p = z, made by the next measure()
-    } else {
-      for (std::size_t k = 0; k < m; ++k) p_[k] = y_[k] > 0.0 ? g_[k] : 0.0;
-    }
-  };
-  // Whether the step y - alpha p stays in y >= 0, tested on the very update the step makes. A
-  // separate pass, and no division: the largest feasible step (min y_k / p_k), taken per row in
-  // measure(), was the hottest instruction of that pass and about a tenth of the solve time.
-  // Dostal's expansion, the only user of that step length, computes it itself.
-  auto fitsBounds = [&](double alpha) {
-    const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
-    int outside = 0;
-#pragma omp parallel for num_threads(threads) schedule(static) reduction(|| : outside) if (threads > 1 && m >= kParallelMin)
-    for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
-      const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
-      int o = 0;
-      for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) o |= y_[k] - alpha * p_[k] < 0.0;
-      outside = outside || o;
-    }
-    return outside == 0;
-  };
-  std::vector<Measures>& partial = measures_;
-  auto measure = [&] {
-    const bool conjugateFirst = !std::isnan(conjugate);
-    const double gamma = conjugate;
-    conjugate = std::numeric_limits<double>::quiet_NaN();
-    const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
-    partial.assign(static_cast<std::size_t>(blocks), Measures{});
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && m >= kParallelMin)
-    for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
-      Measures r;
-      const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
-      for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) {
-        const double g = g_[k], y = y_[k];
-        if (conjugateFirst && preconditioned) {
-          const double az = dvAlongRow(k);  // (A z)_k
-          r.restricted = r.restricted || (gamma != 0.0 && !(y > 0.0) && p_[k] != 0.0);
-          p_[k] = y > 0.0 ? z_[k] - gamma * p_[k] : 0.0;
-          ap_[k] = az - gamma * ap_[k];
-          r.pAp += p_[k] * ap_[k];
-        } else if (conjugateFirst) {
-          p_[k] = y > 0.0 ? g - gamma * p_[k] : 0.0;
-        }
-        const double p = p_[k];
-        // Selects rather than branches (whether a row is free follows no pattern a predictor
-        // could learn); the same sums and bits as branches, and, measured alone, no faster.
-        const bool free = y > 0.0;
-        const double chopped = !free && g < 0.0 ? g : 0.0;
-        r.projected2 += free ? g * g : chopped * chopped;
-        r.chopped2 += chopped * chopped;
-        r.reducedFree += free ? std::min(y * invAlphaBar, g) * g : 0.0;
-        r.gDotP += g * p;
-      }
-      partial[static_cast<std::size_t>(blk)] = r;
-    }
-    Measures total;
-    for (const Measures& r : partial) {
-      total.projected2 += r.projected2;
-      total.chopped2 += r.chopped2;
-      total.reducedFree += r.reducedFree;
-      total.gDotP += r.gDotP;
-      total.pAp += r.pAp;
-      total.restricted = total.restricted || r.restricted;
-    }
-    if (conjugateFirst && preconditioned) {
-      apReady = !total.restricted;
-      pApReady = total.pAp;
-    }
-    return total;
-  };
-
-  // The scale of the residual: ||b|| = ||S (H^T v_free + c)||, the gradient at r = 0. g_ keeps
-  // the gradient at the warm start for the first iterations.
-  contactVelocities(vel, g_, threads);
-  applyOperator(y_, ap_, vel.size(), threads);
-  const double bNorm = std::sqrt(
-      blockedSum(m, threads, partial_, [&](std::size_t k) { return (g_[k] - ap_[k]) * (g_[k] - ap_[k]); }));
-
-  const bool projectedCg = settings.expansion == ExpansionKind::ProjectedCg;
-  bool checkDescent = false;  // p was conjugated across a change of the free set
+  Iteration it = setUp(rows, vel, settings, threads);
   steps_ = MprgpSteps{};
   int iterations = 0;
   double tangentChange = 0.0;
@@ -567,68 +452,10 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   // early blocks cost little.
   double innerTolerance = frictionRows.empty() ? settings.tolerance : std::max(settings.tolerance, 1e-4);
   for (int outer = 0; outer < outerCap; ++outer) {
-    if (outer > 0) contactVelocities(vel, g_, threads);  // the tangential pass moved vel
-    freeGradientToP();
-    while (true) {
-      Measures now = measure();
-      if (checkDescent && !(now.gDotP > 0.0)) {  // not a descent direction: restart from phi
-        freeGradientToP();
-        now = measure();
-      }
-      checkDescent = false;
-      residual_ = bNorm > 0.0 ? std::sqrt(now.projected2) / bNorm : 0.0;
-      if (residual_ < innerTolerance || iterations >= settings.maxIterations) break;
-      ++iterations;
-      if (now.chopped2 <= kGamma * kGamma * now.reducedFree) {
-        const double pAp = apReady ? pApReady : applyOperator(p_, ap_, vel.size(), threads);
-        apReady = false;
-        const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
-        if (fitsBounds(alphaCg)) {  // conjugate gradient step
-          // p <- z - gamma p (z = M_F^-1 phi, or phi), done by the next measure(); preconditioned,
-          // the step itself is made by the forward sweep.
-          if (preconditioned) {
-            conjugate = precondition(rows, vel.size(), threads, alphaCg) / pAp;
-          } else {
-            const double phiAp = blockedSum(m, threads, partial_, [&](std::size_t k) {
-              y_[k] -= alphaCg * p_[k];
-              g_[k] -= alphaCg * ap_[k];
-              return y_[k] > 0.0 ? g_[k] * ap_[k] : 0.0;
-            });
-            conjugate = phiAp / pAp;
-          }
-          ++steps_.conjugate;
-        } else if (double phiAp = 0.0; projectedCg && projectedCgStep(alphaCg, vel.size(), threads, phiAp)) {
-          ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
-          conjugate = (preconditioned ? precondition(rows, vel.size(), threads) : phiAp) / pAp;
-          checkDescent = true;
-        } else {  // expansion: to the first bound, then a projected gradient step of length alpha_bar
-          ++steps_.gradient;
-          double feasible = std::numeric_limits<double>::infinity();  // the first bound along -p
-          for (std::size_t k = 0; k < m; ++k)
-            if (p_[k] > 0.0) feasible = std::min(feasible, y_[k] / p_[k]);
-          for (std::size_t k = 0; k < m; ++k) {
-            y_[k] = std::max(0.0, y_[k] - feasible * p_[k]);
-            g_[k] -= feasible * ap_[k];
-            y_[k] = std::max(0.0, y_[k] - alphaBar * (y_[k] > 0.0 ? g_[k] : 0.0));
-          }
-          syncVelocities();
-          contactVelocities(vel, g_, threads);  // afresh: no drift from the recursive updates
-          freeGradientToP();
-        }
-      } else {  // proportioning: release bound unknowns whose gradient pulls them off the bound
-        for (std::size_t k = 0; k < m; ++k) step_[k] = (y_[k] > 0.0 || g_[k] >= 0.0) ? 0.0 : g_[k];
-        const double dAd = applyOperator(step_, ap_, vel.size(), threads);
-        if (!(dAd > 0.0)) break;  // a chopped direction of zero curvature: nothing to gain
-        const double alpha = now.chopped2 / dAd;  // g.beta = ||beta||^2
-        ++steps_.proportioning;
-        for (std::size_t k = 0; k < m; ++k) {
-          y_[k] = std::max(0.0, y_[k] - alpha * step_[k]);
-          g_[k] -= alpha * ap_[k];
-        }
-        freeGradientToP();
-      }
-    }
-    syncVelocities();
+    if (outer > 0) contactVelocities(vel, scratch_.g, threads);  // the tangential pass moved vel
+    freeGradientToP(it);
+    iterations = minimise(it, innerTolerance, settings.maxIterations, iterations);
+    syncVelocities(it);
     if (frictionRows.empty()) break;
     // Block Gauss-Seidel with the tangential impulses of the wall points (their discs use the new
     // normal impulses), until a pass changes them by less than the tolerance after a normal solve
@@ -642,12 +469,251 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   residual_ = std::max(residual_, tangentChange);
   // The impulses in contact order, for exportImpulses() and normalImpulse(), which read every
   // contact's points: through the rows in sweep order, each read missed the cache.
-  rows.storeNormalImpulses([&](std::size_t k) { return scale_[k] * y_[k]; });
-  for (std::size_t f = 0; f < frictionRows.size(); ++f) frictionRows[f].rn = scale_[nN + f] * y_[nN + f];
+  rows.storeNormalImpulses([&](std::size_t k) { return scratch_.scale[k] * scratch_.y[k]; });
+  for (std::size_t f = 0; f < frictionRows.size(); ++f)
+    frictionRows[f].rn = scratch_.scale[nN + f] * scratch_.y[nN + f];
   if (m >= kParallelMin)  // time per iteration: the iteration count changes from step to step
     threadChoice_.record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
                          std::max(1, iterations));
   return iterations;
+}
+
+// The unknowns at the warm start and the scaled rows; `vel` given the warm start's normal
+// impulses if warmStart() left them out; Dostal's step length from the operator's bound, and
+// ||b|| = ||S (H^T v_free + c)||, the gradient at r = 0, the scale of the residual. Leaves in g the
+// gradient at the warm start for the first iterations.
+MprgpSolver::Iteration MprgpSolver::setUp(ContactRows& rows, std::vector<BodyVelocity>& vel,
+                                          const NscdSettings& settings, int threads) {
+  const std::span<const NormalRow> normalRows = rows.normalRows();
+  const std::span<const FrictionRow> frictionRows = rows.frictionRows();
+  const std::size_t nN = normalRows.size(), m = nN + frictionRows.size();
+  Scratch& s = scratch_;
+  for (std::vector<double>* v : {&s.scale, &s.y, &s.y0, &s.g, &s.p, &s.ap, &s.step, &s.aStep, &s.z}) v->resize(m);
+  for (std::size_t k = 0; k < nN; ++k) {
+    s.scale[k] = std::sqrt(normalRows[k].invW);
+    s.y[k] = normalRows[k].r / s.scale[k];
+  }
+  for (std::size_t f = 0; f < frictionRows.size(); ++f) {
+    s.scale[nN + f] = std::sqrt(frictionRows[f].invWnn);
+    s.y[nN + f] = frictionRows[f].rn / s.scale[nN + f];
+  }
+  buildMprgpRows(rows, vel.size());
+  // warmStart() left the velocities without the normal impulses of the warm start y: applied
+  // here, body by body over the scatter entries (on the team, the same bits for any team).
+  if (rows.warmNormalsInSolve()) addImpulses(s.y, vel, threads);
+  s.y0 = s.y;  // `vel` holds the velocities of y0; iterations move y only (see syncVelocities)
+  Iteration it{rows, vel};
+  it.threads = threads;
+  const double bound = operatorBound_ = scaledOperatorBound(vel.size());
+  it.alphaBar = bound > 0.0 ? 1.95 / bound : 1.0;  // safe: bound >= ||A||
+  it.invAlphaBar = 1.0 / it.alphaBar;
+  it.preconditioned = settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel;
+  it.projectedCg = settings.expansion == ExpansionKind::ProjectedCg;
+  contactVelocities(vel, s.g, threads);
+  applyOperator(s.y, s.ap, vel.size(), threads);
+  it.bNorm = std::sqrt(
+      blockedSum(m, threads, s.partial, [&](std::size_t k) { return (s.g[k] - s.ap[k]) * (s.g[k] - s.ap[k]); }));
+  return it;
+}
+
+// MPRGP's iterations on the normal unknowns (the tangential impulses fixed) from p = the free
+// gradient, until the residual is below `tolerance` or the iterations, counted on from
+// `iterations`, reach `maxIterations`; returns that count.
+int MprgpSolver::minimise(Iteration& it, double tolerance, int maxIterations, int iterations) {
+  constexpr double kGamma = 1.0;  // Dostal's recommended Gamma
+  while (true) {
+    Measures now = measure(it);
+    if (it.checkDescent && !(now.gDotP > 0.0)) {  // not a descent direction: restart from phi
+      freeGradientToP(it);
+      now = measure(it);
+    }
+    it.checkDescent = false;
+    residual_ = it.bNorm > 0.0 ? std::sqrt(now.projected2) / it.bNorm : 0.0;
+    if (residual_ < tolerance || iterations >= maxIterations) break;
+    ++iterations;
+    if (now.chopped2 <= kGamma * kGamma * now.reducedFree) {
+      proportionalStep(it, now);
+    } else if (!proportioningStep(it, now)) {
+      break;
+    }
+  }
+  return iterations;
+}
+
+// The norms that steer the next iteration come from one blocked pass. After a conjugate gradient
+// step the same pass first makes the new direction p = phi - gamma p, or p = z - gamma p with the
+// preconditioner (gamma = it.conjugate), which saves a pass over y, g and p per iteration. With
+// the preconditioner it also makes A p without applying A: the sweeps leave the body velocity
+// changes of z, so A z is one gather, done in that pass, and A p = A z - gamma A p. That holds
+// unless restricting p to the free set zeroed an entry (the free set changed): then A is applied
+// afresh. A restart is the same with gamma = 0.
+MprgpSolver::Measures MprgpSolver::measure(Iteration& it) {
+  const std::size_t m = it.size();
+  const int threads = it.threads;
+  const bool preconditioned = it.preconditioned;
+  const double invAlphaBar = it.invAlphaBar;
+  const bool conjugateFirst = !std::isnan(it.conjugate);
+  const double gamma = it.conjugate;
+  it.conjugate = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Measures>& partial = scratch_.measures;
+  const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
+  partial.assign(static_cast<std::size_t>(blocks), Measures{});
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && m >= kParallelMin)
+  for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+    Measures r;
+    const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
+    for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k) {
+      const double g = scratch_.g[k], y = scratch_.y[k];
+      if (conjugateFirst && preconditioned) {
+        const double az = dvAlongRow(k);  // (A z)_k
+        r.restricted = r.restricted || (gamma != 0.0 && !(y > 0.0) && scratch_.p[k] != 0.0);
+        scratch_.p[k] = y > 0.0 ? scratch_.z[k] - gamma * scratch_.p[k] : 0.0;
+        scratch_.ap[k] = az - gamma * scratch_.ap[k];
+        r.pAp += scratch_.p[k] * scratch_.ap[k];
+      } else if (conjugateFirst) {
+        scratch_.p[k] = y > 0.0 ? g - gamma * scratch_.p[k] : 0.0;
+      }
+      const double p = scratch_.p[k];
+      // Selects rather than branches (whether a row is free follows no pattern a predictor
+      // could learn); the same sums and bits as branches, and, measured alone, no faster.
+      const bool free = y > 0.0;
+      const double chopped = !free && g < 0.0 ? g : 0.0;
+      r.projected2 += free ? g * g : chopped * chopped;
+      r.chopped2 += chopped * chopped;
+      r.reducedFree += free ? std::min(y * invAlphaBar, g) * g : 0.0;
+      r.gDotP += g * p;
+    }
+    partial[static_cast<std::size_t>(blk)] = r;
+  }
+  Measures total;
+  for (const Measures& r : partial) {
+    total.projected2 += r.projected2;
+    total.chopped2 += r.chopped2;
+    total.reducedFree += r.reducedFree;
+    total.gDotP += r.gDotP;
+    total.pAp += r.pAp;
+    total.restricted = total.restricted || r.restricted;
+  }
+  if (conjugateFirst && preconditioned) {
+    it.apReady = !total.restricted;
+    it.pApReady = total.pAp;
+  }
+  return total;
+}
+
+// A proportional iteration: the conjugate gradient step along p if it stays in y >= 0, else an
+// expansion (the projected CG step if settings.expansion asks for it and it lowers f, else
+// Dostal's).
+void MprgpSolver::proportionalStep(Iteration& it, const Measures& now) {
+  const double pAp = it.apReady ? it.pApReady : applyOperator(scratch_.p, scratch_.ap, it.bodyCount(), it.threads);
+  it.apReady = false;
+  const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
+  if (fitsBounds(it, alphaCg)) {
+    conjugateGradientStep(it, alphaCg, pAp);
+  } else if (double phiAp = 0.0; it.projectedCg && projectedCgStep(alphaCg, it.bodyCount(), it.threads, phiAp)) {
+    ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
+    it.conjugate = (it.preconditioned ? precondition(it.rows, it.bodyCount(), it.threads) : phiAp) / pAp;
+    it.checkDescent = true;
+  } else {
+    expansionStep(it);
+  }
+}
+
+// Whether the step y - alpha p stays in y >= 0, tested on the very update the step makes. A
+// separate pass, and no division: the largest feasible step (min y_k / p_k), taken per row in
+// measure(), was the hottest instruction of that pass and about a tenth of the solve time.
+// Dostal's expansion, the only user of that step length, computes it itself.
+bool MprgpSolver::fitsBounds(const Iteration& it, double alpha) {
+  const std::size_t m = it.size();
+  const int threads = it.threads;
+  const std::ptrdiff_t blocks = (static_cast<std::ptrdiff_t>(m) + kBlock - 1) / kBlock;
+  int outside = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) \
+    reduction(||                                               \
+              : outside) if (threads > 1 && m >= kParallelMin)
+  for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+    const std::size_t end = std::min(m, static_cast<std::size_t>((blk + 1) * kBlock));
+    int o = 0;
+    for (std::size_t k = static_cast<std::size_t>(blk * kBlock); k < end; ++k)
+      o |= scratch_.y[k] - alpha * scratch_.p[k] < 0.0;
+    outside = outside || o;
+  }
+  return outside == 0;
+}
+
+// y -= alphaCg p, g -= alphaCg A p, and gamma for the next direction p <- z - gamma p (z = M_F^-1 phi,
+// or phi), which the next measure() makes; preconditioned, the step itself is made by the
+// forward sweep.
+void MprgpSolver::conjugateGradientStep(Iteration& it, double alphaCg, double pAp) {
+  if (it.preconditioned) {
+    it.conjugate = precondition(it.rows, it.bodyCount(), it.threads, alphaCg) / pAp;
+  } else {
+    Scratch& s = scratch_;
+    const double phiAp = blockedSum(it.size(), it.threads, s.partial, [&](std::size_t k) {
+      s.y[k] -= alphaCg * s.p[k];
+      s.g[k] -= alphaCg * s.ap[k];
+      return s.y[k] > 0.0 ? s.g[k] * s.ap[k] : 0.0;
+    });
+    it.conjugate = phiAp / pAp;
+  }
+  ++steps_.conjugate;
+}
+
+// Dostal's expansion: to the first bound along -p, then a projected gradient step of length
+// alpha_bar; the velocities and the gradient afresh (no drift from the recursive updates), and a
+// restart of the conjugate gradients.
+void MprgpSolver::expansionStep(Iteration& it) {
+  ++steps_.gradient;
+  const std::size_t m = it.size();
+  Scratch& s = scratch_;
+  double feasible = std::numeric_limits<double>::infinity();  // the first bound along -p
+  for (std::size_t k = 0; k < m; ++k)
+    if (s.p[k] > 0.0) feasible = std::min(feasible, s.y[k] / s.p[k]);
+  for (std::size_t k = 0; k < m; ++k) {
+    s.y[k] = std::max(0.0, s.y[k] - feasible * s.p[k]);
+    s.g[k] -= feasible * s.ap[k];
+    s.y[k] = std::max(0.0, s.y[k] - it.alphaBar * (s.y[k] > 0.0 ? s.g[k] : 0.0));
+  }
+  syncVelocities(it);
+  contactVelocities(it.vel, s.g, it.threads);
+  freeGradientToP(it);
+}
+
+// Proportioning: release the bound unknowns whose gradient pulls them off the bound, a step along
+// the chopped gradient -beta; false (nothing moved) if that direction has no curvature.
+bool MprgpSolver::proportioningStep(Iteration& it, const Measures& now) {
+  const std::size_t m = it.size();
+  Scratch& s = scratch_;
+  for (std::size_t k = 0; k < m; ++k) s.step[k] = (s.y[k] > 0.0 || s.g[k] >= 0.0) ? 0.0 : s.g[k];
+  const double dAd = applyOperator(s.step, s.ap, it.bodyCount(), it.threads);
+  if (!(dAd > 0.0)) return false;           // a chopped direction of zero curvature: nothing to gain
+  const double alpha = now.chopped2 / dAd;  // g.beta = ||beta||^2
+  ++steps_.proportioning;
+  for (std::size_t k = 0; k < m; ++k) {
+    s.y[k] = std::max(0.0, s.y[k] - alpha * s.step[k]);
+    s.g[k] -= alpha * s.ap[k];
+  }
+  freeGradientToP(it);
+  return true;
+}
+
+// p = M_F^-1 phi (or phi): restart of the conjugate gradients.
+void MprgpSolver::freeGradientToP(Iteration& it) {
+  if (it.preconditioned) {
+    precondition(it.rows, it.bodyCount(), it.threads);
+    it.conjugate = 0.0;  // p = z, made by the next measure()
+  } else {
+    const std::size_t m = it.size();
+    for (std::size_t k = 0; k < m; ++k) scratch_.p[k] = scratch_.y[k] > 0.0 ? scratch_.g[k] : 0.0;
+  }
+}
+
+// vel <- velocities of y (vel + M^-1 H S (y - y0)), then y0 = y.
+void MprgpSolver::syncVelocities(Iteration& it) {
+  const std::size_t m = it.size();
+  for (std::size_t k = 0; k < m; ++k) scratch_.step[k] = scratch_.y[k] - scratch_.y0[k];
+  addImpulses(scratch_.step, it.vel, it.threads);
+  scratch_.y0 = scratch_.y;
 }
 
 }  // namespace confpack::nscd

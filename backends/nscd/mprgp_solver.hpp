@@ -16,6 +16,7 @@
 // tangential impulses, over-relaxed by NscdSettings::frictionRelaxation, until both have
 // converged.
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -74,7 +75,7 @@ class MprgpSolver {
   double scaledOperatorBound(std::size_t bodyCount);
   bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
   // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel
-  // splitting of A restricted to F, leaving M^-1 H S z in dvLinear_ / dv_; returns z . ap_.
+  // splitting of A restricted to F, leaving M^-1 H S z in scratch_.dvLinear / scratch_.dv; returns z . scratch_.ap.
   // Given alphaCg, the forward sweep first makes the conjugate gradient step y -= alphaCg p,
   // g -= alphaCg A p on each row as it reaches it, which saves that step its own pass.
   // With threads > 1 the two sweep blocks (rows.sweepBlockEnd()) run at once, to the same bits.
@@ -83,11 +84,54 @@ class MprgpSolver {
   double dvAlongRow(std::size_t k) const;
   double frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& velocities, double omega);
 
+  // Per-iteration norms of MPRGP: ||g^P||^2, ||beta||^2, phi~.phi, g.p;
+  // with the preconditioner also p.A p of the new direction, and whether restricting it to the
+  // free set zeroed an entry.
+  struct Measures {
+    double projected2 = 0.0, chopped2 = 0.0, reducedFree = 0.0, gDotP = 0.0, pAp = 0.0;
+    bool restricted = false;
+  };
+  // What the phases of one solve share: its rows and velocities, team, size and step length, and
+  // the conjugate gradient state carried from one iteration to the next.
+  struct Iteration {
+    ContactRows& rows;
+    std::vector<BodyVelocity>& vel;  // the velocities of scratch_.y0
+    int threads = 1;
+    bool preconditioned = false;               // settings.preconditioner: symmetric Gauss-Seidel in face
+    bool projectedCg = false;                  // settings.expansion: the projected CG step first
+    double alphaBar = 1.0, invAlphaBar = 1.0;  // Dostal's expansion step length and its inverse
+    double bNorm = 0.0;                        // ||b||, the scale of the residual
+    // The next measure() first makes p = z - conjugate p (p = phi - conjugate p unpreconditioned);
+    // NaN: p is already up to date.
+    double conjugate = std::numeric_limits<double>::quiet_NaN();
+    bool apReady = false;  // that measure() also made A p, and p.A p = pApReady
+    double pApReady = 0.0;
+    bool checkDescent = false;  // p was conjugated across a change of the free set
+
+    std::size_t size() const { return static_cast<std::size_t>(rows.rowCount()); }
+    std::size_t bodyCount() const { return vel.size(); }
+  };
+  // The phases of solve(), in the order an iteration meets them.
+  Iteration setUp(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings, int threads);
+  int minimise(Iteration& it, double tolerance, int maxIterations, int iterations);
+  Measures measure(Iteration& it);
+  void proportionalStep(Iteration& it, const Measures& now);
+  bool fitsBounds(const Iteration& it, double alpha);
+  void conjugateGradientStep(Iteration& it, double alphaCg, double pAp);
+  void expansionStep(Iteration& it);
+  bool proportioningStep(Iteration& it, const Measures& now);
+  void freeGradientToP(Iteration& it);
+  void syncVelocities(Iteration& it);
+
   // MPRGP state per normal unknown and per body (kept to avoid reallocations).
-  std::vector<double> scale_, y_, y0_, g_, p_, ap_, step_, aStep_, z_;
-  std::vector<BodyVelocity> dv_;
-  std::vector<core::Vec3> dvLinear_;
-  std::vector<double> rowSum_, partial_;
+  struct Scratch {
+    std::vector<double> scale, y, y0, g, p, ap, step, aStep, z;
+    std::vector<BodyVelocity> dv;
+    std::vector<core::Vec3> dvLinear;
+    std::vector<double> rowSum, partial;
+    std::vector<Measures> measures;
+  };
+  Scratch scratch_;
   // Compact copies of the rows for the two passes of A p, scaled by s: the Jacobian of unknown k
   // (u_k = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a, times s_k), and per body the velocity
   // change per unit y_k of each of its unknowns, contiguous so the scatter streams.
@@ -129,14 +173,6 @@ class MprgpSolver {
   std::vector<LinearRow> linearRows_;
   std::vector<LinearEntry> linearEntries_;
   std::vector<int> bodyEntryStart_, bodyCursor_;
-  // Per-iteration norms of MPRGP: ||g^P||^2, ||beta||^2, phi~.phi, g.p;
-  // with the preconditioner also p.A p of the new direction, and whether restricting it to the
-  // free set zeroed an entry.
-  struct Measures {
-    double projected2 = 0.0, chopped2 = 0.0, reducedFree = 0.0, gDotP = 0.0, pAp = 0.0;
-    bool restricted = false;
-  };
-  std::vector<Measures> measures_;
   double residual_ = 0.0;
   double operatorBound_ = 0.0;
   MprgpSteps steps_;
