@@ -234,9 +234,9 @@ double correlationSlices(const gsl_vector* r) {
   return tau;
 }
 
-// fitProfile's starts: alpha and lambda of the initial guess each times 1, 1/2 and 2 (or the
-// given start alone).
-constexpr int kStarts = 9;
+// fitProfile's starts: alpha and lambda of the initial guess each times 1, 1/2 and 2, for each
+// of two small grains' periods when bidisperse (or the given start alone).
+constexpr int kStarts = 18;
 
 Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, const ProfileLaw& start,
                const ProfileFitDef& def, int attempt) {
@@ -300,8 +300,17 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
     const ProfileLaw& l = f.law;
     bool physical = l.alpha > 0.0 && l.gamma[0] > 0.0 && l.lambda[0] > 0.0 && std::isfinite(chisq);
     if (bi) physical = physical && l.gamma[1] > 0.0 && l.lambda[1] > 0.0;
+    // A period at its bound is no layering found: the two terms beating against each other (at
+    // the bounds between gamma_S and gamma_L, with large betas of opposite signs) or a
+    // wavelength the data do not hold. Such a start is not kept, however low its chi^2.
+    std::string atBound;
+    if (data.bounds[0].atBound(f.law.alpha)) atBound = "alpha";
+    if (data.bounds[3].atBound(f.law.gamma[0])) atBound = "gamma_L";
+    if (bi && data.bounds[6].atBound(f.law.gamma[1])) atBound = "gamma_S";
     if (!physical)
       f.reason = "non-physical parameters (alpha, gamma or lambda <= 0)";
+    else if (!atBound.empty())
+      f.reason = fmt::format("{} at the bound of its interval (no layering of that period in the data)", atBound);
     else if (!finite)
       f.reason = "singular covariance (parameters not determined by the data)";
     else {
@@ -376,22 +385,28 @@ ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>
   bool found = false;
   std::string lastReason;
   int attempt = 0;
-  for (double fa : factors)
-    for (double fl : factors) {
-      ProfileLaw start = guess;
-      start.alpha *= fa;
-      start.lambda[0] *= fl;
-      start.lambda[1] *= fl;
-      Attempt at = runFit(y, phi, start, def, ++attempt);
-      if (!at.valid) {
-        lastReason = at.fit.reason;
-        continue;
+  // Bidisperse: the small grains' period from the guess (half the large grains') and from about
+  // their size, d_S = d_L / 2, a little less as layers of spheres nest.
+  const std::vector<double> smallPeriods =
+      def.bidisperse && !def.start ? std::vector<double>{guess.gamma[1], 0.47} : std::vector<double>{guess.gamma[1]};
+  for (double gs : smallPeriods)
+    for (double fa : factors)
+      for (double fl : factors) {
+        ProfileLaw start = guess;
+        start.gamma[1] = gs;
+        start.alpha *= fa;
+        start.lambda[0] *= fl;
+        start.lambda[1] *= fl;
+        Attempt at = runFit(y, phi, start, def, ++attempt);
+        if (!at.valid) {
+          lastReason = at.fit.reason;
+          continue;
+        }
+        if (!found || at.fit.chiSquare < best.chiSquare) {
+          best = at.fit;
+          found = true;
+        }
       }
-      if (!found || at.fit.chiSquare < best.chiSquare) {
-        best = at.fit;
-        found = true;
-      }
-    }
   if (!found) {
     best = ProfileFit{};
     best.reason = lastReason.empty() ? "no start converged" : lastReason;

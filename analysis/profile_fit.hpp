@@ -24,7 +24,8 @@
 // lambda_L = gamma / ln((p1 - phi_b)/(p2 - phi_b)) from the first two peak heights (default 1);
 // beta_L = (p1 - phi_b) exp(y1/lambda_L); alpha = 0.1. Small grains start at half the large
 // grains' gamma and lambda and a tenth of beta. A few starts around these (alpha x {1, 0.5, 2},
-// lambda x {1, 0.5, 2}) are run and the lowest chi^2 is kept. ProfileFitDef::start, when given, is the one
+// lambda x {1, 0.5, 2}; bidisperse, each with gamma_S at half gamma_L and at 0.47 d_L) are run and
+// the lowest chi^2 is kept, a start ending with alpha or a gamma at its bound excepted. ProfileFitDef::start, when given, is the one
 // start (a leave-one-out mean fitted from the full mean's minimum, analysis/profile_average.hpp).
 #include <optional>
 #include <string>
@@ -48,8 +49,9 @@ struct ProfileLaw {
 /// The intervals of the bounded parameters [d_L]; lambda's upper bound is twice the profile's span.
 struct ProfileBounds {
   double alpha[2] = {0.005, 0.5};
-  double gammaL[2] = {0.6, 1.6};   ///< large grains' period (about d_L)
-  double gammaS[2] = {0.2, 0.6};   ///< small grains' period (about d_S = d_L / 2)
+  double gammaL[2] = {0.75, 1.6};  ///< large grains' period (about d_L)
+  double gammaS[2] = {0.2, 0.6};   ///< small grains' period (about d_S = d_L / 2); apart from gamma_L's, or
+                                   ///< the two terms can cancel each other with huge betas
   double lambdaMin = 0.02;
 };
 

@@ -90,6 +90,10 @@ struct ReportOptions {
   /// (`--no-run-links`): names without links and the sweep folder by its name alone, for a report
   /// published without the run folders (the medium study's in docs/).
   bool runLinks = true;
+  /// The width [d_L] at which lambda_L is read (`--lambda-width`), from the phi(y) profile
+  /// averaged over the replicas; a family without it is read at its nearest confined width
+  /// (study/report_lambda.hpp).
+  double lambdaWidth = 10.0;
 };
 
 struct ReportSummary {
