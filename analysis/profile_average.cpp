@@ -33,9 +33,9 @@ void checkGrid(const std::vector<SeedProfile>& seeds) {
     bool same = p.y.size() == first.y.size();
     for (std::size_t k = 0; same && k < p.y.size(); ++k) same = std::abs(p.y[k] - first.y[k]) < 1e-9;
     if (!same)
-      throw std::invalid_argument(fmt::format(
-          "averaged profile fit: seed {}'s profile is on another grid than seed 0's ({} and {} slices)", s,
-          p.y.size(), first.y.size()));
+      throw std::invalid_argument(
+          fmt::format("averaged profile fit: seed {}'s profile is on another grid than seed 0's ({} and {} slices)", s,
+                      p.y.size(), first.y.size()));
   }
 }
 

@@ -35,21 +35,21 @@ struct SeedProfile {
 struct FittedLength {
   bool determined = false;  ///< false: the data do not fix it (see the fit's reason or note)
   double value = 0.0;
-  double error = 0.0;                     ///< max(covarianceError, jackknifeError)
-  double covarianceError = 0.0;           ///< of the mean profile's fit
-  std::optional<double> jackknifeError;   ///< over the seeds; none with < 2 seeds or a failed leave-one-out fit
+  double error = 0.0;                    ///< max(covarianceError, jackknifeError)
+  double covarianceError = 0.0;          ///< of the mean profile's fit
+  std::optional<double> jackknifeError;  ///< over the seeds; none with < 2 seeds or a failed leave-one-out fit
 };
 
 struct AveragedProfileFit {
   bool ok = false;
-  std::string reason;           ///< why not ok
-  int seeds = 0;                ///< profiles averaged
-  std::vector<double> y, phi;   ///< the mean profile
-  ProfileFit fit;               ///< of the mean profile
-  double meanSize = 0.0;        ///< d_avg, mean over the seeds [d_L]
-  FittedLength lambdaL;         ///< [d_L]
-  FittedLength lambdaS;         ///< [d_L]; bidisperse fits only
-  FittedLength lambdaLOverDAvg; ///< lambda_L / d_avg [-]
+  std::string reason;                      ///< why not ok
+  int seeds = 0;                           ///< profiles averaged
+  std::vector<double> y, phi;              ///< the mean profile
+  ProfileFit fit;                          ///< of the mean profile
+  double meanSize = 0.0;                   ///< d_avg, mean over the seeds [d_L]
+  FittedLength lambdaL;                    ///< [d_L]
+  FittedLength lambdaS;                    ///< [d_L]; bidisperse fits only
+  FittedLength lambdaLOverDAvg;            ///< lambda_L / d_avg [-]
   std::vector<double> leaveOneOutLambdaL;  ///< lambda_L of the fit without seed i
 };
 

@@ -44,10 +44,14 @@ void fitLambdaSamples(std::vector<LambdaSample>& samples) {
 
 namespace {
 
-std::string num(double v) { return fmt::format("{:g}", v); }
+std::string num(double v) {
+  return fmt::format("{:g}", v);
+}
 
 // "1.23 ± 0.045"
-std::string withError(double v, double e) { return fmt::format("{:.3g} ± {:.2g}", v, e); }
+std::string withError(double v, double e) {
+  return fmt::format("{:.3g} ± {:.2g}", v, e);
+}
 
 std::string lengthText(const analysis::AveragedProfileFit& f, const analysis::FittedLength& l) {
   if (!f.ok) return "no fit";
@@ -297,15 +301,25 @@ void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<La
                     lengthText(f, f.lambdaLOverDAvg), f.ok ? fmt::format("{:.3g}", f.fit.rms) : "-",
                     s.c ? withError(*s.c, s.cError.value_or(0.0)) : "-", f.ok ? "" : f.reason});
   }
-  doc.table({"family", "backend", "W", "replicas", "lambda_L [d_L]", "lambda_S [d_L]", "d_avg [d_L]",
-             "lambda_L/d_avg", "rms residual", "C [d_L]", "note"},
+  doc.table({"family", "backend", "W", "replicas", "lambda_L [d_L]", "lambda_S [d_L]", "d_avg [d_L]", "lambda_L/d_avg",
+             "rms residual", "C [d_L]", "note"},
             rows);
 
   const std::vector<std::string> backends = backendsOf(samples);
-  Plot byXs{"lambdaL_vs_xS", "lambda_L/d_avg against x_S (spheres, line; pinacoids, square)", "x_S [%]",
-            "lambda_L / d_avg", {}, {}, false};
-  Plot byC{"lambdaL_vs_C", "lambda_L against C of the phi(W) fit, with the weighted line", "C [d_L]", "lambda_L [d_L]",
-           {}, {}, false};
+  Plot byXs{"lambdaL_vs_xS",
+            "lambda_L/d_avg against x_S (spheres, line; pinacoids, square)",
+            "x_S [%]",
+            "lambda_L / d_avg",
+            {},
+            {},
+            false};
+  Plot byC{"lambdaL_vs_C",
+           "lambda_L against C of the phi(W) fit, with the weighted line",
+           "C [d_L]",
+           "lambda_L [d_L]",
+           {},
+           {},
+           false};
   for (std::size_t bi = 0; bi < backends.size(); ++bi) {
     const std::string& b = backends[bi];
     const int color = static_cast<int>(bi) + 1;

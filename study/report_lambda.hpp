@@ -28,17 +28,17 @@ std::optional<double> lambdaWidth(const std::vector<double>& widths, double targ
 
 /// One family and backend at the width lambda_L is read at, with its replicas' profiles.
 struct LambdaSample {
-  std::string family;   ///< as the summary names it
-  std::string series;   ///< as the tables name it ("MSP x_S=0 mu_w=0")
+  std::string family;  ///< as the summary names it
+  std::string series;  ///< as the tables name it ("MSP x_S=0 mu_w=0")
   bool sphere = true;
-  double xs = 0.0;      ///< [%]
-  double mu = 0.0;      ///< side walls' friction
-  bool plain = true;    ///< no varied setting beyond the named axes: on the x_S figure
+  double xs = 0.0;    ///< [%]
+  double mu = 0.0;    ///< side walls' friction
+  bool plain = true;  ///< no varied setting beyond the named axes: on the x_S figure
   std::string backend;
   int backendIndex = 0;  ///< colour and dashes
   double width = 0.0;    ///< [d_L]
   std::vector<analysis::SeedProfile> seeds;
-  std::optional<double> c, cError;  ///< C of the family's phi(W) fit for this backend [d_L]
+  std::optional<double> c, cError;   ///< C of the family's phi(W) fit for this backend [d_L]
   analysis::AveragedProfileFit fit;  ///< filled by fitLambdaSamples
 };
 

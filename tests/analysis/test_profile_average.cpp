@@ -58,8 +58,7 @@ std::vector<analysis::SeedProfile> seeds(const analysis::ProfileLaw& law, double
 
 }  // namespace
 
-TEST_CASE("seed-averaged phi(y) fit recovers lambda_L and lambda_S within the stated uncertainty",
-          "[analysis][fit]") {
+TEST_CASE("seed-averaged phi(y) fit recovers lambda_L and lambda_S within the stated uncertainty", "[analysis][fit]") {
   const analysis::ProfileLaw truth = twoSpecies();
   analysis::ProfileFitDef def;
   def.bidisperse = true;
