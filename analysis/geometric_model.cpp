@@ -4,6 +4,7 @@
 #include <gsl/gsl_cdf.h>
 #include <gsl/gsl_fit.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -50,6 +51,31 @@ ConfinementFit fitConfinement(const std::vector<double>& width, const std::vecto
   f.cError = std::sqrt(std::max(0.0, cov11));
   f.covariance = -cov01;
   f.chiSquare = chisq;
+  return f;
+}
+
+LineFit fitLine(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& sigma) {
+  checkSizes(x.size(), y.size(), sigma, 2);
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  if (!(*hi > *lo)) throw std::invalid_argument(fmt::format("line fit: every point at x = {} (no slope)", *lo));
+  const std::size_t n = x.size();
+  LineFit f;
+  f.dof = static_cast<int>(n) - 2;
+  double cov00 = 0, cov01 = 0, cov11 = 0;
+  if (!sigma.empty()) {
+    std::vector<double> w;
+    for (double s : sigma) w.push_back(1.0 / (s * s));
+    gsl_fit_wlinear(x.data(), 1, w.data(), 1, y.data(), 1, n, &f.intercept, &f.slope, &cov00, &cov01, &cov11,
+                    &f.chiSquare);
+    f.weighted = true;
+    if (f.dof > 0) f.quality = gsl_cdf_chisq_Q(f.chiSquare, f.dof);
+  } else {
+    gsl_fit_linear(x.data(), 1, y.data(), 1, n, &f.intercept, &f.slope, &cov00, &cov01, &cov11, &f.chiSquare);
+    if (f.dof == 0) cov00 = cov01 = cov11 = 0.0;
+  }
+  f.interceptError = std::sqrt(std::max(0.0, cov00));
+  f.slopeError = std::sqrt(std::max(0.0, cov11));
+  f.covariance = cov01;
   return f;
 }
 

@@ -10,7 +10,8 @@
 // (gsl_cdf_chisq_Q), defined only for weighted fits with n > 2.
 // The same fit gives Z(W) = Z_bulk - C_Z / W; zeta = C / intercept (zeta_phi, zeta_Z).
 // Cross-check of C: 2 x integral over the half profile of (phi_bulk - phi(y)) dy.
-// lambda_L against C: a straight line through the origin (gsl_fit_mul / gsl_fit_wmul).
+// lambda_L against C: a straight line through the origin (gsl_fit_mul / gsl_fit_wmul), or with an
+// intercept (fitLine).
 #include <optional>
 #include <vector>
 
@@ -46,6 +47,22 @@ struct ProportionalFit {
 /// Fits y = slope * x through the origin (e.g. lambda_L against C). sigma empty = unweighted.
 ProportionalFit fitThroughOrigin(const std::vector<double>& x, const std::vector<double>& y,
                                  const std::vector<double>& sigma = {});
+
+struct LineFit {
+  double intercept = 0.0, slope = 0.0;
+  double interceptError = 0.0, slopeError = 0.0;
+  double covariance = 0.0;        ///< cov(intercept, slope)
+  double chiSquare = 0.0;         ///< weighted: sum ((y - fit)/sigma)^2; unweighted: sum of squared residuals
+  int dof = 0;                    ///< n - 2
+  std::optional<double> quality;  ///< Q of the chi^2 (weighted fits with dof > 0)
+  bool weighted = false;
+};
+
+/// Fits y = intercept + slope x (e.g. lambda_L / d_avg against x_S), weighted by 1/sigma^2
+/// (gsl_fit_wlinear), or unweighted with the covariance from the scatter when sigma is empty.
+/// Throws std::invalid_argument for fewer than 2 points, sizes that differ, a non-positive sigma
+/// or all points at one x.
+LineFit fitLine(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& sigma = {});
 
 /// C from a folded wall-normal profile: 2 sum_k (phi_bulk - phi_k) dy over y in [0, W/2] [d_L].
 double profileIntegralC(const SolidFractionProfile& profile, double phiBulk);

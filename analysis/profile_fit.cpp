@@ -63,15 +63,53 @@ void toVector(const ProfileLaw& l, gsl_vector* x) {
   }
 }
 
+// A parameter's interval, or none (lo = hi = 0): p = lo + (hi - lo) s(u), s the logistic function.
+struct Bound {
+  double lo = 0.0, hi = 0.0;
+  bool bounded() const { return hi > lo; }
+  double toNatural(double u) const { return bounded() ? lo + (hi - lo) / (1.0 + std::exp(-u)) : u; }
+  double toFree(double p) const {
+    if (!bounded()) return p;
+    // Strictly inside: a start on a bound would have a zero derivative.
+    const double margin = 1e-3 * (hi - lo);
+    const double q = std::clamp(p, lo + margin, hi - margin);
+    return std::log((q - lo) / (hi - q));
+  }
+  double derivative(double p) const { return bounded() ? (p - lo) * (hi - p) / (hi - lo) : 1.0; }
+  bool atBound(double p) const { return bounded() && std::min(p - lo, hi - p) < 1e-3 * (hi - lo); }
+};
+
+// Intervals in the order of the parameter vector; lambda up to twice the span of the data.
+std::vector<Bound> boundsOf(const ProfileBounds& b, bool bi, double extent) {
+  std::vector<Bound> out(parameterCount(bi));
+  out[0] = {b.alpha[0], b.alpha[1]};
+  out[3] = {b.gammaL[0], b.gammaL[1]};
+  out[4] = {b.lambdaMin, std::max(2.0 * extent, 2.0 * b.lambdaMin)};
+  if (bi) {
+    out[6] = {b.gammaS[0], b.gammaS[1]};
+    out[7] = out[4];
+  }
+  return out;
+}
+
 struct Data {
   const std::vector<double>* y;
   const std::vector<double>* phi;
   bool bi;
+  std::vector<Bound> bounds;
+  gsl_vector* natural;  // scratch: the natural parameters of the free ones
 };
+
+const gsl_vector* naturalOf(const gsl_vector* u, const Data& d) {
+  for (std::size_t i = 0; i < d.bounds.size(); ++i) gsl_vector_set(d.natural, i, d.bounds[i].toNatural(gsl_vector_get(u, i)));
+  return d.natural;
+}
+
+ProfileLaw lawOf(const gsl_vector* u, const Data& d) { return fromVector(naturalOf(u, d), d.bi); }
 
 int residuals(const gsl_vector* x, void* params, gsl_vector* f) {
   const Data& d = *static_cast<Data*>(params);
-  const ProfileLaw l = fromVector(x, d.bi);
+  const ProfileLaw l = lawOf(x, d);
   for (std::size_t k = 0; k < d.y->size(); ++k) gsl_vector_set(f, k, l((*d.y)[k]) - (*d.phi)[k]);
   return GSL_SUCCESS;
 }
@@ -80,9 +118,7 @@ int residuals(const gsl_vector* x, void* params, gsl_vector* f) {
 // s_i = sin(...), e_i = e^{-y/lambda_i}:
 //   df/dalpha = -(y/alpha^2) e^{-y/alpha} B,   df/dphi_b = A,   df/dbeta_i = A c_i e_i,
 //   df/dgamma_i = A beta_i e_i s_i pi (2y-1)/gamma_i^2,   df/dlambda_i = A beta_i c_i e_i y/lambda_i^2.
-int jacobian(const gsl_vector* x, void* params, gsl_matrix* jac) {
-  const Data& d = *static_cast<Data*>(params);
-  const ProfileLaw l = fromVector(x, d.bi);
+void naturalJacobian(const ProfileLaw& l, const Data& d, gsl_matrix* jac) {
   for (std::size_t k = 0; k < d.y->size(); ++k) {
     const double y = (*d.y)[k];
     const double ea = std::exp(-y / l.alpha), a = 1.0 - ea;
@@ -98,6 +134,18 @@ int jacobian(const gsl_vector* x, void* params, gsl_matrix* jac) {
     }
     gsl_matrix_set(jac, k, 0, -(y / (l.alpha * l.alpha)) * ea * b);
     gsl_matrix_set(jac, k, 1, a);
+  }
+}
+
+// In the free parameters: each bounded column times dp/du.
+int jacobian(const gsl_vector* x, void* params, gsl_matrix* jac) {
+  const Data& d = *static_cast<Data*>(params);
+  const gsl_vector* p = naturalOf(x, d);
+  naturalJacobian(fromVector(p, d.bi), d, jac);
+  for (std::size_t i = 0; i < d.bounds.size(); ++i) {
+    const double dp = d.bounds[i].derivative(gsl_vector_get(p, i));
+    if (dp != 1.0)
+      for (std::size_t k = 0; k < d.y->size(); ++k) gsl_matrix_set(jac, k, i, gsl_matrix_get(jac, k, i) * dp);
   }
   return GSL_SUCCESS;
 }
@@ -167,15 +215,37 @@ bool drive(gsl_multifit_nlinear_workspace* w, int maxIterations, int& status, in
   return true;
 }
 
-// fitProfile's starts: alpha and lambda of the initial guess each times 1, 1/2 and 2.
-constexpr int kStarts = 9;
+// The residuals' integrated autocorrelation, tau = 1 + 2 sum_{j>=1} rho_j, the sum over the lags
+// before the first rho_j <= 0 (the initial positive sequence; Geyer 1992), at most n/4 of them.
+double correlationSlices(const gsl_vector* r) {
+  const std::size_t n = r->size;
+  double mean = 0.0, var = 0.0;
+  for (std::size_t k = 0; k < n; ++k) mean += gsl_vector_get(r, k) / static_cast<double>(n);
+  for (std::size_t k = 0; k < n; ++k) var += std::pow(gsl_vector_get(r, k) - mean, 2);
+  if (!(var > 0.0)) return 1.0;
+  double tau = 1.0;
+  for (std::size_t lag = 1; lag <= n / 4; ++lag) {
+    double c = 0.0;
+    for (std::size_t k = lag; k < n; ++k) c += (gsl_vector_get(r, k) - mean) * (gsl_vector_get(r, k - lag) - mean);
+    const double rho = c / var;
+    if (rho <= 0.0) break;
+    tau += 2.0 * rho;
+  }
+  return tau;
+}
+
+// fitProfile's starts: alpha and lambda of the initial guess each times 1, 1/2 and 2, for each
+// of two small grains' periods when bidisperse (or the given start alone).
+constexpr int kStarts = 18;
 
 Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, const ProfileLaw& start,
                const ProfileFitDef& def, int attempt) {
   Attempt at;
   const bool bi = def.bidisperse;
   const std::size_t n = y.size(), p = parameterCount(bi);
-  Data data{&y, &phi, bi};
+  const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
+  const auto natural = checked(gsl_vector_alloc(p));
+  Data data{&y, &phi, bi, boundsOf(def.bounds, bi, *hi - *lo), natural.get()};
   gsl_multifit_nlinear_fdf fdf;
   fdf.f = residuals;
   fdf.df = jacobian;
@@ -190,6 +260,7 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   const auto x0 = checked(gsl_vector_alloc(p));
   const auto covar = checked(gsl_matrix_alloc(p, p));
   toVector(start, x0.get());
+  for (std::size_t i = 0; i < p; ++i) gsl_vector_set(x0.get(), i, data.bounds[i].toFree(gsl_vector_get(x0.get(), i)));
   int info = 0;
   int status = gsl_multifit_nlinear_init(x0.get(), &fdf, w);
   // GSL_ENOMEM: an allocation inside GSL failed (the error handler is off).
@@ -203,8 +274,7 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   }
   ProfileFit& f = at.fit;
   f.iterations = static_cast<int>(gsl_multifit_nlinear_niter(w));
-  const gsl_vector* x = gsl_multifit_nlinear_position(w);
-  f.law = fromVector(x, bi);
+  f.law = lawOf(gsl_multifit_nlinear_position(w), data);
   double chisq = 0.0;
   gsl_blas_ddot(gsl_multifit_nlinear_residual(w), gsl_multifit_nlinear_residual(w), &chisq);
   f.chiSquare = chisq;
@@ -213,8 +283,12 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
   if (status != GSL_SUCCESS) {
     f.reason = fmt::format("no convergence ({})", gsl_strerror(status));
   } else {
-    if (gsl_multifit_nlinear_covar(gsl_multifit_nlinear_jac(w), 0.0, covar.get()) == GSL_ENOMEM) throw std::bad_alloc();
-    const double scale = chisq / f.dof;
+    // The covariance of the natural parameters: the Jacobian in p at the minimum.
+    const auto jac = checked(gsl_matrix_alloc(n, p));
+    naturalJacobian(f.law, data, jac.get());
+    if (gsl_multifit_nlinear_covar(jac.get(), 0.0, covar.get()) == GSL_ENOMEM) throw std::bad_alloc();
+    f.correlationSlices = correlationSlices(gsl_multifit_nlinear_residual(w));
+    const double scale = chisq / f.dof * f.correlationSlices;
     const auto err = checked(gsl_vector_alloc(p));
     bool finite = true;
     for (std::size_t i = 0; i < p; ++i) {
@@ -226,8 +300,17 @@ Attempt runFit(const std::vector<double>& y, const std::vector<double>& phi, con
     const ProfileLaw& l = f.law;
     bool physical = l.alpha > 0.0 && l.gamma[0] > 0.0 && l.lambda[0] > 0.0 && std::isfinite(chisq);
     if (bi) physical = physical && l.gamma[1] > 0.0 && l.lambda[1] > 0.0;
+    // A period at its bound is no layering found: the two terms beating against each other (at
+    // the bounds between gamma_S and gamma_L, with large betas of opposite signs) or a
+    // wavelength the data do not hold. Such a start is not kept, however low its chi^2.
+    std::string atBound;
+    if (data.bounds[0].atBound(f.law.alpha)) atBound = "alpha";
+    if (data.bounds[3].atBound(f.law.gamma[0])) atBound = "gamma_L";
+    if (bi && data.bounds[6].atBound(f.law.gamma[1])) atBound = "gamma_S";
     if (!physical)
       f.reason = "non-physical parameters (alpha, gamma or lambda <= 0)";
+    else if (!atBound.empty())
+      f.reason = fmt::format("{} at the bound of its interval (no layering of that period in the data)", atBound);
     else if (!finite)
       f.reason = "singular covariance (parameters not determined by the data)";
     else {
@@ -294,46 +377,59 @@ ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>
     best.reason = fmt::format("too few profile points ({}) for {} parameters", y.size(), p);
     return best;
   }
-  const ProfileLaw guess = initialGuess(y, phi, def.bidisperse);
+  ProfileLaw guess = def.start ? *def.start : initialGuess(y, phi, def.bidisperse);
+  guess.bidisperse = def.bidisperse;
+  if (!def.bidisperse) guess.beta[1] = 0.0;
+  // A given start is the minimum's basin already: that one start alone.
+  const std::vector<double> factors = def.start ? std::vector<double>{1.0} : std::vector<double>{1.0, 0.5, 2.0};
   bool found = false;
   std::string lastReason;
   int attempt = 0;
-  for (double fa : {1.0, 0.5, 2.0})
-    for (double fl : {1.0, 0.5, 2.0}) {
-      ProfileLaw start = guess;
-      start.alpha *= fa;
-      start.lambda[0] *= fl;
-      start.lambda[1] *= fl;
-      Attempt at = runFit(y, phi, start, def, ++attempt);
-      if (!at.valid) {
-        lastReason = at.fit.reason;
-        continue;
+  // Bidisperse: the small grains' period from the guess (half the large grains') and from about
+  // their size, d_S = d_L / 2, a little less as layers of spheres nest.
+  const std::vector<double> smallPeriods =
+      def.bidisperse && !def.start ? std::vector<double>{guess.gamma[1], 0.47} : std::vector<double>{guess.gamma[1]};
+  for (double gs : smallPeriods)
+    for (double fa : factors)
+      for (double fl : factors) {
+        ProfileLaw start = guess;
+        start.gamma[1] = gs;
+        start.alpha *= fa;
+        start.lambda[0] *= fl;
+        start.lambda[1] *= fl;
+        Attempt at = runFit(y, phi, start, def, ++attempt);
+        if (!at.valid) {
+          lastReason = at.fit.reason;
+          continue;
+        }
+        if (!found || at.fit.chiSquare < best.chiSquare) {
+          best = at.fit;
+          found = true;
+        }
       }
-      if (!found || at.fit.chiSquare < best.chiSquare) {
-        best = at.fit;
-        found = true;
-      }
-    }
   if (!found) {
     best = ProfileFit{};
     best.reason = lastReason.empty() ? "no start converged" : lastReason;
     return best;
   }
   // A decay length beyond the profile's extent is not measured by it: the layering does not
-  // decay within the data, and the fit lets lambda run away (to 1e9 d_L on 6 d_L wide piles).
-  // Judged on the best start only: another start's shorter lambda, with a larger chi^2, is no
-  // better measure of it.
+  // decay within the data, and left free the fit would let lambda run away (to 1e9 d_L on 6 d_L
+  // wide piles; bounded, to twice the span). Nor is one at its lower bound. Judged on the best
+  // start only: another start's shorter lambda, with a larger chi^2, is no better measure of it.
   const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
   const double extent = *hi - *lo;
-  for (int i = 0; i < (def.bidisperse ? 2 : 1); ++i)
-    if (best.law.lambda[i] > extent) {
+  const std::vector<Bound> bounds = boundsOf(def.bounds, def.bidisperse, extent);
+  for (int i = 0; i < (def.bidisperse ? 2 : 1); ++i) {
+    const double lambda = best.law.lambda[i];
+    best.lambdaDetermined[i] = lambda <= extent && !bounds[4].atBound(lambda);
+    if (i == 0 && !best.lambdaDetermined[0]) {
       best.ok = false;
-      best.reason = fmt::format(
-          "the layering does not decay within the profile: lambda_{} = {:.3g} d_L is longer "
-          "than the {:.3g} d_L it spans",
-          i == 0 ? 'L' : 'S', best.law.lambda[i], extent);
-      break;
+      best.reason = lambda > extent ? fmt::format("the layering does not decay within the profile: lambda_L = {:.3g} "
+                                                  "d_L is longer than the {:.3g} d_L it spans",
+                                                  lambda, extent)
+                                    : fmt::format("lambda_L = {:.3g} d_L is at its lower bound", lambda);
     }
+  }
   return best;
 }
 

@@ -24,6 +24,7 @@ struct ReportState {
   std::string compare;
   bool noFigures = false;
   bool noRunLinks = false;
+  double lambdaWidth = study::ReportOptions{}.lambdaWidth;
 };
 
 void runReportCommand(const ReportState& st) {
@@ -43,6 +44,7 @@ void runReportCommand(const ReportState& st) {
     o.reference = std::move(reference);
     o.runLinks = !st.noRunLinks;
     o.compare = st.compare;
+    o.lambdaWidth = st.lambdaWidth;
     const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
     step.next("moving the report into place");
     output.commit();
@@ -80,6 +82,11 @@ void registerReport(CLI::App& app) {
   sub->add_flag("--no-run-links", st->noRunLinks,
                 "Name the runs without links to their folders and the sweep folder by its name alone: a report to "
                 "publish without the run folders");
+  sub->add_option("--lambda-width", st->lambdaWidth,
+                  "Width W [d_L] at which lambda_L is read, from phi(y) averaged over the replicas; a family without "
+                  "it is read at its nearest confined width")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   sub->callback([st] { runReportCommand(*st); });
 }
 

@@ -19,6 +19,7 @@
 #include "study/report_compare.hpp"
 #include "study/report_document.hpp"
 #include "study/report_figures.hpp"
+#include "study/report_lambda.hpp"
 #include "study/report_relaxation.hpp"
 
 namespace confpack::study {
@@ -678,66 +679,6 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
   }
 }
 
-// lambda_L from the widest confined sample of each series (the wall effect of one wall, least
-// disturbed by the other), against x_S and against C of the phi(W) fit.
-void addLambdaSection(Document& doc, const StudyView& study, FigureWriter& figures,
-                      const std::vector<FitRow>& phiFits) {
-  Plot byXs{"lambdaL_vs_xS", "lambda_L (widest confined sample) against x_S", "x_S [%]", "lambda_L [d_L]", {}, {}, false};
-  Plot byC{"lambdaL_vs_C", "lambda_L against C of the phi(W) fit, with a line through the origin", "C [d_L]",
-           "lambda_L [d_L]", {}, {}, true};
-  std::vector<std::vector<std::string>> originRows;
-  for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
-    const std::string& b = study.sides[bi];
-    std::map<SeriesKey, Series> bySeries;  // a line per series without its x_S
-    std::vector<double> cs, ls, sig;
-    Series cSeries{b, static_cast<int>(bi) + 1, bi > 0, false, {}};
-    for (const SeriesKey& sk : study.seriesKeys()) {
-      const ConfKey* widest = study.sampleOf(sk, b, "profile_fit/lambda_L", false);
-      if (!widest) continue;
-      const ReplicaStat st = study.statOf(*widest, b, "profile_fit/lambda_L");
-      const double err = standardError(st);
-      auto& ser = bySeries[SeriesKey{sk.shape, 0.0, sk.mu, sk.settings}];
-      if (ser.name.empty())
-        ser = Series{fmt::format("{} mu_w={}{} {}", sk.shape == 0 ? "spheres" : "pinacoids", num(sk.mu),
-                                 settingsText(sk.settings), b),
-                     static_cast<int>(bySeries.size()), bi > 0, true, {}};
-      ser.points.push_back({sk.xs, st.mean, err});
-      for (const FitRow& f : phiFits)
-        if (f.series == sk && f.side == b && f.fit) {
-          cs.push_back(f.fit->c);
-          ls.push_back(st.mean);
-          sig.push_back(err);
-          cSeries.points.push_back({f.fit->c, st.mean, err});
-        }
-    }
-    for (auto& [_, ser] : bySeries) byXs.series.push_back(ser);
-    if (!cSeries.points.empty()) byC.series.push_back(cSeries);
-    if (!cs.empty()) {
-      bool weighted = true;
-      for (double e : sig) weighted = weighted && e > 0.0;
-      try {
-        const analysis::ProportionalFit f = analysis::fitThroughOrigin(cs, ls, weighted ? sig : std::vector<double>{});
-        originRows.push_back({b, std::to_string(cs.size()), fmt::format("{:.4f} ± {:.2g}", f.slope, f.slopeError),
-                              weighted ? "weighted" : "unweighted"});
-        byC.functions.push_back(fmt::format("[0:*] {:.10g}*x lc {} dt {} notitle", f.slope, bi + 1, bi > 0 ? 2 : 1));
-      } catch (const std::exception& e) {
-        originRows.push_back({b, std::to_string(cs.size()), std::string("no fit: ") + e.what(), ""});
-      }
-    }
-  }
-  doc.heading(2, "Wall ordering length lambda_L against x_S and against C");
-  doc.paragraph(
-      "lambda_L is the length, in d_L, over which the layering of the large grains decays away from a wall, "
-      "from the fit of the profile phi(y) of the widest confined sample of each family (the wall least disturbed "
-      "by the other one).");
-  if (!byXs.series.empty()) doc.figure(figures.draw(byXs));
-  if (!originRows.empty()) {
-    doc.figure(figures.draw(byC));
-    doc.paragraph(fmt::format("Linear fit through the origin lambda_L = k C per {}:", study.compared.noun));
-    doc.table({study.compared.column, "points", "k = lambda_L / C", "weights"}, originRows);
-  }
-}
-
 // ---------------------------------------------------------------------------------------------
 // The answers first: one row per family and backend, then nscd against Bullet
 
@@ -745,6 +686,57 @@ std::string familyName(const SeriesKey& s) {
   return fmt::format("{}: {} x_S = {}, mu_w = {}{}", familyOf(s.shape, s.xs),
                      s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids", num(s.xs),
                      num(s.mu), settingsText(s.settings, ", ", " = "));
+}
+
+// The families' samples for lambda_L (study/report_lambda.hpp): per series and backend, the
+// replicas' phi(y) at the confined width nearest `target`, and C of the series' phi(W) fit.
+std::vector<LambdaSample> lambdaSamples(const StudyView& study, const std::vector<FitRow>& phiFits, double target) {
+  std::vector<LambdaSample> out;
+  for (const SeriesKey& sk : study.seriesKeys())
+    for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
+      const std::string& b = study.sides[bi];
+      std::vector<double> widths;
+      for (const auto& [k, bySide] : study.groups)
+        if (seriesOf(k) == sk && !k.periodic && bySide.count(b) && study.statOf(k, b, "mean_size").n > 0)
+          widths.push_back(k.width);
+      const std::optional<double> width = lambdaWidth(widths, target);
+      if (!width) continue;
+      LambdaSample s;
+      s.family = familyName(sk);
+      s.series = seriesText(sk);
+      s.sphere = sk.shape == static_cast<int>(core::ShapeKind::Sphere);
+      s.xs = sk.xs;
+      s.mu = sk.mu;
+      s.plain = sk.settings.empty();
+      s.backend = b;
+      s.backendIndex = static_cast<int>(bi);
+      s.width = *width;
+      for (const auto& [k, bySide] : study.groups) {
+        if (seriesOf(k) != sk || k.periodic || k.width != *width) continue;
+        for (const RunRecord* r : bySide.at(b)) {
+          if (r->status != RunStatus::Done) continue;
+          const auto table = readCsv(study.runDir(*r) / "phi_y.csv");
+          const auto size = r->values.find("mean_size");
+          if (!table || table->columns.size() < 2 || size == r->values.end() || !size->second) continue;
+          analysis::SeedProfile p;
+          for (const auto& row : table->rows) {
+            p.y.push_back(row[0]);
+            p.phi.push_back(row[1]);
+          }
+          p.meanSize = *size->second;
+          s.seeds.push_back(std::move(p));
+        }
+      }
+      if (s.seeds.empty()) continue;
+      for (const FitRow& f : phiFits)
+        if (f.series == sk && f.side == b && f.fit) {
+          s.c = f.fit->c;
+          if (fitErrorsKnown(*f.fit)) s.cError = f.fit->cError;
+        }
+      out.push_back(std::move(s));
+    }
+  fitLambdaSamples(out);
+  return out;
 }
 
 // A number of the summary with its standard error (none from a single run or a line through two
@@ -780,6 +772,7 @@ struct StudySummary {
   std::vector<SummaryQuantity> quantities;
   std::map<std::pair<SeriesKey, std::string>, RunCount> runs;
   std::map<std::pair<SeriesKey, std::string>, std::string> phiFitQuality;  // chi²/dof and Q, or why no fit
+  std::vector<LambdaFinding> lambdaFindings;  // the wall-ordering length's two findings, tested
 };
 
 // phi_bulk and C (or Z_bulk and C_Z) of the fits of one key; nothing when the study has no fit.
@@ -809,7 +802,7 @@ std::string fitQualityText(const FitRow& f) {
                          : "exact through 2 widths: no standard errors";
 }
 
-StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
+StudySummary summarize(const StudyView& study, const ConfinementFits& fits, const std::vector<LambdaSample>& lambdas) {
   StudySummary out;
   if (!fits.phi.empty()) {
     for (const FitRow& f : fits.phi) out.phiFitQuality[{f.series, f.side}] = fitQualityText(f);
@@ -819,19 +812,23 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits) {
   addFitQuantities(out, fits.z, "Z_bulk",
                      "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
                      "C_Z", "loss of coordination due to the walls, in d_L");
-  // lambda_L/d_avg from the widest confined sample of each family, as the lambda_L section takes it.
-  const std::string lambdaKey = "profile_fit/lambda_L_over_d_avg";
+  // lambda_L/d_avg of the seed-averaged profile at the lambda width, as the lambda_L section takes it.
   SummaryQuantity lambda{
       "lambda_L/d_avg",
-      "length over which the wall's layering of the large grains decays, in mean grain sizes d_avg, "
-      "from the fit of phi(y) of the widest confined sample (mean ± standard error over its replicas)",
+      "length over which the wall's layering of the large grains decays, in mean grain sizes d_avg, from the fit "
+      "of phi(y) averaged over the replicas at the width of the lambda_L section (± the larger of the fit's "
+      "standard error and the jackknife over the replicas)",
       {}};
-  for (const SeriesKey& sk : study.seriesKeys())
-    for (const std::string& b : study.sides) {
-      const ConfKey* widest = study.sampleOf(sk, b, lambdaKey, false);
-      if (!widest) continue;
-      lambda.values[{sk, b}] = replicaEstimate(study.statOf(*widest, b, lambdaKey), 3);
-    }
+  for (const LambdaSample& l : lambdas) {
+    const SeriesKey* sk = nullptr;
+    for (const SeriesKey& k : study.seriesKeys())
+      if (familyName(k) == l.family) sk = &k;
+    if (!sk || !l.fit.ok) continue;
+    const analysis::FittedLength& v = l.fit.lambdaLOverDAvg;
+    lambda.values[{*sk, l.backend}] = {v.value, v.error,
+                                       fmt::format("{:.3g} ± {:.2g} (W = {})", v.value, v.error, num(l.width))};
+  }
+  out.lambdaFindings = lambdaFindings(lambdas);
   if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
   // Measured on one sample of each family, the biperiodic one (or, without it, the widest confined
   // one), mean ± standard error over its replicas: phi and Z where the study fits no phi_bulk (a
@@ -1088,6 +1085,12 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
       "comes from a single run and one marked (no SE) from a line through two widths: neither has a standard "
       "error, and the verdict does not judge them");
   doc.bullets(definitions);
+  if (!summary.lambdaFindings.empty()) {
+    doc.paragraph("The wall-ordering length lambda_L (section \"Wall ordering length\" below):");
+    std::vector<std::string> findings;
+    for (const LambdaFinding& f : summary.lambdaFindings) findings.push_back(f.text);
+    doc.bullets(findings);
+  }
 }
 
 // What the finished runs of (series, backend) say of their contact networks' rigidity
@@ -1341,7 +1344,6 @@ void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& f
                  "the same model Z(W) = Z_bulk − C_Z/W gives its value far from the walls, Z_bulk, and its loss "
                  "due to the walls, C_Z, in d_L."},
                 references);
-  if (study.keys.count("profile_fit/lambda_L")) addLambdaSection(doc, study, figures, fits.phi);
 }
 
 // The figures of one profile file the runs wrote (CSV), averaged over replicas: one figure per
@@ -1724,11 +1726,13 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   ConfinementFits fits;
   if (study.keys.count("solid_fraction")) fits.phi = confinementFits(study, "solid_fraction");
   if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
-  const StudySummary results = summarize(study, fits);
+  const std::vector<LambdaSample> lambdas = lambdaSamples(study, fits.phi, options.lambdaWidth);
+  const StudySummary results = summarize(study, fits, lambdas);
   References references(options.reference);
   addSummarySection(doc, study, results, references);
   addVerdictSection(doc, study, results);
   addFitFigureSections(doc, study, figures, fits, references);
+  if (!lambdas.empty()) addLambdaSection(doc, figures, lambdas, options.lambdaWidth, outDir);
   addSettingSections(doc, study, figures);
   addProfileSections(doc, study, figures);
   addRelaxationSections(doc, study, figures);

@@ -97,6 +97,10 @@ struct ReportOptions {
   /// runs, std::invalid_argument otherwise. Empty: the backends, unchecked (a study of one backend
   /// says it has nothing to compare).
   std::string compare;
+  /// The width [d_L] at which lambda_L is read (`--lambda-width`), from the phi(y) profile
+  /// averaged over the replicas; a family without it is read at its nearest confined width
+  /// (study/report_lambda.hpp).
+  double lambdaWidth = 10.0;
 };
 
 struct ReportSummary {

@@ -58,6 +58,7 @@ void makeStudy(const fs::path& dir) {
     const double s = 0.002 * static_cast<double>(cfg.seed);
     const double w = cfg.box.periodicY ? 1e9 : cfg.box.width;
     const json r = {{"solid_fraction", 0.64 - 0.5 / w + s},
+                    {"mean_size", 1.0},
                     {"coordination", {{"Z", 6.0 - 1.2 / w + s}}},
                     {"profile_fit", {{"lambda_L", 1.0 + s}, {"lambda_L_over_d_avg", 1.0 + s}}},
                     {"interpenetration_percent", {{"exact", 0.01}}},
@@ -67,10 +68,13 @@ void makeStudy(const fs::path& dir) {
     std::ofstream phi(runDir / "phi_y.csv"), z(runDir / "z_y.csv");
     phi << "y,phi\n";
     z << "y,Z,simple\n";
-    for (int i = 0; i < 20; ++i) {
-      phi << 0.1 * i << ',' << 0.6 + 0.05 * std::exp(-0.3 * i) * std::cos(3.0 * i) << '\n';
-      z << 0.25 * i << ',' << 5.5 + 0.02 * i << ',' << 5.0 << '\n';
+    // A layering decaying over 1 d_L, for the lambda_L figures (study/report_lambda.hpp).
+    for (int i = 0; i < 100; ++i) {
+      const double y = 0.02 * (i + 0.5);
+      phi << y << ',' << (1.0 - std::exp(-y / 0.08)) * (0.6 + 0.2 * std::exp(-y) * std::cos(3.3 * (2.0 * y - 1.0))) + s * 0.01
+          << '\n';
     }
+    for (int i = 0; i < 20; ++i) z << 0.25 * i << ',' << 5.5 + 0.02 * i << ',' << 5.0 << '\n';
     return r;
   };
   study::SweepOptions o;
