@@ -27,29 +27,6 @@ namespace {
 // The points of a common-plane contact at most (LMGC90 keeps 4 corners of the intersection).
 constexpr std::size_t kCommonPlanePoints = 4;
 
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-// Counter-clockwise convex hull of the points (Andrew's monotone chain): written here because
-// none of the project's libraries offers a 2D hull of a handful of points.
-Polygon2 convexHull(Polygon2 pts) {
-  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  if (pts.size() < 3) return pts;
-  std::vector<Vec2> hull(2 * pts.size());
-  std::size_t k = 0;
-  auto add = [&](const Vec2& p, std::size_t floor) {
-    while (k >= floor + 2 && cross2(hull[k - 1] - hull[k - 2], p - hull[k - 2]) <= 0.0) --k;
-    hull[k++] = p;
-  };
-  for (const Vec2& p : pts) add(p, 0);
-  const std::size_t lower = k - 1;
-  for (std::size_t i = pts.size() - 1; i-- > 0;) add(pts[i], lower);
-  Polygon2 out;
-  for (std::size_t i = 0; i + 1 < k; ++i) out.push_back(hull[i]);  // the last is the first again
-  return out;
-}
-
 // The corners of a convex polygon with the sharpest turns, at most `keep`, in polygon order.
 Polygon2 sharpestCorners(const Polygon2& poly, std::size_t keep) {
   if (poly.size() <= keep) return poly;

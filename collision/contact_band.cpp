@@ -15,10 +15,6 @@ namespace confpack::collision {
 
 namespace {
 
-double cross2(const Vec2& a, const Vec2& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
-
 void checkWidth(double width, const char* who) {
   if (!(width > 0.0) || !std::isfinite(width))
     throw std::invalid_argument(fmt::format("{}: band width must be positive and finite (got {})", who, width));
@@ -29,33 +25,6 @@ Vec3 unitOrThrow(const Vec3& n, const char* who) {
   if (!(len > 0.0) || !std::isfinite(len))
     throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
   return n / len;
-}
-
-// Convex hull of pts, counter-clockwise (Andrew's monotone chain); collinear and repeated points
-// are dropped, so a hull of one point or of points on one line has 1 or 2 vertices.
-Polygon2 convexHull(Polygon2 pts) {
-  std::sort(pts.begin(), pts.end(),
-            [](const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); });
-  if (pts.size() == 2 && pts[0] == pts[1]) return {pts[0]};
-  if (pts.size() < 3) return pts;
-  std::vector<Vec2> hull;
-  auto turnsLeft = [&](const Vec2& p) {
-    const std::size_t k = hull.size();
-    return cross2(hull[k - 1] - hull[k - 2], p - hull[k - 2]) > 0.0;
-  };
-  for (const Vec2& p : pts) {  // lower chain
-    while (hull.size() >= 2 && !turnsLeft(p)) hull.pop_back();
-    hull.push_back(p);
-  }
-  const std::size_t lower = hull.size() + 1;
-  for (std::size_t i = pts.size() - 1; i-- > 0;) {  // upper chain
-    while (hull.size() >= lower && !turnsLeft(pts[i])) hull.pop_back();
-    hull.push_back(pts[i]);
-  }
-  hull.pop_back();  // the last point repeats the first
-  Polygon2 out;
-  for (const Vec2& p : hull) out.push_back(p);
-  return out;
 }
 
 double segmentDistance(const Vec2& p, const Vec2& a, const Vec2& b) {

@@ -13,10 +13,6 @@ namespace {
 // reach (reachFace).
 constexpr double kReachFaceMinCos = 0.1;
 
-double cross2(const Vec2& a, const Vec2& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
-
 // Clips segment p-q to the convex CCW polygon (Cyrus-Beck). Returns false if nothing is left.
 bool clipSegment(Vec2& p, Vec2& q, std::span<const Vec2> poly) {
   double t0 = 0.0, t1 = 1.0;
@@ -409,6 +405,31 @@ void pointsWithinReach(const WorldPolyhedron& A, const WorldPolyhedron& B, const
 }
 
 }  // namespace
+
+Polygon2 convexHull(Polygon2 pts) {
+  std::sort(pts.begin(), pts.end(),
+            [](const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); });
+  if (pts.size() == 2 && pts[0] == pts[1]) return {pts[0]};
+  if (pts.size() < 3) return pts;
+  std::vector<Vec2> hull;
+  auto turnsLeft = [&](const Vec2& p) {
+    const std::size_t k = hull.size();
+    return cross2(hull[k - 1] - hull[k - 2], p - hull[k - 2]) > 0.0;
+  };
+  for (const Vec2& p : pts) {  // lower chain
+    while (hull.size() >= 2 && !turnsLeft(p)) hull.pop_back();
+    hull.push_back(p);
+  }
+  const std::size_t lower = hull.size() + 1;
+  for (std::size_t i = pts.size() - 1; i-- > 0;) {  // upper chain
+    while (hull.size() >= lower && !turnsLeft(pts[i])) hull.pop_back();
+    hull.push_back(pts[i]);
+  }
+  hull.pop_back();  // the last point repeats the first
+  Polygon2 out;
+  for (const Vec2& p : hull) out.push_back(p);
+  return out;
+}
 
 double polygonArea(std::span<const Vec2> p) {
   double a = 0.0;

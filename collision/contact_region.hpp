@@ -58,6 +58,14 @@ struct SupportSet {
 /// Support feature of w along dir (unit): the vertices with dir.x >= max_w dir.x - eps [d_L].
 SupportSet supportSet(const WorldPolyhedron& w, const Vec3& dir, double eps);
 
+/// z component of the cross product of two lateral vectors.
+inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// Counter-clockwise convex hull of lateral points (Andrew's monotone chain; collinear points
+/// dropped, two equal points one): written here because none of the project's libraries offers
+/// a 2D hull of a handful of points.
+Polygon2 convexHull(Polygon2 pts);
+
 /// Signed area of a polygon (> 0 counter-clockwise) [d_L^2].
 double polygonArea(std::span<const Vec2> p);
 

@@ -11,7 +11,6 @@ namespace {
 // Lock-free, so the handler may store into it (async-signal-safe).
 std::atomic<int> requested{0};
 static_assert(std::atomic<int>::is_always_lock_free);
-std::atomic<bool> outOfMemory{false};
 
 extern "C" void onStopSignal(int signal) { requested.store(signal, std::memory_order_relaxed); }
 
@@ -41,9 +40,5 @@ void installStopHandlers() {
 }
 
 int stopSignal() { return requested.load(std::memory_order_relaxed); }
-
-void requestStopForMemory() noexcept { outOfMemory.store(true, std::memory_order_relaxed); }
-
-bool memoryRanOut() noexcept { return outOfMemory.load(std::memory_order_relaxed); }
 
 }  // namespace confpack::core

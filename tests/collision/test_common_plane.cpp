@@ -58,7 +58,7 @@ TEST_CASE("common plane: a face tilted by 2 degrees is face to face, every point
   CHECK(farthest > 0.02);  // not vacuous: the face is open far beyond the one gap
 }
 
-TEST_CASE("common plane: an overlap is the gap of every point; a narrower band reads the tilt as an edge") {
+TEST_CASE("common plane: an overlap is the gap of every point, and a narrower band reads the tilt as an edge") {
   const ConvexPolyhedron p = makePinacoid(1.0, kParams);
   const WorldPolyhedron A(PlacedPolyhedron{&p, Vec3::Zero(), Mat3::Identity()});
   const WorldPolyhedron flat(facingB(p, 0.0, -0.002));
