@@ -819,9 +819,10 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits, cons
       "of phi(y) averaged over the replicas at the width of the lambda_L section (± the larger of the fit's "
       "standard error and the jackknife over the replicas)",
       {}};
+  const auto seriesKeys = study.seriesKeys();  // sk points into it, so it must outlive the loop
   for (const LambdaSample& l : lambdas) {
     const SeriesKey* sk = nullptr;
-    for (const SeriesKey& k : study.seriesKeys())
+    for (const SeriesKey& k : seriesKeys)
       if (familyName(k) == l.family) sk = &k;
     if (!sk || !l.fit.ok) continue;
     const analysis::FittedLength& v = l.fit.lambdaLOverDAvg;
