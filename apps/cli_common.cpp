@@ -160,33 +160,34 @@ std::string& programName() {
 std::string_view currentCommand;
 thread_local const char* currentStep = "reading the command line";
 
-// Address space set aside at start, in two parts, for when an allocation first fails. The first
-// part is given back and the allocation retried: it succeeds from that room, and the work fails
-// at its next safe point (core::requestStopForMemory). An allocation can fail where a throw ends
-// the program: nlohmann::json's destructor (noexcept) keeps the children of the value it destroys
-// on a stack, a vector as long as its largest array (1 MB for the packing of a 68,000-grain
-// deposit). The second part is given back when an allocation fails again, just before
-// std::bad_alloc is thrown: the unwinding that follows allocates too, and a bad_alloc thrown by a
-// destructor during unwinding terminates the program (SIGABRT) with the staging folder left
-// behind. 16 MB each covers the destruction of arrays of a million elements; untouched, it costs
-// no physical memory.
+// Address space set aside at start and given back when an allocation first fails, just before
+// std::bad_alloc is thrown. The unwinding that follows allocates: nlohmann::json's destructor
+// keeps the children of the value it destroys on a stack, a vector as long as its largest array
+// (1 MB for the packing of a 68,000-grain deposit). 16 MB covers the destruction of arrays of a
+// million elements; untouched, it costs no physical memory.
 constexpr std::size_t kUnwindingReserve = std::size_t{16} << 20;
-std::atomic<void*> retryReserve{nullptr};
 std::atomic<void*> unwindingReserve{nullptr};
 
-void releaseReserveOrFail() {
-  if (void* reserve = retryReserve.exchange(nullptr)) {
-    std::free(reserve);
-    core::requestStopForMemory();
-    return;  // operator new retries
-  }
+// Set when an allocation has failed: a std::terminate that follows with no exception current (a
+// noexcept function that a bad_alloc left, as libstdc++'s directory_iterator::operator++) is that
+// failure.
+std::atomic<bool> allocationFailed{false};
+
+void releaseReserveAndFail() {
+  allocationFailed = true;
   std::free(unwindingReserve.exchange(nullptr));
   throw std::bad_alloc();
 }
 
-/// "<program> <command>: out of memory while <step>", assembled on the stack and written with one
-/// write(2): nothing here allocates, so it works when memory has run out.
-void writeOutOfMemoryLine() noexcept {
+// The staged output being written, for the terminate handler (one per process at a time).
+std::atomic<StagedOutput*> openOutput{nullptr};
+// Set once a command's output is in place: what fails after it (its summary line) fails nothing.
+std::atomic<bool> outputCommitted{false};
+
+/// "<program> <command>: out of memory while <step>" (or, given `instead`, that text after the
+/// colon), assembled on the stack and written with one write(2): nothing here allocates, so it
+/// works when memory has run out.
+void writeOutOfMemoryLine(const char* instead = nullptr) noexcept {
   char line[512];
   std::size_t n = 0;
   auto put = [&](std::string_view s) {
@@ -199,11 +200,43 @@ void writeOutOfMemoryLine() noexcept {
     put(" ");
     put(currentCommand);
   }
-  put(": out of memory while ");
-  put(currentStep);
+  if (instead != nullptr) {
+    put(": ");
+    put(instead);
+  } else {
+    put(": out of memory while ");
+    put(currentStep);
+  }
   line[n++] = '\n';
   std::fflush(stdout);
   (void)!::write(STDERR_FILENO, line, n);
+}
+
+// An allocation that fails where no exception may leave (a noexcept destructor: nlohmann::json's
+// allocates its stack) ends in std::terminate with std::bad_alloc current. Out of memory is still
+// one line and exit 1 with nothing left behind: the staged output is removed here, and the
+// process ends without unwinding further. Any other reason to terminate aborts as before.
+[[noreturn]] void terminateOutOfMemory() noexcept {
+  bool outOfMemory = false;
+  if (const std::exception_ptr e = std::current_exception(); !e) {
+    outOfMemory = allocationFailed.load();
+  } else {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::bad_alloc&) {
+      outOfMemory = true;
+    } catch (...) {
+    }
+  }
+  if (!outOfMemory) std::abort();
+  std::free(unwindingReserve.exchange(nullptr));
+  if (outputCommitted.load()) {
+    writeOutOfMemoryLine("warning: out of memory after the output was in place (it is complete)");
+    std::_Exit(kExitOk);
+  }
+  if (StagedOutput* out = openOutput.exchange(nullptr)) out->abandon();
+  writeOutOfMemoryLine();
+  std::_Exit(kExitRuntimeFailure);
 }
 
 [[noreturn]] void failWith(std::string_view command, const std::exception& e, int code) {
@@ -220,9 +253,9 @@ int parseAndRun(CLI::App& app, int argc, char** argv) {
   programName() = app.get_name();
   core::installStopHandlers();
   if (unwindingReserve.load() == nullptr) {
-    retryReserve = std::malloc(kUnwindingReserve);
     unwindingReserve = std::malloc(kUnwindingReserve);
-    std::set_new_handler(releaseReserveOrFail);
+    std::set_new_handler(releaseReserveAndFail);
+    std::set_terminate(terminateOutOfMemory);
   }
   // Out of memory is a failure of the work wherever it happens (exit 1), never bad input. By the
   // time this handler runs, the unwinding has released what the failed work held; the line is
@@ -268,7 +301,8 @@ void runStage(std::string_view command, const char* stepName, int failure, const
   } catch (const CLI::RuntimeError&) {
     throw;
   } catch (const std::bad_alloc&) {
-    throw;
+    if (!outputCommitted.load()) throw;
+    writeOutOfMemoryLine("warning: out of memory after the output was in place (it is complete)");
   } catch (const core::Interrupted& e) {
     failWith(command, e, 128 + e.signal());
   } catch (const std::exception& e) {
@@ -407,6 +441,7 @@ StagedOutput::StagedOutput(const fs::path& target, RenameFn rename, RemoveFn rem
     fs::remove_all(staging_);
     fs::create_directory(staging_);
     writeOutputMarker(staging_);
+    openOutput.store(this);
   } catch (const fs::filesystem_error& e) {
     discardStaging();
     throw std::runtime_error(fmt::format("cannot create output folder {}: {}", target.string(), e.code().message()));
@@ -428,7 +463,11 @@ void StagedOutput::discardStaging() noexcept {
   }
 }
 
+void StagedOutput::abandon() noexcept { discardStaging(); }
+
 StagedOutput::~StagedOutput() {
+  StagedOutput* self = this;
+  openOutput.compare_exchange_strong(self, nullptr);
   if (committed_ || keepStaging_) return;
   // remove_all allocates (directory entries) and may throw std::bad_alloc even with an error_code;
   // out of a destructor that would terminate the program (SIGABRT) in the middle of the unwinding
@@ -439,9 +478,12 @@ StagedOutput::~StagedOutput() {
 }
 
 void StagedOutput::commit() {
+  StagedOutput* self = this;
+  openOutput.compare_exchange_strong(self, nullptr);  // from here on, its files are the output
   if (!fs::exists(target_)) {
     rename_(staging_, target_);
     committed_ = true;
+    outputCommitted = true;
     return;
   }
   // Into an existing target, entry by entry. Each old entry is moved aside into the staging
@@ -490,6 +532,7 @@ void StagedOutput::commit() {
   // Every new entry is in place: the command has done its work, whatever happens to the old
   // files now. One that cannot be removed (an immutable file) is left where it is and named.
   committed_ = true;
+  outputCommitted = true;
   try {
     removeAll_(aside);
     fs::remove(staging_);

@@ -136,6 +136,9 @@ class StagedOutput {
 
   /// Where to write.
   const std::filesystem::path& dir() const { return staging_; }
+  /// Removes the staging folder (and the parents it made) at once, for a process about to end
+  /// without unwinding (out of memory where no exception may leave, apps/cli_common.cpp).
+  void abandon() noexcept;
   /// The final directory.
   const std::filesystem::path& target() const { return target_; }
   void commit();
