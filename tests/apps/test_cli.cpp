@@ -271,7 +271,7 @@ TEST_CASE("values that can be refused before any work are: exit 2, one line, the
   CHECK(s.entries().empty());
 }
 
-TEST_CASE("--out must be new, empty or confpack's: the root and a folder of other files are refused untouched") {
+TEST_CASE("the output rule from the command line: the root and a folder of other files are refused untouched") {
   // The failure this guards against: `run --out /` exited 0 having written into the file system's root, and a
   // folder of the user's was filled.
   ConfpackSession s("cli_out_rule");

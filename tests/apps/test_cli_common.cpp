@@ -180,7 +180,7 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
 }
 
 
-TEST_CASE("--out must be new, empty or confpack's own: the root and a folder of other files are refused") {
+TEST_CASE("the output rule: --out must be new, empty or confpack's own, and the root or a folder of other files are refused") {
   // The failure this guards against: `run --out /` wrote into the file system's root, and a folder of the
   // user's was filled or its entries replaced.
   using confpack::app::checkOutputTarget;
