@@ -11,7 +11,7 @@ set yrange [0.64:0.84]
 set grid
 plot "inflation.csv" every ::1 using 4:2 with linespoints lw 2 pt 7 title "exact packings inflated by S = 1.00 ... 1.07 (exact overlap)", \
      "inflation.csv" every ::1 using 4:2:(sprintf("%s", stringcolumn(1))) with labels offset 1.8,-0.6 notitle, \
-     "variants.csv" every ::1::4 using 3:2 with points pt 5 ps 1.2 title "contact models (exact, velocity law, common plane, both)", \
+     "variants.csv" every ::1::5 using 3:2 with points pt 5 ps 1.2 title "contact models (exact, loose, velocity law, common plane, both)", \
      "-" using 1:2:3 with xerrorbars pt 9 ps 1.8 lc rgb "black" title "published (biperiodic, lattice bounds)"
 3.6,0.772,0.1
 e
