@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -181,6 +181,9 @@ void releaseReserveAndFail() {
 
 // The staged output being written, for the terminate handler (one per process at a time).
 std::atomic<StagedOutput*> openOutput{nullptr};
+// The last staging folder made and the user's folder it stands for: an error message names the
+// user's folder, not the internal one (a write that failed in it, a disk full).
+std::string stagingName, stagingTarget;
 // Set once a command's output is in place: what fails after it (its summary line) fails nothing.
 std::atomic<bool> outputCommitted{false};
 
@@ -241,6 +244,9 @@ void writeOutOfMemoryLine(const char* instead = nullptr) noexcept {
 
 [[noreturn]] void failWith(std::string_view command, const std::exception& e, int code) {
   std::string what = e.what();
+  if (!stagingName.empty())
+    for (std::size_t at = what.find(stagingName); at != std::string::npos; at = what.find(stagingName, at))
+      what.replace(at, stagingName.size(), stagingTarget);
   for (char& c : what)
     if (c == '\n') c = ' ';
   const std::string label = command.empty() ? programName() : programName() + " " + std::string(command);
@@ -339,8 +345,8 @@ void checkCanCreateIn(const fs::path& target) {
   fs::path parent = target.parent_path();
   while (!parent.empty() && !fs::exists(parent, ec) && parent != parent.parent_path()) parent = parent.parent_path();
   if (!fs::is_directory(parent, ec))
-    throw std::invalid_argument(fmt::format("--out: '{}' is not a folder, so '{}' cannot be made in it",
-                                            parent.string(), target.string()));
+    throw std::invalid_argument(
+        fmt::format("--out: '{}' is not a folder, so '{}' cannot be made in it", parent.string(), target.string()));
   const fs::path probe = parent / fmt::format(".confpack-probe-{}", ::getpid());
   if (!fs::create_directory(probe, ec) && ec)
     throw std::invalid_argument(fmt::format("--out: cannot create '{}': {}", target.string(), ec.message()));
@@ -440,6 +446,8 @@ StagedOutput::StagedOutput(const fs::path& target, RenameFn rename, RemoveFn rem
     removeStaleStaging(target_);
     fs::remove_all(staging_);
     fs::create_directory(staging_);
+    stagingName = staging_.string();
+    stagingTarget = target_.string();
     writeOutputMarker(staging_);
     openOutput.store(this);
   } catch (const fs::filesystem_error& e) {
@@ -463,7 +471,9 @@ void StagedOutput::discardStaging() noexcept {
   }
 }
 
-void StagedOutput::abandon() noexcept { discardStaging(); }
+void StagedOutput::abandon() noexcept {
+  discardStaging();
+}
 
 StagedOutput::~StagedOutput() {
   StagedOutput* self = this;

@@ -468,6 +468,14 @@ std::filesystem::path privateFileName(const std::filesystem::path& dir, std::str
   return dir / fmt::format(".{}.{}.{}.{}", stem, host, ::getpid(), counter++);
 }
 
+namespace {
+std::atomic<WriteFault> writeFault{nullptr};
+}  // namespace
+
+void setWriteFault(WriteFault fault) {
+  writeFault = fault;
+}
+
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   // Named after this host and process: tasks on several nodes write into one shared sweep folder.
@@ -478,8 +486,10 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view tex
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw std::runtime_error(fmt::format("{}: cannot create ({})", tmp.string(), std::strerror(errno)));
   // The reason (disk full, quota) is errno of the call that failed, before anything else sets it.
-  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  const int writeError = written ? 0 : errno;
+  const WriteFault fault = writeFault.load();
+  const int injected = fault != nullptr ? fault(path) : 0;
+  const bool written = injected == 0 && std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const int writeError = injected != 0 ? injected : written ? 0 : errno;
   const bool closed = std::fclose(f) == 0;
   const int reason = writeError != 0 ? writeError : closed ? 0 : errno;  // 0: the C library gave none
   std::error_code ec;

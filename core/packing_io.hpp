@@ -59,4 +59,11 @@ std::filesystem::path privateFileName(const std::filesystem::path& dir, std::str
 /// failure the temporary is removed and std::runtime_error is thrown; `path` is then untouched.
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text);
 
+/// Fault injection for a test build (tests/support/allocation_fault.hpp): called before each
+/// writeFileAtomically with the file's path, a non-zero errno it returns makes that write fail
+/// as the system's would (ENOSPC for a full disk, EIO for an I/O error). confpack itself never
+/// sets one.
+using WriteFault = int (*)(const std::filesystem::path& path);
+void setWriteFault(WriteFault fault);
+
 }  // namespace confpack::core

@@ -1,9 +1,13 @@
 #include "tests/support/allocation_fault.hpp"
 
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <new>
+
+#include "core/packing_io.hpp"
 
 namespace {
 // Allocations to go until the one that fails (that one takes it from 1 to 0); <= 0: disarmed.
@@ -11,6 +15,14 @@ std::atomic<long> countdown{0};
 // Every operator new since the start, for CONFPACK_COUNT_ALLOCATIONS.
 std::atomic<long> made{0};
 const char* countFile = nullptr;
+
+// Writes to go until the one that fails, and the errno it fails with (CONFPACK_FAIL_WRITE).
+std::atomic<long> writesLeft{0};
+int writeErrno = ENOSPC;
+
+int failKthWrite(const std::filesystem::path&) {
+  return writesLeft.fetch_sub(1) == 1 ? writeErrno : 0;
+}
 
 void writeCount() {
   if (std::FILE* f = std::fopen(countFile, "w")) {
@@ -46,6 +58,12 @@ void operator delete(void* p, std::size_t) noexcept {
 namespace confpack::testing {
 
 void armAllocationFault() {
+  if (const char* k = std::getenv("CONFPACK_FAIL_WRITE")) {
+    writesLeft = std::strtol(k, nullptr, 10);
+    if (const char* e = std::getenv("CONFPACK_FAIL_WRITE_ERRNO"); e != nullptr && std::strcmp(e, "EIO") == 0)
+      writeErrno = EIO;
+    if (writesLeft > 0) confpack::core::setWriteFault(failKthWrite);
+  }
   if (const char* k = std::getenv("CONFPACK_FAIL_ALLOCATION")) countdown = std::strtol(k, nullptr, 10);
   if ((countFile = std::getenv("CONFPACK_COUNT_ALLOCATIONS")) != nullptr) {
     made = 0;
