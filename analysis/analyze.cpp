@@ -58,8 +58,8 @@ void checkCells(const core::BoxDef& box, double grains, const AnalysisOptions& o
   std::string what;
   const double cells = estimatedCells(box, grains, options, &what);
   if (!(cells <= options.maxCells))
-    throw std::invalid_argument(fmt::format(
-        "analysis: about {:.3g} cells ({}), more than max_cells ({:g}); {}", cells, what, options.maxCells, remedy));
+    throw std::invalid_argument(fmt::format("analysis: about {:.3g} cells ({}), more than max_cells ({:g}); {}", cells,
+                                            what, options.maxCells, remedy));
 }
 
 namespace {

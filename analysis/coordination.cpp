@@ -1,7 +1,5 @@
 #include "analysis/coordination.hpp"
 
-#include "analysis/geometric_contacts.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,6 +8,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "analysis/geometric_contacts.hpp"
 #include "analysis/grain_volumes.hpp"
 #include "analysis/solid_fraction.hpp"
 #include "collision/contact_band.hpp"

@@ -30,11 +30,11 @@
 namespace confpack::analysis {
 
 struct EquilibriumReport {
-  bool reached = false;          ///< all three ratios below their thresholds for every grain
-  double maxForceRatio = 0.0;    ///< max_i |sum F_i| / (d_i^2 P) [-]
-  double maxMomentRatio = 0.0;   ///< max_i |sum M_i| / (d_i^3 P) [-]
-  double maxKineticRatio = 0.0;  ///< max_i E_k,i / (d_i^3 P) [-]
-  double meanKineticRatio = 0.0; ///< the mean over grains of E_k,i / (d_i^3 P) [-]
+  bool reached = false;           ///< all three ratios below their thresholds for every grain
+  double maxForceRatio = 0.0;     ///< max_i |sum F_i| / (d_i^2 P) [-]
+  double maxMomentRatio = 0.0;    ///< max_i |sum M_i| / (d_i^3 P) [-]
+  double maxKineticRatio = 0.0;   ///< max_i E_k,i / (d_i^3 P) [-]
+  double meanKineticRatio = 0.0;  ///< the mean over grains of E_k,i / (d_i^3 P) [-]
   /// The same mean without the spin of spheres, the energy of the motion that can still change the
   /// packing [-]: a sphere's spin leaves its boundary in place, and once a sphere spun by wall
   /// friction leaves the wall, its frictionless contacts never stop it.

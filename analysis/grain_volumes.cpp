@@ -63,7 +63,8 @@ double grainBoxVolume(const core::Grain& g, const core::Vec3& lo, const core::Ve
   return collision::boxVolume(p.placed, lo, hi);
 }
 
-collision::ConvexPolytope pinacoidIntersection(const collision::PlacedPolyhedron& a, const collision::PlacedPolyhedron& b) {
+collision::ConvexPolytope pinacoidIntersection(const collision::PlacedPolyhedron& a,
+                                               const collision::PlacedPolyhedron& b) {
   collision::ConvexPolytope cur = collision::toPolytope(a), next;
   const auto& normals = b.shape->faceNormals();
   const auto& offsets = b.shape->faceOffsets();

@@ -5,8 +5,8 @@
 #include <span>
 #include <vector>
 
-#include "core/grain.hpp"
 #include "collision/polyhedron_clip.hpp"
+#include "core/grain.hpp"
 
 namespace confpack::analysis {
 
@@ -44,6 +44,7 @@ double grainBoxVolume(const core::Grain& g, const core::Vec3& lo, const core::Ve
 double grainOverlapVolume(const core::Grain& a, const core::Grain& b, const core::Vec3& separation);
 
 /// The intersection of two placed pinacoids as a polytope (for bounds and further clipping).
-collision::ConvexPolytope pinacoidIntersection(const collision::PlacedPolyhedron& a, const collision::PlacedPolyhedron& b);
+collision::ConvexPolytope pinacoidIntersection(const collision::PlacedPolyhedron& a,
+                                               const collision::PlacedPolyhedron& b);
 
 }  // namespace confpack::analysis

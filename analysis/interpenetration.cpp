@@ -159,8 +159,8 @@ bool latticeBounds(const core::Packing& packing, const BulkRegion& region, const
       volumeOf[g] = 0.0;
       if ((bounds[g].first.array() >= cHi.array()).any() || (bounds[g].second.array() <= cLo.array()).any()) continue;
       const collision::Plane planes[6] = {{core::Vec3::UnitX(), cHi.x()}, {-core::Vec3::UnitX(), -cLo.x()},
-                                     {core::Vec3::UnitY(), cHi.y()}, {-core::Vec3::UnitY(), -cLo.y()},
-                                     {core::Vec3::UnitZ(), cHi.z()}, {-core::Vec3::UnitZ(), -cLo.z()}};
+                                          {core::Vec3::UnitY(), cHi.y()}, {-core::Vec3::UnitY(), -cLo.y()},
+                                          {core::Vec3::UnitZ(), cHi.z()}, {-core::Vec3::UnitZ(), -cLo.z()}};
       collision::clip(polytope[g], planes[0], work[0]);
       int cur = 0;
       for (int pl = 1; pl < 6 && !work[cur].empty(); ++pl) {

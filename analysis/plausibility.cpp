@@ -106,11 +106,10 @@ void checkPlausible(const core::Packing& packing, const std::filesystem::path& f
   // backends nor the analysis has sphere-pinacoid contacts. The file format can hold both.
   for (std::size_t i = 0; i < packing.grains.size(); ++i)
     if (packing.grains[i].shape != packing.grains.front().shape)
-      throw std::invalid_argument(
-          fmt::format("{}: grains[{}].shape: {}, but grains[0] is a {}: a packing mixing spheres and pinacoids is "
-                      "not supported",
-                      file.string(), i, core::toString(packing.grains[i].shape),
-                      core::toString(packing.grains.front().shape)));
+      throw std::invalid_argument(fmt::format(
+          "{}: grains[{}].shape: {}, but grains[0] is a {}: a packing mixing spheres and pinacoids is "
+          "not supported",
+          file.string(), i, core::toString(packing.grains[i].shape), core::toString(packing.grains.front().shape)));
   if (allow) return;
   if (const auto why = implausibility(packing))
     throw std::invalid_argument(

@@ -101,11 +101,14 @@ struct Data {
 };
 
 const gsl_vector* naturalOf(const gsl_vector* u, const Data& d) {
-  for (std::size_t i = 0; i < d.bounds.size(); ++i) gsl_vector_set(d.natural, i, d.bounds[i].toNatural(gsl_vector_get(u, i)));
+  for (std::size_t i = 0; i < d.bounds.size(); ++i)
+    gsl_vector_set(d.natural, i, d.bounds[i].toNatural(gsl_vector_get(u, i)));
   return d.natural;
 }
 
-ProfileLaw lawOf(const gsl_vector* u, const Data& d) { return fromVector(naturalOf(u, d), d.bi); }
+ProfileLaw lawOf(const gsl_vector* u, const Data& d) {
+  return fromVector(naturalOf(u, d), d.bi);
+}
 
 int residuals(const gsl_vector* x, void* params, gsl_vector* f) {
   const Data& d = *static_cast<Data*>(params);
@@ -424,9 +427,10 @@ ProfileFit fitProfile(const std::vector<double>& yAll, const std::vector<double>
     best.lambdaDetermined[i] = lambda <= extent && !bounds[4].atBound(lambda);
     if (i == 0 && !best.lambdaDetermined[0]) {
       best.ok = false;
-      best.reason = lambda > extent ? fmt::format("the layering does not decay within the profile: lambda_L = {:.3g} "
-                                                  "d_L is longer than the {:.3g} d_L it spans",
-                                                  lambda, extent)
+      best.reason = lambda > extent ? fmt::format(
+                                          "the layering does not decay within the profile: lambda_L = {:.3g} "
+                                          "d_L is longer than the {:.3g} d_L it spans",
+                                          lambda, extent)
                                     : fmt::format("lambda_L = {:.3g} d_L is at its lower bound", lambda);
     }
   }

@@ -25,8 +25,8 @@
 // beta_L = (p1 - phi_b) exp(y1/lambda_L); alpha = 0.1. Small grains start at half the large
 // grains' gamma and lambda and a tenth of beta. A few starts around these (alpha x {1, 0.5, 2},
 // lambda x {1, 0.5, 2}; bidisperse, each with gamma_S at half gamma_L and at 0.47 d_L) are run and
-// the lowest chi^2 is kept, a start ending with alpha or a gamma at its bound excepted. ProfileFitDef::start, when given, is the one
-// start (a leave-one-out mean fitted from the full mean's minimum, analysis/profile_average.hpp).
+// the lowest chi^2 is kept, a start ending with alpha or a gamma at its bound excepted. ProfileFitDef::start, when
+// given, is the one start (a leave-one-out mean fitted from the full mean's minimum, analysis/profile_average.hpp).
 #include <optional>
 #include <string>
 #include <vector>
@@ -72,7 +72,7 @@ struct ProfileFit {
   double chiSquare = 0.0;  ///< sum of squared residuals
   int dof = 0;             ///< points - parameters
   int iterations = 0;
-  double rms = 0.0;  ///< sqrt(chi^2 / dof)
+  double rms = 0.0;                ///< sqrt(chi^2 / dof)
   double correlationSlices = 1.0;  ///< tau, the residuals' integrated autocorrelation [slices]
   /// Whether the data fix lambda_L (index 0) and lambda_S (1): a lambda longer than the profile's
   /// span, or at its lower bound, is not determined. lambda_L not determined makes ok false;

@@ -45,8 +45,8 @@ void runDeposit(const DepositState& st) {
     // The progress callback is the deposition's safe point (every hundredth of the placeholders,
     // at most every 1000): SIGINT or SIGTERM stops it there, the staged output is removed on the
     // way out, exit 130 or 143.
-    const compaction::Deposit pile =
-        compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
+    const compaction::Deposit pile = compaction::deposit(
+        cfg.box, cfg.population, cfg.deposition, cfg.seed, [&](std::size_t done, std::size_t total) {
           core::stopIfRequested([&] { return fmt::format("while depositing (placeholder {} of {})", done, total); });
           progress.update(total ? static_cast<double>(done) / static_cast<double>(total) : 0.0,
                           fmt::format("{}/{} placeholders", done, total));

@@ -50,10 +50,11 @@ void runReportCommand(const ReportState& st) {
     output.commit();
     // A figure gnuplot failed on is said in its place in the report and here; the rest stands.
     for (const std::string& e : s.figureErrors) fmt::print(stderr, "confpack report: {}\n", e);
-    const std::string drawn = !s.gnuplotUsed ? (st.noFigures ? " (not drawn: --no-figures)"
-                                                              : fmt::format(" (not drawn: gnuplot {})", s.gnuplotProblem))
-                              : s.figureErrors.empty() ? ""
-                                                       : fmt::format(" ({} not drawn, see above)", s.figureErrors.size());
+    const std::string drawn =
+        !s.gnuplotUsed
+            ? (st.noFigures ? " (not drawn: --no-figures)" : fmt::format(" (not drawn: gnuplot {})", s.gnuplotProblem))
+        : s.figureErrors.empty() ? ""
+                                 : fmt::format(" ({} not drawn, see above)", s.figureErrors.size());
     fmt::print("report: {} runs ({} done, {} failed, {} missing, {} not equilibrated), {} figures{}\n  {}\n  {}\n",
                s.runs, s.done, s.failed, s.missing, s.unequilibrated, s.figures, drawn,
                (out / s.html.filename()).string(), (out / s.markdown.filename()).string());
@@ -64,8 +65,9 @@ void runReportCommand(const ReportState& st) {
 
 void registerReport(CLI::App& app) {
   auto st = std::make_shared<ReportState>();
-  auto* sub = app.add_subcommand("report", "Tables and figures of a study, the two backends side by side "
-                                           "(writes report.html, report.md and figures/)");
+  auto* sub = app.add_subcommand("report",
+                                 "Tables and figures of a study, the two backends side by side "
+                                 "(writes report.html, report.md and figures/)");
   sub->add_option("sweepdir", st->sweepDir, "Sweep folder (made by confpack sweep or reproduce)")
       ->required()
       ->check(CLI::ExistingDirectory);

@@ -56,8 +56,9 @@ void runReproduceCommand(const ReproduceState& st) {
     markOutputFolder(st.out);
     // The study's definition next to its results, as a sweep file a user can edit and rerun.
     core::writeFileAtomically(st.out / "study.json", study::reproductionSweep(st.scale).dump(2));
-    summary = study::runSweep(spec, st.out, opt, study::pipelineRunner(1, compaction::Checkpointing{}.everySeconds, spec.settleWith),
-                               study::pipelineDepositor());
+    summary = study::runSweep(spec, st.out, opt,
+                              study::pipelineRunner(1, compaction::Checkpointing{}.everySeconds, spec.settleWith),
+                              study::pipelineDepositor());
     step.next("writing the report");
     // Staged like `confpack report`'s: an interrupted report leaves the previous one whole.
     StagedOutput staged(st.out / "report");
@@ -71,8 +72,9 @@ void runReproduceCommand(const ReproduceState& st) {
              st.scale, summary.total, summary.ran, summary.alreadyDone, summary.failed, summary.wallSeconds,
              report.html.string(), report.markdown.string());
   if (summary.failed > 0) {
-    fmt::print(stderr, "confpack reproduce: error: {} run(s) failed (listed in the report); run the same command "
-                       "again to retry them\n",
+    fmt::print(stderr,
+               "confpack reproduce: error: {} run(s) failed (listed in the report); run the same command "
+               "again to retry them\n",
                summary.failed);
     throw CLI::RuntimeError(kExitRuntimeFailure);
   }
@@ -86,9 +88,10 @@ void registerReproduce(CLI::App& app) {
       "reproduce",
       "Run the confinement study (docs/model.md) with both backends and write its report (DIR/report/report.html). "
       "Rerunning the same command resumes an interrupted study.");
-  sub->add_option("--scale", st->scale,
-                  "tiny (smoke test, minutes), quick (shrunk box, about 10 min on 2 cores), medium (830 to 4,300 "
-                  "monodisperse grains a run, meant to run overnight on 2 cores) or paper (the paper's sizes, for a cluster)")
+  sub->add_option(
+         "--scale", st->scale,
+         "tiny (smoke test, minutes), quick (shrunk box, about 10 min on 2 cores), medium (830 to 4,300 "
+         "monodisperse grains a run, meant to run overnight on 2 cores) or paper (the paper's sizes, for a cluster)")
       ->check(CLI::IsMember({"tiny", "quick", "medium", "paper"}))
       ->capture_default_str();
   sub->add_option("--out", st->out, "Study folder (sweep runs, deposits, report/)")->required();

@@ -40,19 +40,19 @@ std::string number(const nlohmann::json& v, const char* format = "{:.4f}") {
 struct RunState {
   core::RunConfig cfg;
   CommonOptions opts;
-  std::string backendOptions;  ///< --backend-options JSON text
-  std::string compactionOptions;  ///< --compaction-options JSON text
-  std::string from;            ///< --from PACKING: start from its grains instead of a deposit
-  std::string configFile;      ///< --config FILE: the configuration instead of the flags
-  bool allowImplausible = false;  ///< --allow-implausible: take an implausible --from packing
+  std::string backendOptions;               ///< --backend-options JSON text
+  std::string compactionOptions;            ///< --compaction-options JSON text
+  std::string from;                         ///< --from PACKING: start from its grains instead of a deposit
+  std::string configFile;                   ///< --config FILE: the configuration instead of the flags
+  bool allowImplausible = false;            ///< --allow-implausible: take an implausible --from packing
   compaction::Checkpointing checkpointing;  ///< --checkpoint FILE, --checkpoint-every SECONDS
   CLI::App* sub = nullptr;
 };
 
 /// Options that --from replaces: the packing gives the box and the grains.
-constexpr const char* kGivenByPacking[] = {"--length-x", "--width", "--periodic-y", "--height", "--shape",
-                                           "--small-fraction", "--grains", "--pinacoid-G", "--pinacoid-E",
-                                           "--pinacoid-alpha"};
+constexpr const char* kGivenByPacking[] = {"--length-x",   "--width",          "--periodic-y", "--height",
+                                           "--shape",      "--small-fraction", "--grains",     "--pinacoid-G",
+                                           "--pinacoid-E", "--pinacoid-alpha"};
 
 /// Flags that --config may go with: they set nothing the configuration holds.
 constexpr const char* kBesideConfig[] = {"--help",       "--config",           "--out",
@@ -145,13 +145,12 @@ void runRun(RunState& st) {
     writeJson(output.dir() / "config.json", resolvedConfig(cfg, result));
     step.next("moving the output into place");
     output.commit();
-    fmt::print("run: {} {} grains, phi = {}, Z = {}, interpenetration {} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
-               cfg.backend, result["n_grains"].get<int>(), number(result["solid_fraction"]),
-               number(result["coordination"]["Z"], "{:.3f}"),
-               number(result["interpenetration_percent"]["exact"], "{:.2e}"),
-               result["equilibrium"]["reached"].get<bool>() ? "reached" : "NOT reached",
-               result["timing"]["steps"].get<long>(), result["timing"]["wall_s"].get<double>(),
-               output.target().string());
+    fmt::print(
+        "run: {} {} grains, phi = {}, Z = {}, interpenetration {} %, equilibrium {} ({} steps, {:.1f} s) -> {}\n",
+        cfg.backend, result["n_grains"].get<int>(), number(result["solid_fraction"]),
+        number(result["coordination"]["Z"], "{:.3f}"), number(result["interpenetration_percent"]["exact"], "{:.2e}"),
+        result["equilibrium"]["reached"].get<bool>() ? "reached" : "NOT reached", result["timing"]["steps"].get<long>(),
+        result["timing"]["wall_s"].get<double>(), output.target().string());
   });
 }
 

@@ -60,8 +60,8 @@ std::vector<std::size_t> namedRuns(const std::vector<study::SweepRun>& runs, con
     if (name.empty()) continue;
     const auto it = index.find(name);
     if (it == index.end())
-      throw std::invalid_argument(fmt::format("--runs: no run '{}' in the table ({} to {})", name, runs.front().name,
-                                              runs.back().name));
+      throw std::invalid_argument(
+          fmt::format("--runs: no run '{}' in the table ({} to {})", name, runs.front().name, runs.back().name));
     picked.insert(it->second);
   }
   if (picked.empty()) throw std::invalid_argument("--runs: no run named");
@@ -90,8 +90,8 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
     const fs::path dir = fs::absolute(out).lexically_normal();
     fs::create_directories(dir / "slurm" / "logs");  // sbatch does not create the logs' folder
     const fs::path script = dir / "slurm" / "study.sbatch";
-    core::writeFileAtomically(script, study::sbatchScript(st.slurmOptions, tasks, fs::read_symlink("/proc/self/exe"),
-                                                          dir, spec.name));
+    core::writeFileAtomically(
+        script, study::sbatchScript(st.slurmOptions, tasks, fs::read_symlink("/proc/self/exe"), dir, spec.name));
     fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
     const std::string others = fmt::format("{} done, {} running or queued", done, live);
     if (!st.submit) {
@@ -101,9 +101,10 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
     }
     const std::string job = study::submitBatch(script);
     study::recordSubmission(dir, {job, tasks, ""});
-    fmt::print("submitted job {}: {} array tasks over {} unfinished runs ({}); logs in {}; progress: confpack sweep {} "
-               "--status\n",
-               job, tasks.size(), todo.size(), others, (dir / "slurm" / "logs").string(), dir.string());
+    fmt::print(
+        "submitted job {}: {} array tasks over {} unfinished runs ({}); logs in {}; progress: confpack sweep {} "
+        "--status\n",
+        job, tasks.size(), todo.size(), others, (dir / "slurm" / "logs").string(), dir.string());
   });
 }
 
@@ -159,10 +160,12 @@ void runSweepCommand(const SweepState& st) {
   std::vector<std::size_t> only;
   checkInput("sweep", [&] {
     if (folder && !st.out.empty() && fs::absolute(st.out).lexically_normal() != fs::absolute(out).lexically_normal())
-      throw std::invalid_argument(fmt::format("--out: {} is a sweep folder already; give no other --out",
-                                              st.file.string()));
-    if (folder) study::readRunTable(st.file, &spec);
-    else spec = study::readSweepSpec(st.file, st.maxRuns);
+      throw std::invalid_argument(
+          fmt::format("--out: {} is a sweep folder already; give no other --out", st.file.string()));
+    if (folder)
+      study::readRunTable(st.file, &spec);
+    else
+      spec = study::readSweepSpec(st.file, st.maxRuns);
     runs = study::expandRuns(spec);
     study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
     // The sweep file leaves backend_options to the backend: checked here, so that a typo is bad
@@ -188,8 +191,8 @@ void runSweepCommand(const SweepState& st) {
       study::checkSlurmPath(out);
     }
     if ((st.status || st.reanalyse) && !fs::exists(out / study::kSweepTable))
-      throw std::invalid_argument(fmt::format("{}: not a sweep folder (no {}): nothing has run", out.string(),
-                                              study::kSweepTable));
+      throw std::invalid_argument(
+          fmt::format("{}: not a sweep folder (no {}): nothing has run", out.string(), study::kSweepTable));
   });
   if (st.status) {
     runWork("sweep", [&] { std::fputs(study::formatStatus(runs, study::sweepStatus(out, runs)).c_str(), stdout); });
@@ -227,8 +230,10 @@ void runSweepCommand(const SweepState& st) {
                               study::pipelineDepositor());
   });
   if (summary.failed > 0) {
-    fmt::print(stderr, "confpack sweep: error: {} run(s) failed (see runs/*/failed.json); run the same command again to retry them\n",
-               summary.failed);
+    fmt::print(
+        stderr,
+        "confpack sweep: error: {} run(s) failed (see runs/*/failed.json); run the same command again to retry them\n",
+        summary.failed);
     throw CLI::RuntimeError(kExitRuntimeFailure);
   }
   fmt::print("sweep {}: {} of {} runs in this task finished ({} now, {} earlier{}); report with: confpack report {}\n",
@@ -314,8 +319,7 @@ void registerSweep(CLI::App& app) {
                   "With --slurm: at most this many array tasks, deposits dealt round-robin (default: one per deposit)")
       ->check(CLI::Range(1, 1000000))
       ->needs(slurm);
-  sub->add_option("--sbatch-line", so.extraLines,
-                  "With --slurm: one more #SBATCH option, e.g. --qos=long (repeatable)")
+  sub->add_option("--sbatch-line", so.extraLines, "With --slurm: one more #SBATCH option, e.g. --qos=long (repeatable)")
       ->allow_extra_args(false)
       ->needs(slurm);
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");

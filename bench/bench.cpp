@@ -14,9 +14,9 @@
 
 #include "analysis/bulk_region.hpp"
 #include "analysis/interpenetration.hpp"
-#include "core/build_info.hpp"
 #include "compaction/deposition.hpp"
 #include "compaction/time_step.hpp"
+#include "core/build_info.hpp"
 #include "study/run_pipeline.hpp"
 
 namespace confpack::bench {
@@ -147,11 +147,13 @@ nlohmann::json compareCase(const BenchDef& def, const std::string& name, core::S
                       {"box", cfg.box},
                       {"deposit_s", dep.seconds}};
   BackendRun nscd = runBackend(cfg, "nscd", dep, labelled(progress, name));
-  if (log) log(fmt::format("  nscd: {:.1f} s, {} steps, reached {}", nscd.json["wall_s"].get<double>(),
-                           nscd.json["steps"].get<long>(), nscd.outcome.reached));
+  if (log)
+    log(fmt::format("  nscd: {:.1f} s, {} steps, reached {}", nscd.json["wall_s"].get<double>(),
+                    nscd.json["steps"].get<long>(), nscd.outcome.reached));
   BackendRun bullet = runBackend(cfg, "bullet", dep, labelled(progress, name));
-  if (log) log(fmt::format("  bullet: {:.1f} s, {} steps, reached {}", bullet.json["wall_s"].get<double>(),
-                           bullet.json["steps"].get<long>(), bullet.outcome.reached));
+  if (log)
+    log(fmt::format("  bullet: {:.1f} s, {} steps, reached {}", bullet.json["wall_s"].get<double>(),
+                    bullet.json["steps"].get<long>(), bullet.outcome.reached));
   // From when on did Bullet stay at nscd's final interpenetration or lower? Not the first check
   // that is: the geometric deposit overlaps nothing, so every run starts at zero before the pile
   // loads. The answer is the first check after the last one above nscd's level (null if Bullet
@@ -166,7 +168,8 @@ nlohmann::json compareCase(const BenchDef& def, const std::string& name, core::S
   c["bullet"] = bullet.json;
   const bool both = nscd.outcome.reached && bullet.outcome.reached;
   c["ratio_time_to_equilibrium"] =
-      both ? nlohmann::json(nscd.json["wall_s"].get<double>() / bullet.json["wall_s"].get<double>()) : nlohmann::json(nullptr);
+      both ? nlohmann::json(nscd.json["wall_s"].get<double>() / bullet.json["wall_s"].get<double>())
+           : nlohmann::json(nullptr);
   c["ratio_wall_time"] = nscd.json["wall_s"].get<double>() / bullet.json["wall_s"].get<double>();
   return c;
 }
@@ -203,7 +206,8 @@ nlohmann::json restSeries(const BenchDef& def, nlohmann::json& exponents,
   for (int n : def.restSizes) {
     core::RunConfig cfg = stretchedConfig(def, n);
     const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-    const BackendRun run = runBackend(cfg, "nscd", dep, labelled(progress, fmt::format("rest n={}", dep.grains.size())));
+    const BackendRun run =
+        runBackend(cfg, "nscd", dep, labelled(progress, fmt::format("rest n={}", dep.grains.size())));
     const double wall = run.json["wall_s"].get<double>();
     const double cpu = run.outcome.history.empty() ? 0.0 : run.outcome.history.back().stepCpuSeconds;
     points.push_back({{"n_grains", dep.grains.size()},
@@ -396,9 +400,9 @@ nlohmann::json runBench(const BenchDef& def, const std::function<void(const std:
       nlohmann::json exponents;
       cases[name] = restSeries(def, exponents, log, progress);
       cases["rest_exponent"] = exponents;  // t_rest ~ n^k over the points at rest
-    }
-    else
-      throw std::invalid_argument(fmt::format("unknown bench case '{}' (expected msp-w10, mpp-w10, scaling or rest)", name));
+    } else
+      throw std::invalid_argument(
+          fmt::format("unknown bench case '{}' (expected msp-w10, mpp-w10, scaling or rest)", name));
   }
   const nlohmann::json targets = benchTargets(def, cases);
   if (log)

@@ -23,10 +23,10 @@ struct BenchDef {
   /// Which cases to run: msp-w10, mpp-w10, scaling (cost of a step against n) and rest (time to
   /// equilibrium against n; not among the defaults, being hours long at its default sizes).
   std::vector<std::string> cases = {"msp-w10", "mpp-w10", "scaling"};
-  double timeLimit = 200.0;       ///< simulated time limit of a compaction [t0]
-  double scale = 1.0;             ///< multiplies the box length and width (smaller = quicker) [-]
-  int scalingSteps = 200;         ///< steps timed per scaling point [-]
-  double scalingFall = 4.0;       ///< simulated time before the timed steps of a scaling point [t0]
+  double timeLimit = 200.0;  ///< simulated time limit of a compaction [t0]
+  double scale = 1.0;        ///< multiplies the box length and width (smaller = quicker) [-]
+  int scalingSteps = 200;    ///< steps timed per scaling point [-]
+  double scalingFall = 4.0;  ///< simulated time before the timed steps of a scaling point [t0]
   std::vector<int> scalingSizes = {2000, 4000, 8000, 16000, 30400};  ///< grains per scaling point
   /// Grains per point of the rest series: nscd compactions to equilibrium in the scaling series'
   /// box (W = 10, h = 16, L_x stretched), with `protocol` and `adaptiveDt`.

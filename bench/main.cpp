@@ -9,10 +9,10 @@
 #include <algorithm>
 #include <memory>
 
-#include "bench/bench.hpp"
 #include "apps/cli_common.hpp"
-#include "bench/microbench.hpp"
 #include "apps/progress.hpp"
+#include "bench/bench.hpp"
+#include "bench/microbench.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::bench {
@@ -106,8 +106,9 @@ void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
       ->capture_default_str();
   auto* threads =
       sub->add_option("--threads", st->def.threads, "Worker threads")->check(positiveNumber())->capture_default_str();
-  auto* adaptive = sub->add_flag("--adaptive-dt", st->def.adaptiveDt,
-                                 "msp-w10, mpp-w10 and the rest series on the adaptive time step (as run --adaptive-dt)");
+  auto* adaptive =
+      sub->add_flag("--adaptive-dt", st->def.adaptiveDt,
+                    "msp-w10, mpp-w10 and the rest series on the adaptive time step (as run --adaptive-dt)");
   auto* protocol = app::addProtocolOption(*sub, st->def.protocol);
   sub->add_flag("--quiet,-q", st->quiet, "No progress lines");
   auto* micro = sub->add_flag("--micro", st->micro,

@@ -24,8 +24,8 @@
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "collision/polyhedron_contact.hpp"
-#include "core/build_info.hpp"
 #include "compaction/deposition.hpp"
+#include "core/build_info.hpp"
 #include "core/population.hpp"
 #include "core/random.hpp"
 
@@ -140,8 +140,8 @@ double exactGap(const Grain& a, const Vec3& pa, const Grain& b, const Vec3& pb) 
     pc = collision::collidePolyhedronSphere(placedA, pb, 0.5 * b.size, kNoAlert);
   } else {
     const core::ConvexPolyhedron polyB = b.polyhedron();
-    pc =
-        collision::collidePolyhedra(placedA, collision::PlacedPolyhedron{&polyB, pb, b.orientation.toRotationMatrix()}, kNoAlert);
+    pc = collision::collidePolyhedra(placedA, collision::PlacedPolyhedron{&polyB, pb, b.orientation.toRotationMatrix()},
+                                     kNoAlert);
   }
   if (!pc) throw std::runtime_error("narrow-phase fixture: no gap for a pose");
   return pc->gap;

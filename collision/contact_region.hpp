@@ -59,7 +59,9 @@ struct SupportSet {
 SupportSet supportSet(const WorldPolyhedron& w, const Vec3& dir, double eps);
 
 /// z component of the cross product of two lateral vectors.
-inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+inline double cross2(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 /// Counter-clockwise convex hull of lateral points (Andrew's monotone chain; collinear points
 /// dropped, two equal points one): written here because none of the project's libraries offers

@@ -70,8 +70,8 @@ struct PolyhedronContact {
   double gap = 0.0;             ///< signed distance between the surfaces along normal (< 0: penetration depth) [d_L]
   Vec3 normal = Vec3::UnitZ();  ///< unit, from a towards b (for a wall: into the wall)
   ContactType type = ContactType::Simple;
-  Feature featureA{};             ///< feature of a in contact (stable key for a contact cache)
-  Feature featureB{};             ///< feature of b (for a wall or a sphere: kind Face/Vertex, index 0)
+  Feature featureA{};  ///< feature of a in contact (stable key for a contact cache)
+  Feature featureB{};  ///< feature of b (for a wall or a sphere: kind Face/Vertex, index 0)
   /// World points on the contact plane, midway between the surfaces. Inline storage: a contact
   /// costs no heap allocation (the nscd narrow phase builds one per pair and step).
   SmallVector<Vec3, kMaxPolyhedronContactPoints> points;

@@ -23,7 +23,7 @@ double closestSegmentSegment(const Vec3& p1, const Vec3& q1, const Vec3& p2, con
                              Vec3& c1, Vec3& c2);
 
 struct DistanceResult {
-  double distance = kInf;      ///< [d_L]
+  double distance = kInf;       ///< [d_L]
   Vec3 normal = Vec3::UnitZ();  ///< unit, from A towards B
 };
 

@@ -39,13 +39,13 @@ using Polygon2 = VertexArray<Vec2>;
 // A polyhedron in world coordinates with the topology the narrow phase needs.
 struct WorldPolyhedron {
   const ConvexPolyhedron* shape = nullptr;
-  VertexArray<Vec3> v;                                          // world vertices
-  VertexArray<Vec3> n;                                          // world outward face normals
-  VertexArray<double> off;                                      // n.x = off on the face
-  SmallVector<std::array<int, 2>, kInlineEdges> edgeFaces;      // the two faces adjacent to each edge
-  SmallVector<Vec3, kInlineEdges> edgeArc;                      // n[face1] x n[face0]: the edge's Gauss-map arc normal
-  Vec3 centre = Vec3::Zero();                 // an interior point (vertex mean)
-  double radius = 0.0;                        // bounding radius of the shape
+  VertexArray<Vec3> v;                                      // world vertices
+  VertexArray<Vec3> n;                                      // world outward face normals
+  VertexArray<double> off;                                  // n.x = off on the face
+  SmallVector<std::array<int, 2>, kInlineEdges> edgeFaces;  // the two faces adjacent to each edge
+  SmallVector<Vec3, kInlineEdges> edgeArc;                  // n[face1] x n[face0]: the edge's Gauss-map arc normal
+  Vec3 centre = Vec3::Zero();                               // an interior point (vertex mean)
+  double radius = 0.0;                                      // bounding radius of the shape
 
   /// Vertices, face normals and offsets in world coordinates; with withTopology also each edge's
   /// two faces and its Gauss-map arc normal (the separating-axis test needs them, a plane or a

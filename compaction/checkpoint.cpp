@@ -62,8 +62,7 @@ nlohmann::json historyToJson(const std::vector<CheckPoint>& history) {
   for (const CheckPoint& c : history)
     out.push_back({c.steps, c.time, c.wallSeconds, number(c.maxForceRatio), number(c.maxMomentRatio),
                    number(c.maxKineticRatio), number(c.interpenetrationPercent), c.iterations, c.rowUpdates,
-                   c.solveSeconds, c.stepSeconds, c.stepCpuSeconds, number(c.solidFraction),
-                   number(c.coordination)});
+                   c.solveSeconds, c.stepSeconds, c.stepCpuSeconds, number(c.solidFraction), number(c.coordination)});
   return out;
 }
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "core/backend.hpp"
 #include "compaction/deposition.hpp"
+#include "core/backend.hpp"
 #include "core/run_config.hpp"
 
 namespace confpack::compaction {

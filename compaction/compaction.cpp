@@ -27,7 +27,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 /// CPU time of the whole process (every thread) [s]: unlike the wall clock, it does not count the
 /// time other jobs on a shared machine take from this one.
@@ -54,7 +56,9 @@ core::Packing snapshot(const core::RunConfig& cfg, const std::vector<core::Grain
 }
 
 // A history number for result.json: null where it was not measured (JSON has no NaN).
-nlohmann::json number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+nlohmann::json number(double x) {
+  return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
+}
 
 std::vector<core::Vec3> velocities(const std::vector<core::BodyState>& states) {
   std::vector<core::Vec3> v;
@@ -105,8 +109,8 @@ Schedule makeSchedule(const core::RunConfig& cfg, const Deposit& deposit, const 
   // A step count a long holds exactly (time_limit is bounded by validation; a tiny --dt is not).
   const double stepsToLimit = std::ceil(s.timeLimit / s.dt);
   if (!(stepsToLimit < 0x1p53))
-    throw std::invalid_argument(fmt::format("compaction: time_limit {:g} t0 at dt {:g} t0 is more steps than can be counted",
-                                            s.timeLimit, s.dt));
+    throw std::invalid_argument(fmt::format(
+        "compaction: time_limit {:g} t0 at dt {:g} t0 is more steps than can be counted", s.timeLimit, s.dt));
   s.maxSteps = static_cast<long>(stepsToLimit);
   return s;
 }
@@ -423,19 +427,18 @@ nlohmann::json Driver::timingJson(const CompactionOutcome& out) const {
                               {"last_displacement", finish_->lastMove().maxDisplacement}};
     stages["quasi_static"].update(backend_->finisherReport());
   }
-  nlohmann::json timing = {
-      {"wall_s", wall},
-      {"compaction_s", wall},
-      {"protocol", core::toString(out.protocol)},
-      {"stages", stages},
-      {"steps", c_.steps},
-      {"dt", out.dt},
-      {"dt_largest", out.dtLargest},
-      {"iterations", c_.iterations},
-      {"iterations_per_step", c_.steps > 0 ? static_cast<double>(c_.iterations) / c_.steps : 0.0},
-      {"contact_updates_per_s", solveSeconds > 0.0 ? c_.rowUpdates / solveSeconds : 0.0},
-      {"phases", phases},
-      {"history", history}};
+  nlohmann::json timing = {{"wall_s", wall},
+                           {"compaction_s", wall},
+                           {"protocol", core::toString(out.protocol)},
+                           {"stages", stages},
+                           {"steps", c_.steps},
+                           {"dt", out.dt},
+                           {"dt_largest", out.dtLargest},
+                           {"iterations", c_.iterations},
+                           {"iterations_per_step", c_.steps > 0 ? static_cast<double>(c_.iterations) / c_.steps : 0.0},
+                           {"contact_updates_per_s", solveSeconds > 0.0 ? c_.rowUpdates / solveSeconds : 0.0},
+                           {"phases", phases},
+                           {"history", history}};
   // Only where the run was given a checkpoint file, so that other runs' result.json is unchanged.
   if (!checkpointing_.file.empty()) {
     // earlier_s: the wall time of the invocations this one resumed, up to their last checkpoint.
@@ -450,7 +453,8 @@ nlohmann::json Driver::timingJson(const CompactionOutcome& out) const {
 }  // namespace
 
 Deposit depositFromPacking(const core::Packing& packing, const std::filesystem::path& source) {
-  if (packing.grains.empty()) throw std::invalid_argument(fmt::format("{}: the packing has no grains", source.string()));
+  if (packing.grains.empty())
+    throw std::invalid_argument(fmt::format("{}: the packing has no grains", source.string()));
   Deposit d;
   d.grains = packing.grains;
   for (const core::Grain& g : d.grains) d.pileHeight = std::max(d.pileHeight, g.position.z() + g.boundingRadius());

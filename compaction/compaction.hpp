@@ -23,14 +23,14 @@ namespace confpack::compaction {
 using CompactionProgressFn = std::function<void(double fraction, const std::string& status)>;
 
 struct CompactionOutcome {
-  core::Packing packing;                  ///< final poses with the last step's contacts and forces
-  std::vector<core::BodyState> states;    ///< final velocities
-  nlohmann::json equilibrium;             ///< result.json's equilibrium block
-  nlohmann::json timing;                  ///< wall_s, steps, iterations, phases, ...
-  nlohmann::json backendSettings;         ///< resolved backend settings
-  std::vector<CheckPoint> history;        ///< one entry per equilibrium check
-  double dt = 0.0;        ///< the fixed step, or the smallest (first) step of an adaptive run [t0]
-  double dtLargest = 0.0; ///< the largest step taken [t0] (dt unless adaptive)
+  core::Packing packing;                ///< final poses with the last step's contacts and forces
+  std::vector<core::BodyState> states;  ///< final velocities
+  nlohmann::json equilibrium;           ///< result.json's equilibrium block
+  nlohmann::json timing;                ///< wall_s, steps, iterations, phases, ...
+  nlohmann::json backendSettings;       ///< resolved backend settings
+  std::vector<CheckPoint> history;      ///< one entry per equilibrium check
+  double dt = 0.0;                      ///< the fixed step, or the smallest (first) step of an adaptive run [t0]
+  double dtLargest = 0.0;               ///< the largest step taken [t0] (dt unless adaptive)
   /// The protocol that ran: the configured one, except that a backend without a finisher
   /// (Bullet) always runs the dynamic protocol.
   core::Protocol protocol = core::Protocol::Dynamic;
@@ -47,8 +47,7 @@ Deposit depositFromPacking(const core::Packing& packing, const std::filesystem::
 /// checkpoint of this run, and saves its state there as it goes; result.json's timing then says
 /// how often the run was resumed. A resumed run's ParaView series starts with the deposit and
 /// goes on from the resume.
-CompactionOutcome compact(const core::RunConfig& cfg, const Deposit& deposit,
-                          const std::filesystem::path& vtkDir = {}, const CompactionProgressFn& progress = {},
-                          const Checkpointing& checkpointing = {});
+CompactionOutcome compact(const core::RunConfig& cfg, const Deposit& deposit, const std::filesystem::path& vtkDir = {},
+                          const CompactionProgressFn& progress = {}, const Checkpointing& checkpointing = {});
 
 }  // namespace confpack::compaction

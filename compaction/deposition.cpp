@@ -62,8 +62,8 @@ constexpr double kDirectionTol = 1e-12;    // motion accepted as not entering a 
 // happens in a W = D channel) with no admissible subset. The moves' event tests still refuse any
 // penetration deeper than kPenetrationTol, so the relaxed tolerance cannot create overlaps.
 constexpr double kRelaxedDirectionTol = 1e-5;
-constexpr double kDegenerateTol = 1e-10;   // Gram determinant below which normals are dependent [-]
-constexpr double kValidGapTol = 1e-10;     // a fallback seat may overlap at most this [D]
+constexpr double kDegenerateTol = 1e-10;  // Gram determinant below which normals are dependent [-]
+constexpr double kValidGapTol = 1e-10;    // a fallback seat may overlap at most this [D]
 // A seat is normally found in 3 to 10 moves; far more means a degenerate cycle (see settle()).
 constexpr int kMaxMoves = 200;
 // Generically 3 supports touch at once; 6 leaves room for symmetric coincidences.
@@ -108,7 +108,7 @@ struct Projection {
   bool found = false;
   std::array<int, 3> members{};  // indices into the touching list
   int size = 0;
-  Vec3 motion = Vec3::Zero();    // projected gravity d [-]
+  Vec3 motion = Vec3::Zero();  // projected gravity d [-]
 };
 
 // Support forces lambda = N^-1 e_z of three supports (columns of N the normals), if independent.
@@ -188,8 +188,7 @@ Projection projectGravity(const std::vector<Vec3>& normals, double directionTol)
 // The growing pile and the descent of one placeholder onto it.
 class Pile {
  public:
-  Pile(const BoxDef& box, double diameter)
-      : box_(box), d_(diameter), r_(0.5 * diameter), grid_(box, diameter) {}
+  Pile(const BoxDef& box, double diameter) : box_(box), d_(diameter), r_(0.5 * diameter), grid_(box, diameter) {}
 
   double top() const { return top_; }
 
@@ -224,9 +223,12 @@ class Pile {
       for (int i = 0; i < p.size; ++i) {
         const Support& s = touching[static_cast<std::size_t>(p.members[static_cast<std::size_t>(i)])];
         active.push_back(s);
-        if (s.kind == SupportKind::Sphere) ++spheres;
-        else if (s.kind == SupportKind::Floor) floor = true;
-        else ++walls;
+        if (s.kind == SupportKind::Sphere)
+          ++spheres;
+        else if (s.kind == SupportKind::Floor)
+          floor = true;
+        else
+          ++walls;
       }
       if (floor || p.size == 3) {
         settled = true;
@@ -260,10 +262,14 @@ class Pile {
 
   Vec3 normalOf(const Support& s, const Vec3& c) const {
     switch (s.kind) {
-      case SupportKind::Sphere: return (c - s.centre).normalized();
-      case SupportKind::Floor: return Vec3::UnitZ();
-      case SupportKind::WallLow: return Vec3::UnitY();
-      case SupportKind::WallHigh: return -Vec3::UnitY();
+      case SupportKind::Sphere:
+        return (c - s.centre).normalized();
+      case SupportKind::Floor:
+        return Vec3::UnitZ();
+      case SupportKind::WallLow:
+        return Vec3::UnitY();
+      case SupportKind::WallHigh:
+        return -Vec3::UnitY();
     }
     return Vec3::UnitZ();
   }
@@ -399,7 +405,7 @@ class Pile {
     const double lowNorm = low.norm();
     if (lowNorm < 1e-12) return a;  // horizontal circle: no descent along it (psiEnd = 0)
     low /= lowNorm;
-    const double psiLow = std::atan2(low.dot(a.e2), low.dot(a.e1));  // in [0, pi]: e2_z <= 0
+    const double psiLow = std::atan2(low.dot(a.e2), low.dot(a.e1));    // in [0, pi]: e2_z <= 0
     const double hRelease = 2.0 * rho2 * std::abs(u.z()) / s / a.rho;  // in units of rho
     const double g0 = a.e1.z() - hRelease;
     if (g0 <= 0.0) return a;  // already at the release height (psiEnd = 0)
@@ -459,7 +465,6 @@ Vec3 wrapStrict(const BoxDef& box, Vec3 p) {
   return p;
 }
 
-
 }  // namespace
 
 PlaceholderPile depositPlaceholders(const BoxDef& box, double diameter, std::size_t count, Rng& rng,
@@ -468,11 +473,11 @@ PlaceholderPile depositPlaceholders(const BoxDef& box, double diameter, std::siz
   if (!(diameter > 0.0) || !std::isfinite(diameter))
     throw std::invalid_argument(fmt::format("deposition: placeholder diameter must be positive (got {})", diameter));
   if (box.lengthX < diameter)
-    throw std::invalid_argument(fmt::format(
-        "deposition: length_x {} is shorter than the placeholder diameter {}", box.lengthX, diameter));
+    throw std::invalid_argument(
+        fmt::format("deposition: length_x {} is shorter than the placeholder diameter {}", box.lengthX, diameter));
   if (box.width < diameter)
-    throw std::invalid_argument(fmt::format(
-        "deposition: width {} is narrower than the placeholder diameter {}", box.width, diameter));
+    throw std::invalid_argument(
+        fmt::format("deposition: width {} is narrower than the placeholder diameter {}", box.width, diameter));
   if (count > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw std::invalid_argument(fmt::format("deposition: too many placeholders ({})", count));
 
@@ -507,8 +512,8 @@ Vec3 dropPlaceholder(const BoxDef& box, double diameter, const std::vector<Vec3>
     throw std::invalid_argument(fmt::format("deposition: placeholder diameter must be positive (got {})", diameter));
   const double r = 0.5 * diameter;
   if (!std::isfinite(x) || !std::isfinite(y) || (!box.periodicY && (y < r || y > box.width - r)))
-    throw std::invalid_argument(fmt::format(
-        "deposition: drop point ({}, {}) must keep the placeholder between the side walls", x, y));
+    throw std::invalid_argument(
+        fmt::format("deposition: drop point ({}, {}) must keep the placeholder between the side walls", x, y));
   Pile p(box, diameter);
   for (std::size_t i = 0; i < pile.size(); ++i) p.add(static_cast<int>(i), pile[i]);
   bool ok = false;
@@ -518,8 +523,8 @@ Vec3 dropPlaceholder(const BoxDef& box, double diameter, const std::vector<Vec3>
   return wrapStrict(box, c);
 }
 
-Deposit deposit(const BoxDef& box, const PopulationDef& population, const DepositionDef& def,
-                std::uint64_t seed, const ProgressFn& progress) {
+Deposit deposit(const BoxDef& box, const PopulationDef& population, const DepositionDef& def, std::uint64_t seed,
+                const ProgressFn& progress) {
   const auto start = std::chrono::steady_clock::now();
   box.validate();
   population.validate();

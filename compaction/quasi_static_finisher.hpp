@@ -33,7 +33,7 @@ class QuasiStaticFinisher {
   bool settled() const { return steps_ > 0 && lastMove_.maxDisplacement <= settleTolerance_; }
   long steps() const { return steps_; }
   long clippedSteps() const { return clipped_; }
-  double lastStepLength() const { return lastStep_; }      ///< h of the last step [t0]
+  double lastStepLength() const { return lastStep_; }  ///< h of the last step [t0]
   const core::QuasiStaticMove& lastMove() const { return lastMove_; }
 
   /// The finisher's counters and next step, for a run's checkpoint (docs/model.md, "Checkpoints").

@@ -45,9 +45,9 @@ class AdaptiveTimeStep {
 
  private:
   std::vector<double> spinLever_;  ///< Grain::spinLever of each grain [d_L]
-  double motion_ = 0.0;         ///< s: the largest motion per step [d_L]
-  double gravity_ = 0.0;        ///< |g|
-  double floor_ = 0.0;          ///< the fixed step [t0]
+  double motion_ = 0.0;            ///< s: the largest motion per step [d_L]
+  double gravity_ = 0.0;           ///< |g|
+  double floor_ = 0.0;             ///< the fixed step [t0]
 };
 
 }  // namespace confpack::compaction

@@ -16,14 +16,22 @@ std::string unknownBackendMessage(std::string_view name) {
 
 std::string_view toString(Phase p) {
   switch (p) {
-    case Phase::UpdatePairs: return "update_pairs";
-    case Phase::Collide: return "collide";
-    case Phase::PrepareContacts: return "prepare_contacts";
-    case Phase::WarmStart: return "warm_start";
-    case Phase::Solve: return "solve";
-    case Phase::Integrate: return "integrate";
-    case Phase::StoreImpulses: return "store_impulses";
-    case Phase::Count: break;
+    case Phase::UpdatePairs:
+      return "update_pairs";
+    case Phase::Collide:
+      return "collide";
+    case Phase::PrepareContacts:
+      return "prepare_contacts";
+    case Phase::WarmStart:
+      return "warm_start";
+    case Phase::Solve:
+      return "solve";
+    case Phase::Integrate:
+      return "integrate";
+    case Phase::StoreImpulses:
+      return "store_impulses";
+    case Phase::Count:
+      break;
   }
   return "unknown";
 }

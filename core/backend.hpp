@@ -31,18 +31,18 @@ std::string unknownBackendMessage(std::string_view name);
 /// Everything a backend needs to build its world.
 struct SystemDef {
   BoxDef box;
-  WallMaterial walls;                 ///< the walls' friction (RunConfig::walls)
-  std::vector<Grain> grains;          ///< initial poses; velocities start at zero
-  Vec3 gravity = Vec3(0.0, 0.0, -1.0);///< [g]
-  double density = 1.0;               ///< grain density rho
-  int threads = 1;                    ///< OpenMP threads the backend may use (RunConfig::threads) [-]
+  WallMaterial walls;                   ///< the walls' friction (RunConfig::walls)
+  std::vector<Grain> grains;            ///< initial poses; velocities start at zero
+  Vec3 gravity = Vec3(0.0, 0.0, -1.0);  ///< [g]
+  double density = 1.0;                 ///< grain density rho
+  int threads = 1;                      ///< OpenMP threads the backend may use (RunConfig::threads) [-]
 };
 
 struct BodyState {
-  Vec3 position = Vec3::Zero();        ///< centroid, wrapped into the box [d_L]
+  Vec3 position = Vec3::Zero();  ///< centroid, wrapped into the box [d_L]
   Quat orientation = Quat::Identity();
-  Vec3 velocity = Vec3::Zero();        ///< [sqrt(g d_L)]
-  Vec3 angularVelocity = Vec3::Zero(); ///< world frame [1/t0]
+  Vec3 velocity = Vec3::Zero();         ///< [sqrt(g d_L)]
+  Vec3 angularVelocity = Vec3::Zero();  ///< world frame [1/t0]
 };
 
 /// Named phases of one step (after Box2D's solver stages), the same for both backends so that
@@ -50,13 +50,13 @@ struct BodyState {
 /// by one PhaseClock; a backend fills the phases it has and leaves the others at zero. What each
 /// backend does in each phase: docs/performance.md, "The phases of a step".
 enum class Phase : int {
-  UpdatePairs,     ///< broad phase: candidate pairs, periodic images included
-  Collide,         ///< narrow phase: contact points, normals, gaps
-  PrepareContacts, ///< constraint rows (Delassus blocks, frames)
-  WarmStart,       ///< cached impulses applied (Bullet: inside PrepareContacts)
-  Solve,           ///< the contact solver's iterations
-  Integrate,       ///< free velocities, then positions
-  StoreImpulses,   ///< impulses kept for the next step, contact list, states
+  UpdatePairs,      ///< broad phase: candidate pairs, periodic images included
+  Collide,          ///< narrow phase: contact points, normals, gaps
+  PrepareContacts,  ///< constraint rows (Delassus blocks, frames)
+  WarmStart,        ///< cached impulses applied (Bullet: inside PrepareContacts)
+  Solve,            ///< the contact solver's iterations
+  Integrate,        ///< free velocities, then positions
+  StoreImpulses,    ///< impulses kept for the next step, contact list, states
   Count
 };
 
@@ -64,9 +64,9 @@ std::string_view toString(Phase p);  ///< "update_pairs", "collide", ... (JSON k
 
 struct StepProfile {
   std::array<double, static_cast<int>(Phase::Count)> seconds{};  ///< wall time of each phase [s]
-  int iterations = 0;        ///< Gauss-Seidel sweeps or solver iterations this step
-  double residual = 0.0;     ///< final convergence measure of the solver (backend-defined, documented)
-  int contactPoints = 0;     ///< active contact points (rows) solved this step
+  int iterations = 0;                                            ///< Gauss-Seidel sweeps or solver iterations this step
+  double residual = 0.0;  ///< final convergence measure of the solver (backend-defined, documented)
+  int contactPoints = 0;  ///< active contact points (rows) solved this step
   double& operator[](Phase p) { return seconds[static_cast<int>(p)]; }
   double operator[](Phase p) const { return seconds[static_cast<int>(p)]; }
   double total() const {

@@ -11,9 +11,12 @@ namespace confpack::core {
 
 Vec3 BoxDef::wallNormal(WallId w) {
   switch (w) {
-    case WallId::Floor: return Vec3::UnitZ();
-    case WallId::SideLow: return Vec3::UnitY();
-    case WallId::SideHigh: return -Vec3::UnitY();
+    case WallId::Floor:
+      return Vec3::UnitZ();
+    case WallId::SideLow:
+      return Vec3::UnitY();
+    case WallId::SideHigh:
+      return -Vec3::UnitY();
   }
   return Vec3::UnitZ();
 }

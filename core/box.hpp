@@ -13,14 +13,16 @@ namespace confpack::core {
 /// Ids given to the fixed boundaries wherever a contact partner is a wall (docs/packing-format.md).
 enum class WallId : int { Floor = -1, SideLow = -2, SideHigh = -3 };
 
-inline constexpr bool isWall(int id) { return id < 0; }
+inline constexpr bool isWall(int id) {
+  return id < 0;
+}
 
 /// Box definition. Lengths in d_L.
 struct BoxDef {
-  double lengthX = 20.0;     ///< period along x [d_L], > 0
-  double width = 10.0;       ///< gap W between the side walls, or period along y [d_L], > 0
-  bool periodicY = false;    ///< true: y is periodic with period `width` (no side walls)
-  double height = 16.0;      ///< target final packing height h [d_L] (deposition aims for it)
+  double lengthX = 20.0;   ///< period along x [d_L], > 0
+  double width = 10.0;     ///< gap W between the side walls, or period along y [d_L], > 0
+  bool periodicY = false;  ///< true: y is periodic with period `width` (no side walls)
+  double height = 16.0;    ///< target final packing height h [d_L] (deposition aims for it)
 
   /// Wraps a position into [0, lengthX) (and [0, width) when periodic in y).
   Vec3 wrap(Vec3 p) const {

@@ -8,9 +8,12 @@ namespace confpack::core {
 
 std::string_view toString(ContactType t) {
   switch (t) {
-    case ContactType::Simple: return "simple";
-    case ContactType::Double: return "double";
-    case ContactType::Triple: return "triple";
+    case ContactType::Simple:
+      return "simple";
+    case ContactType::Double:
+      return "double";
+    case ContactType::Triple:
+      return "triple";
   }
   return "simple";
 }

@@ -42,7 +42,8 @@ ConvexPolyhedron::ConvexPolyhedron(std::vector<Vec3> vertices, std::vector<std::
   for (std::size_t f = 0; f < faces_.size(); ++f)
     for (std::size_t v = 0; v < vertices_.size(); ++v)
       if (normals_[f].dot(vertices_[v]) - offsets_[f] > tol)
-        throw std::invalid_argument(fmt::format("polyhedron: vertex {} lies outside face {} (not convex or badly oriented)", v, f));
+        throw std::invalid_argument(
+            fmt::format("polyhedron: vertex {} lies outside face {} (not convex or badly oriented)", v, f));
 }
 
 int ConvexPolyhedron::supportIndex(const Vec3& dir) const {

@@ -10,9 +10,9 @@
 namespace confpack::core {
 
 struct MassProperties {
-  double volume = 0.0;           ///< [d_L^3]
-  Vec3 centroid = Vec3::Zero();  ///< body frame [d_L]
-  Mat3 secondMoment = Mat3::Zero(); ///< int (x-c)(x-c)^T dV about the centroid [d_L^5]
+  double volume = 0.0;               ///< [d_L^3]
+  Vec3 centroid = Vec3::Zero();      ///< body frame [d_L]
+  Mat3 secondMoment = Mat3::Zero();  ///< int (x-c)(x-c)^T dV about the centroid [d_L^5]
   /// Inertia tensor about the centroid for density rho: rho (tr(S) I - S).
   Mat3 inertia(double density = 1.0) const {
     return density * (secondMoment.trace() * Mat3::Identity() - secondMoment);
@@ -29,8 +29,8 @@ class ConvexPolyhedron {
 
   const std::vector<Vec3>& vertices() const { return vertices_; }
   const std::vector<std::vector<int>>& faces() const { return faces_; }
-  const std::vector<Vec3>& faceNormals() const { return normals_; }   ///< outward unit normals
-  const std::vector<double>& faceOffsets() const { return offsets_; } ///< n.x = offset on face
+  const std::vector<Vec3>& faceNormals() const { return normals_; }    ///< outward unit normals
+  const std::vector<double>& faceOffsets() const { return offsets_; }  ///< n.x = offset on face
   const std::vector<std::array<int, 2>>& edges() const { return edges_; }
 
   /// Index of the vertex farthest along dir (the support point).

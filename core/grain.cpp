@@ -10,7 +10,9 @@
 
 namespace confpack::core {
 
-std::string_view toString(ShapeKind s) { return s == ShapeKind::Sphere ? "sphere" : "pinacoid"; }
+std::string_view toString(ShapeKind s) {
+  return s == ShapeKind::Sphere ? "sphere" : "pinacoid";
+}
 
 ShapeKind shapeFromString(std::string_view s) {
   if (s == "sphere") return ShapeKind::Sphere;

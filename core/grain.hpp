@@ -17,10 +17,10 @@ ShapeKind shapeFromString(std::string_view s);
 
 struct Grain {
   ShapeKind shape = ShapeKind::Sphere;
-  double size = 1.0;              ///< sphere diameter d, or pinacoid length L [d_L]
-  PinacoidParams params{};        ///< used when shape == Pinacoid
-  Vec3 position = Vec3::Zero();   ///< centroid, world frame [d_L]
-  Quat orientation = Quat::Identity(); ///< body-to-world rotation
+  double size = 1.0;                    ///< sphere diameter d, or pinacoid length L [d_L]
+  PinacoidParams params{};              ///< used when shape == Pinacoid
+  Vec3 position = Vec3::Zero();         ///< centroid, world frame [d_L]
+  Quat orientation = Quat::Identity();  ///< body-to-world rotation
 
   double volume() const;
   /// Body-frame inertia about the centroid for density rho.

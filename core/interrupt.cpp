@@ -12,7 +12,9 @@ namespace {
 std::atomic<int> requested{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 
-extern "C" void onStopSignal(int signal) { requested.store(signal, std::memory_order_relaxed); }
+extern "C" void onStopSignal(int signal) {
+  requested.store(signal, std::memory_order_relaxed);
+}
 
 std::string signalName(int signal) {
   if (signal == SIGINT) return "SIGINT";
@@ -39,6 +41,8 @@ void installStopHandlers() {
   (void)installed;
 }
 
-int stopSignal() { return requested.load(std::memory_order_relaxed); }
+int stopSignal() {
+  return requested.load(std::memory_order_relaxed);
+}
 
 }  // namespace confpack::core

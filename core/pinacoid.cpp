@@ -55,8 +55,8 @@ ConvexPolyhedron makePinacoid(double length, const PinacoidParams& p) {
   const double e = 0.5 * p.heightRatio * length;
   const double l = pinacoidRidgeHalfLength(length, p);
   // 0..3: mid-plane rectangle, 4..7: ridge ends (top ridge 4,5; bottom ridge 6,7).
-  std::vector<Vec3> v = {{a, g, 0},  {-a, g, 0}, {-a, -g, 0}, {a, -g, 0},
-                         {l, 0, e},  {-l, 0, e}, {l, 0, -e},  {-l, 0, -e}};
+  std::vector<Vec3> v = {{a, g, 0}, {-a, g, 0}, {-a, -g, 0}, {a, -g, 0},
+                         {l, 0, e}, {-l, 0, e}, {l, 0, -e},  {-l, 0, -e}};
   std::vector<std::vector<int>> f = {
       {0, 1, 5, 4},  // top trapezoid, y > 0
       {2, 3, 4, 5},  // top trapezoid, y < 0

@@ -29,7 +29,7 @@ template <class T>
 class SettingsTable;
 /// The keys of PinacoidParams (core/settings_table.hpp): JSON reader, writer and validation.
 const SettingsTable<PinacoidParams>& pinacoidTable();
-void to_json(nlohmann::json& j, const PinacoidParams& p);   // {"G":..,"E":..,"alpha_deg":..}
+void to_json(nlohmann::json& j, const PinacoidParams& p);  // {"G":..,"E":..,"alpha_deg":..}
 void from_json(const nlohmann::json& j, PinacoidParams& p);
 
 /// Half-length of the ridge, l = L/2 - (E/2)/tan(alpha), for length L.

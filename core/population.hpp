@@ -12,14 +12,14 @@ namespace confpack::core {
 
 struct PopulationDef {
   ShapeKind shape = ShapeKind::Sphere;
-  double largeSize = 1.0;        ///< mean size of the large population d_L [d_L]
-  double smallSize = 0.5;        ///< mean size of the small population d_S [d_L]
-  double smallFraction = 0.0;    ///< x_S, volume percentage of small grains, in [0, 100]
+  double largeSize = 1.0;           ///< mean size of the large population d_L [d_L]
+  double smallSize = 0.5;           ///< mean size of the small population d_S [d_L]
+  double smallFraction = 0.0;       ///< x_S, volume percentage of small grains, in [0, 100]
   double relativeStd = 1.0 / 30.0;  ///< sigma / d (variance d^2/900) [-]
-  double truncationSigmas = 3.0; ///< Gaussian truncated at this many sigma [-]
-  PinacoidParams pinacoid{};     ///< shape parameters when shape == Pinacoid
+  double truncationSigmas = 3.0;    ///< Gaussian truncated at this many sigma [-]
+  PinacoidParams pinacoid{};        ///< shape parameters when shape == Pinacoid
 
-  void validate() const;         ///< throws std::invalid_argument naming the bad field
+  void validate() const;  ///< throws std::invalid_argument naming the bad field
   /// Largest size any grain can have (mean + truncation of the large population).
   double maxSize() const { return largeSize * (1.0 + truncationSigmas * relativeStd); }
   /// Diameter of the sphere circumscribing the largest possible grain (the placeholder size).

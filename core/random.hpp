@@ -13,11 +13,11 @@ namespace confpack::core {
 /// Every random stream of the project, in one place. Never reorder: values are part of the
 /// reproducibility contract (a packing is a function of its seed).
 enum class StreamId : std::uint32_t {
-  DepositionXY = 1,     ///< drop positions of placeholders
-  GrainSizes = 2,       ///< Gaussian size draws
-  GrainOrder = 3,       ///< order in which grains replace placeholders
-  GrainOrientation = 4, ///< random orientations of pinacoids
-  Test = 1000,          ///< tests only
+  DepositionXY = 1,      ///< drop positions of placeholders
+  GrainSizes = 2,        ///< Gaussian size draws
+  GrainOrder = 3,        ///< order in which grains replace placeholders
+  GrainOrientation = 4,  ///< random orientations of pinacoids
+  Test = 1000,           ///< tests only
 };
 
 class Rng {

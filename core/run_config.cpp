@@ -1,9 +1,5 @@
 #include "core/run_config.hpp"
 
-#include "core/backend.hpp"
-#include "core/json_input.hpp"
-#include "core/settings_table.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -12,11 +8,17 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "core/backend.hpp"
+#include "core/json_input.hpp"
+#include "core/settings_table.hpp"
+
 namespace confpack::core {
 
 using nlohmann::json;
 
-std::string toString(Protocol p) { return p == Protocol::QuasiStatic ? "quasi-static" : "dynamic"; }
+std::string toString(Protocol p) {
+  return p == Protocol::QuasiStatic ? "quasi-static" : "dynamic";
+}
 
 const SettingsTable<DepositionDef>& depositionTable() {
   using D = DepositionDef;
@@ -36,9 +38,13 @@ const SettingsTable<DepositionDef>& depositionTable() {
   return table;
 }
 
-void DepositionDef::validate() const { depositionTable().validate(*this); }
+void DepositionDef::validate() const {
+  depositionTable().validate(*this);
+}
 
-void to_json(nlohmann::json& j, const DepositionDef& d) { j = depositionTable().write(d); }
+void to_json(nlohmann::json& j, const DepositionDef& d) {
+  j = depositionTable().write(d);
+}
 
 void from_json(const nlohmann::json& j, DepositionDef& d) {
   DepositionDef out;
@@ -80,7 +86,9 @@ const SettingsTable<CompactionDef>& compactionTable() {
   return table;
 }
 
-void to_json(json& j, const CompactionDef& c) { j = compactionTable().write(c); }
+void to_json(json& j, const CompactionDef& c) {
+  j = compactionTable().write(c);
+}
 
 void from_json(const json& j, CompactionDef& c) {
   c = CompactionDef{};
@@ -192,9 +200,9 @@ void RunConfig::validateDeposit() const {
   const std::pair<double, const char*> lengths[] = {{box.lengthX, "box.length_x"}, {box.width, "box.width"}};
   for (const auto& [length, name] : lengths)
     if (length < diameter)
-      throw std::invalid_argument(fmt::format(
-          "{}: {:g} d_L is less than a grain's circumscribed diameter ({:g} d_L): no grain fits", name, length,
-          diameter));
+      throw std::invalid_argument(
+          fmt::format("{}: {:g} d_L is less than a grain's circumscribed diameter ({:g} d_L): no grain fits", name,
+                      length, diameter));
   if (deposition.grainCount > 0) return;
   // drawGrains stops each size class at the count whose volume is nearest its share: none when
   // the share is under half a grain.

@@ -78,11 +78,11 @@ struct CompactionDef {
   /// Apart from time_limit so that a study can give nscd's fall the time it needs and still stop
   /// Bullet, which has no finisher, at time_limit. At most kMaxTimeLimit.
   double fallTimeLimit = 0.0;
-  int checkInterval = 200;          ///< steps between equilibrium checks [-]
-  int frameInterval = 0;            ///< steps between ParaView frames; 0 = first and last only [-]
-  double forceRatio = 1e-4;         ///< equilibrium: |sum F| < forceRatio d^2 P [-]
-  double momentRatio = 1e-4;        ///< equilibrium: |sum M| < momentRatio d^3 P [-]
-  double kineticRatio = 1e-8;       ///< equilibrium: E_k < kineticRatio d^3 P [-]
+  int checkInterval = 200;     ///< steps between equilibrium checks [-]
+  int frameInterval = 0;       ///< steps between ParaView frames; 0 = first and last only [-]
+  double forceRatio = 1e-4;    ///< equilibrium: |sum F| < forceRatio d^2 P [-]
+  double momentRatio = 1e-4;   ///< equilibrium: |sum M| < momentRatio d^3 P [-]
+  double kineticRatio = 1e-8;  ///< equilibrium: E_k < kineticRatio d^3 P [-]
   Protocol protocol = Protocol::Dynamic;
   /// Quasi-static protocol: the dynamic steps hand over to the finisher at the first equilibrium
   /// check whose mean kinetic ratio E_k / (d^3 P) over the grains is below this [-]. 1e-4 is a

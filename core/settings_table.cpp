@@ -9,7 +9,9 @@ bool Range::contains(double v) const {
   return aboveLow && belowHigh;
 }
 
-std::string numberText(double v) { return fmt::format("{:g}", v); }
+std::string numberText(double v) {
+  return fmt::format("{:g}", v);
+}
 
 std::string Range::text() const {
   const bool hasLow = std::isfinite(low), hasHigh = std::isfinite(high);

@@ -55,7 +55,7 @@ class SettingsTable {
     std::string key, unit, accepted, help;
     std::function<void(const nlohmann::json&, T&)> read;  ///< type-checked; the range is checked after
     std::function<nlohmann::json(const T&)> write;
-    std::function<void(const T&)> validate;               ///< throws with the key named
+    std::function<void(const T&)> validate;  ///< throws with the key named
     bool nested = false;  ///< a section: its keys are checked as it reads them, its rules by validate()
   };
 
@@ -66,23 +66,25 @@ class SettingsTable {
   bool has(const std::string& key) const { return find(key) != nullptr; }
 
   SettingsTable& number(const char* key, double T::*member, Range range, const char* unit, const char* help) {
-    return add(key, unit, range.text(), help,
-               [w = where_, key, member](const nlohmann::json& j, T& t) { t.*member = asNumber(w, key, j); },
-               [member](const T& t) { return nlohmann::json(t.*member); },
-               [w = where_, key, member, range](const T& t) { inRange(w, key, t.*member, range); });
+    return add(
+        key, unit, range.text(), help,
+        [w = where_, key, member](const nlohmann::json& j, T& t) { t.*member = asNumber(w, key, j); },
+        [member](const T& t) { return nlohmann::json(t.*member); },
+        [w = where_, key, member, range](const T& t) { inRange(w, key, t.*member, range); });
   }
   /// A number where JSON null (written for +infinity) means "no limit".
   SettingsTable& numberOrNone(const char* key, double T::*member, Range range, const char* unit, const char* help) {
-    return add(key, unit, range.text() + ", or null for no limit", help,
-               [w = where_, key, member](const nlohmann::json& j, T& t) {
-                 t.*member = j.is_null() ? std::numeric_limits<double>::infinity() : asNumber(w, key, j);
-               },
-               [member](const T& t) {
-                 return std::isinf(t.*member) && t.*member > 0 ? nlohmann::json(nullptr) : nlohmann::json(t.*member);
-               },
-               [w = where_, key, member, range](const T& t) {
-                 if (!(std::isinf(t.*member) && t.*member > 0)) inRange(w, key, t.*member, range);
-               });
+    return add(
+        key, unit, range.text() + ", or null for no limit", help,
+        [w = where_, key, member](const nlohmann::json& j, T& t) {
+          t.*member = j.is_null() ? std::numeric_limits<double>::infinity() : asNumber(w, key, j);
+        },
+        [member](const T& t) {
+          return std::isinf(t.*member) && t.*member > 0 ? nlohmann::json(nullptr) : nlohmann::json(t.*member);
+        },
+        [w = where_, key, member, range](const T& t) {
+          if (!(std::isinf(t.*member) && t.*member > 0)) inRange(w, key, t.*member, range);
+        });
   }
   /// A number where JSON "auto" (held as 0, which `range` must exclude) leaves the value to the
   /// settings' owner. A number is checked as it is read: a 0 in the file is refused, not "auto".
@@ -105,58 +107,61 @@ class SettingsTable {
   }
   template <class Int>
   SettingsTable& integer(const char* key, Int T::*member, Range range, const char* unit, const char* help) {
-    return add(key, unit, range.text(), help,
-               [w = where_, key, member, range](const nlohmann::json& j, T& t) {
-                 if (!j.is_number_integer())
-                   fail(w, key, fmt::format("must be an integer (got {})", jsonExcerpt(j, 40)));
-                 const long double v = j.is_number_unsigned() ? static_cast<long double>(j.get<std::uint64_t>())
-                                                              : static_cast<long double>(j.get<std::int64_t>());
-                 if (v < static_cast<long double>(std::numeric_limits<Int>::min()) ||
-                     v > static_cast<long double>(std::numeric_limits<Int>::max()))
-                   fail(w, key, fmt::format("must be {} (got {})", range.text(), jsonExcerpt(j, 40)));
-                 t.*member = static_cast<Int>(v);
-               },
-               [member](const T& t) { return nlohmann::json(t.*member); },
-               [w = where_, key, member, range](const T& t) { inRange(w, key, static_cast<double>(t.*member), range); });
+    return add(
+        key, unit, range.text(), help,
+        [w = where_, key, member, range](const nlohmann::json& j, T& t) {
+          if (!j.is_number_integer()) fail(w, key, fmt::format("must be an integer (got {})", jsonExcerpt(j, 40)));
+          const long double v = j.is_number_unsigned() ? static_cast<long double>(j.get<std::uint64_t>())
+                                                       : static_cast<long double>(j.get<std::int64_t>());
+          if (v < static_cast<long double>(std::numeric_limits<Int>::min()) ||
+              v > static_cast<long double>(std::numeric_limits<Int>::max()))
+            fail(w, key, fmt::format("must be {} (got {})", range.text(), jsonExcerpt(j, 40)));
+          t.*member = static_cast<Int>(v);
+        },
+        [member](const T& t) { return nlohmann::json(t.*member); },
+        [w = where_, key, member, range](const T& t) { inRange(w, key, static_cast<double>(t.*member), range); });
   }
   SettingsTable& flag(const char* key, bool T::*member, const char* help) {
-    return add(key, "-", "true or false", help,
-               [w = where_, key, member](const nlohmann::json& j, T& t) {
-                 if (!j.is_boolean()) fail(w, key, fmt::format("must be true or false (got {})", jsonExcerpt(j, 40)));
-                 t.*member = j.get<bool>();
-               },
-               [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
+    return add(
+        key, "-", "true or false", help,
+        [w = where_, key, member](const nlohmann::json& j, T& t) {
+          if (!j.is_boolean()) fail(w, key, fmt::format("must be true or false (got {})", jsonExcerpt(j, 40)));
+          t.*member = j.get<bool>();
+        },
+        [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
   }
   /// Free text that must not be empty (a citation, a name).
   SettingsTable& text(const char* key, std::string T::*member, const char* help) {
-    return add(key, "-", "a non-empty string", help,
-               [w = where_, key, member](const nlohmann::json& j, T& t) {
-                 if (!j.is_string() || j.get_ref<const std::string&>().empty())
-                   fail(w, key, fmt::format("must be a non-empty string (got {})", jsonExcerpt(j, 40)));
-                 t.*member = j.get<std::string>();
-               },
-               [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
+    return add(
+        key, "-", "a non-empty string", help,
+        [w = where_, key, member](const nlohmann::json& j, T& t) {
+          if (!j.is_string() || j.get_ref<const std::string&>().empty())
+            fail(w, key, fmt::format("must be a non-empty string (got {})", jsonExcerpt(j, 40)));
+          t.*member = j.get<std::string>();
+        },
+        [member](const T& t) { return nlohmann::json(t.*member); }, [](const T&) {});
   }
   /// One of a few names, each standing for a value of E.
   template <class E>
   SettingsTable& choice(const char* key, E T::*member, std::vector<std::pair<std::string, E>> names, const char* help) {
     std::string accepted;
     for (const auto& [name, value] : names) accepted += fmt::format("{}\"{}\"", accepted.empty() ? "" : " or ", name);
-    return add(key, "-", accepted, help,
-               [w = where_, key, member, names, accepted](const nlohmann::json& j, T& t) {
-                 for (const auto& [name, value] : names)
-                   if (j == name) {
-                     t.*member = value;
-                     return;
-                   }
-                 fail(w, key, fmt::format("must be {} (got {})", accepted, jsonExcerpt(j, 40)));
-               },
-               [member, names](const T& t) {
-                 for (const auto& [name, value] : names)
-                   if (t.*member == value) return nlohmann::json(name);
-                 return nlohmann::json(nullptr);
-               },
-               [](const T&) {});
+    return add(
+        key, "-", accepted, help,
+        [w = where_, key, member, names, accepted](const nlohmann::json& j, T& t) {
+          for (const auto& [name, value] : names)
+            if (j == name) {
+              t.*member = value;
+              return;
+            }
+          fail(w, key, fmt::format("must be {} (got {})", accepted, jsonExcerpt(j, 40)));
+        },
+        [member, names](const T& t) {
+          for (const auto& [name, value] : names)
+            if (t.*member == value) return nlohmann::json(name);
+          return nlohmann::json(nullptr);
+        },
+        [](const T&) {});
   }
   /// A nested settings object with its own table (e.g. the run configuration's "box"): its keys
   /// read over the member's current values (readKeys), written and validated by `table`, whose
@@ -215,7 +220,8 @@ class SettingsTable {
     if (!f->nested) f->validate(t);
   }
   void requireObject(const nlohmann::json& j) const {
-    if (!j.is_object()) throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
+    if (!j.is_object())
+      throw std::invalid_argument(fmt::format("{}: must be a JSON object (got {})", where_, j.type_name()));
   }
   /// Throws "<where>.<key>: missing" for the first of `keys` that `j` (an object) lacks: for
   /// documents that must state a value rather than take its default.

@@ -44,8 +44,7 @@ compaction::Deposit depositFromJson(const nlohmann::json& j, std::string_view so
     throw std::invalid_argument(fmt::format("{}: format: not a {} document", source, kDepositFormat));
   if (j.value("version", 0) != kDepositVersion)
     throw std::invalid_argument(fmt::format("{}: version: expected {}", source, kDepositVersion));
-  if (!j.contains("packing"))
-    throw std::invalid_argument(fmt::format("{}: packing: missing", source));
+  if (!j.contains("packing")) throw std::invalid_argument(fmt::format("{}: packing: missing", source));
   compaction::Deposit d;
   d.grains = core::packingFromJson(j.at("packing"), fmt::format("{}: packing", source)).grains;
   const nlohmann::json& ph = j.value("placeholders", nlohmann::json::array());

@@ -13,8 +13,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "core/box.hpp"
 #include "compaction/deposition.hpp"
+#include "core/box.hpp"
 
 namespace confpack::study {
 

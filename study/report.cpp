@@ -149,7 +149,9 @@ std::vector<RunRecord> loadStudy(const fs::path& sweepDir, SweepSpec* spec) {
   return out;
 }
 
-std::string settledName(const std::string& backend) { return backend + "_settled"; }
+std::string settledName(const std::string& backend) {
+  return backend + "_settled";
+}
 
 namespace {
 
@@ -165,9 +167,10 @@ struct SettingValue {
   std::optional<double> number;
 
   std::weak_ordering operator<=>(const SettingValue& o) const {
-    if (number && o.number) return *number < *o.number ? std::weak_ordering::less
-                                   : *number > *o.number ? std::weak_ordering::greater
-                                                         : std::weak_ordering::equivalent;
+    if (number && o.number)
+      return *number < *o.number   ? std::weak_ordering::less
+             : *number > *o.number ? std::weak_ordering::greater
+                                   : std::weak_ordering::equivalent;
     if (number.has_value() != o.number.has_value())
       return number ? std::weak_ordering::less : std::weak_ordering::greater;
     return text <=> o.text;
@@ -212,9 +215,13 @@ struct SeriesKey {
   auto operator<=>(const SeriesKey&) const = default;
 };
 
-SeriesKey seriesOf(const ConfKey& k) { return {k.shape, k.xs, k.mu, k.settings}; }
+SeriesKey seriesOf(const ConfKey& k) {
+  return {k.shape, k.xs, k.mu, k.settings};
+}
 
-std::string num(double v) { return fmt::format("{:g}", v); }
+std::string num(double v) {
+  return fmt::format("{:g}", v);
+}
 
 // "Backend" of "backend": a name at the start of a sentence.
 std::string capitalized(std::string name) {
@@ -233,7 +240,9 @@ std::string settingsText(const std::vector<SettingValue>& settings, const char* 
   return out;
 }
 
-std::string widthText(const ConfKey& k) { return k.periodic ? fmt::format("biperiodic ({})", num(k.width)) : num(k.width); }
+std::string widthText(const ConfKey& k) {
+  return k.periodic ? fmt::format("biperiodic ({})", num(k.width)) : num(k.width);
+}
 
 std::string seriesText(const SeriesKey& s) {
   return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu), settingsText(s.settings));
@@ -303,8 +312,8 @@ CsvTable averageProfiles(const std::vector<CsvTable>& tables) {
 // measurements); a key of none goes to tables/other.csv.
 
 struct TableGroup {
-  std::string file;  // tables/FILE.csv
-  std::string what;  // what its keys measure, as the page lists it
+  std::string file;                   // tables/FILE.csv
+  std::string what;                   // what its keys measure, as the page lists it
   std::vector<std::string> prefixes;  // key starts with one of these
 };
 
@@ -435,9 +444,12 @@ ReportSummary countRuns(const StudyView& study) {
   for (const RunRecord& r : study.records) {
     if (r.settle) continue;
     ++s.runs;
-    if (r.status == RunStatus::Done) ++s.done;
-    else if (r.status == RunStatus::Failed) ++s.failed;
-    else ++s.missing;
+    if (r.status == RunStatus::Done)
+      ++s.done;
+    else if (r.status == RunStatus::Failed)
+      ++s.failed;
+    else
+      ++s.missing;
     if (unequilibrated(r)) ++s.unequilibrated;
   }
   return s;
@@ -452,8 +464,8 @@ std::string sweepName(const StudyView& study) {
 // The sections (writeReport calls them in the order of the page: the introduction, the summary and
 // the verdict, the figures with their fits, the profiles, the runs, the tables, the cost, the method)
 
-void addIntroduction(Document& doc, const StudyView& study, const ReportSummary& summary,
-                     const ReportOptions& options, bool figuresDrawn, const std::string& gnuplotProblem) {
+void addIntroduction(Document& doc, const StudyView& study, const ReportSummary& summary, const ReportOptions& options,
+                     bool figuresDrawn, const std::string& gnuplotProblem) {
   doc.heading(1, doc.title());
   const std::time_t t = std::time(nullptr);
   char when[32];
@@ -523,7 +535,7 @@ struct FitRow {
   SeriesKey series;
   std::string side;
   std::optional<analysis::ConfinementFit> fit;
-  std::string why;  // when no fit
+  std::string why;                            // when no fit
   std::vector<std::array<double, 3>> points;  // 1/W, mean, sigma
   std::optional<ReplicaStat> biperiodic;
 };
@@ -594,9 +606,9 @@ void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, 
     const bool dashed = f.side != study.sides[0];
     Series s{fmt::format("{} {}", seriesText(f.series), f.side), colors[f.series], dashed, false, f.points};
     if (f.biperiodic)
-      s.points.insert(s.points.begin(), {0.0, f.biperiodic->mean,
-                                         f.biperiodic->n >= 2 ? f.biperiodic->std / std::sqrt(double(f.biperiodic->n))
-                                                              : 0.0});
+      s.points.insert(s.points.begin(),
+                      {0.0, f.biperiodic->mean,
+                       f.biperiodic->n >= 2 ? f.biperiodic->std / std::sqrt(double(f.biperiodic->n)) : 0.0});
     p.series.push_back(std::move(s));
     if (f.fit)
       p.functions.push_back(fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt {} notitle", f.fit->bulk, f.fit->c,
@@ -609,13 +621,15 @@ void addFitFigure(Document& doc, const StudyView& study, FigureWriter& figures, 
     const ReferenceValue* bulk = references.find(series, q.quantity + "_bulk");
     if (!bulk) continue;
     marked = true;
-    Series s{fmt::format("reference {} [{}]", seriesText(series), references.number(bulk->citation)), color, false,
-             false, {{0.0, bulk->value, bulk->uncertainty}}};
+    Series s{fmt::format("reference {} [{}]", seriesText(series), references.number(bulk->citation)),
+             color,
+             false,
+             false,
+             {{0.0, bulk->value, bulk->uncertainty}}};
     s.pointType = 5;
     p.series.push_back(std::move(s));
     if (const ReferenceValue* c = references.find(series, q.cName))
-      p.functions.push_back(
-          fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt 3 notitle", bulk->value, c->value, color));
+      p.functions.push_back(fmt::format("[0:*] {:.10g} - {:.10g}*x lc {} dt 3 notitle", bulk->value, c->value, color));
   }
   if (marked) p.caption += "; squares: reference values";
   doc.figure(figures.draw(p));
@@ -806,12 +820,13 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits, cons
   StudySummary out;
   if (!fits.phi.empty()) {
     for (const FitRow& f : fits.phi) out.phiFitQuality[{f.series, f.side}] = fitQualityText(f);
-    addFitQuantities(out, fits.phi, "phi_bulk", "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W",
-                     "C", "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
+    addFitQuantities(out, fits.phi, "phi_bulk",
+                     "solid fraction far from the walls, intercept of phi(W) = phi_bulk − C/W", "C",
+                     "loss of solid fraction due to the walls, in d_L: C = 2 h (phi_bulk − phi_BL)");
   }
   addFitQuantities(out, fits.z, "Z_bulk",
-                     "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
-                     "C_Z", "loss of coordination due to the walls, in d_L");
+                   "coordination number (contacts per grain) far from the walls, intercept of Z(W) = Z_bulk − C_Z/W",
+                   "C_Z", "loss of coordination due to the walls, in d_L");
   // lambda_L/d_avg of the seed-averaged profile at the lambda width, as the lambda_L section takes it.
   SummaryQuantity lambda{
       "lambda_L/d_avg",
@@ -953,7 +968,9 @@ std::string bulkSizeText(const FamilySize& f) {
 }
 
 std::string widthSpanText(const FamilySize& f) {
-  return f.widths == 0 ? "-" : f.widths == 1 ? num(f.widthMin) : fmt::format("{} to {}", num(f.widthMin), num(f.widthMax));
+  return f.widths == 0   ? "-"
+         : f.widths == 1 ? num(f.widthMin)
+                         : fmt::format("{} to {}", num(f.widthMin), num(f.widthMax));
 }
 
 // The warning that opens the summary where a family's numbers cannot carry its physics: a bulk too
@@ -964,7 +981,8 @@ void addAdequacyWarning(Document& doc, const StudyView& study, const StudySummar
     const FamilySize f = familySize(study, sk);
     std::vector<std::string> why;
     if (std::isfinite(f.thickness) && f.thickness < kMinBulkThickness)
-      why.push_back(fmt::format("its bulk region is {:.1f} d_L thick (fewer than {:g})", f.thickness, kMinBulkThickness));
+      why.push_back(
+          fmt::format("its bulk region is {:.1f} d_L thick (fewer than {:g})", f.thickness, kMinBulkThickness));
     if (std::isfinite(f.grains) && f.grains < kMinBulkGrains)
       why.push_back(fmt::format("it holds {:.0f} grains (fewer than {:g})", f.grains, kMinBulkGrains));
     if (f.widths >= 2 && f.widthMax < kMinWidthSpan * f.widthMin)
@@ -1198,15 +1216,15 @@ std::string runsText(const StudyView& study, const StudySummary& summary, const 
 }
 
 // The sentence of one quantity compared between backends a and b.
-std::string comparisonText(const std::string& a, const std::string& b, const std::string& quantity,
-                           const Comparison& c, const std::string& both) {
+std::string comparisonText(const std::string& a, const std::string& b, const std::string& quantity, const Comparison& c,
+                           const std::string& both) {
   if (!c.known() && c.diff == 0.0) return fmt::format(" {} and {} give the same {} {}.", a, b, quantity, both);
   if (!c.known())
     return fmt::format(" {} and {} give {} {} with no standard error to compare them.", a, b, quantity, both);
   if (c.differ())
-    return fmt::format(" {} and {} differ on {} by {:+.3g} ± {:.2g}, {} standard errors {}.", a, b, quantity, c.diff,
-                       c.se, std::abs(c.diff) > 100.0 * c.se ? "more than 100" : fmt::format("{:.1f}", std::abs(c.diff) / c.se),
-                       both);
+    return fmt::format(
+        " {} and {} differ on {} by {:+.3g} ± {:.2g}, {} standard errors {}.", a, b, quantity, c.diff, c.se,
+        std::abs(c.diff) > 100.0 * c.se ? "more than 100" : fmt::format("{:.1f}", std::abs(c.diff) / c.se), both);
   return fmt::format(" {} and {} agree on {} within 2 standard errors {}.", a, b, quantity, both);
 }
 
@@ -1242,8 +1260,12 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
       const auto eb = q.values.find({sk, b});
       if (ea == q.values.end() || eb == q.values.end()) continue;
       const Comparison c = compare(ea->second, eb->second);
-      std::vector<std::string> row = {familyName(sk), q.name, ea->second.text, eb->second.text,
-                                      fmt::format("{:+.3g}", c.diff), c.bothErrors ? fmt::format("{:.2g}", c.se) : "-",
+      std::vector<std::string> row = {familyName(sk),
+                                      q.name,
+                                      ea->second.text,
+                                      eb->second.text,
+                                      fmt::format("{:+.3g}", c.diff),
+                                      c.bothErrors ? fmt::format("{:.2g}", c.se) : "-",
                                       c.verdict()};
       text += comparisonText(a, b, q.name, c, fmt::format("({} against {})", ea->second.text, eb->second.text));
       if (withSettled) {
@@ -1255,7 +1277,8 @@ void addVerdictSection(Document& doc, const StudyView& study, const StudySummary
           const std::string madeOf = differenceMadeOf(c, cs);
           row.insert(row.end(), {es->second.text, fmt::format("{:+.3g}", cs.diff),
                                  cs.bothErrors ? fmt::format("{:.2g}", cs.se) : "-", cs.verdict(), madeOf});
-          text += comparisonText(a, settled, q.name, cs, fmt::format("({} against {})", ea->second.text, es->second.text));
+          text +=
+              comparisonText(a, settled, q.name, cs, fmt::format("({} against {})", ea->second.text, es->second.text));
           if (madeOf != "-" && madeOf != "none") text += fmt::format(" On {}: {}.", q.name, madeOf);
         }
       }
@@ -1301,7 +1324,12 @@ void addSettingSections(Document& doc, const StudyView& study, FigureWriter& fig
             study.settings[i], name, study.compared.noun));
         headed = true;
       }
-      Plot p{fmt::format("{}_vs_{}", symbol, stem), fmt::format("{} against {}", symbol, name), name, symbol, {}, {},
+      Plot p{fmt::format("{}_vs_{}", symbol, stem),
+             fmt::format("{} against {}", symbol, name),
+             name,
+             symbol,
+             {},
+             {},
              false};
       // One line per (configuration without this setting, backend), in the study's order.
       std::map<std::pair<ConfKey, std::string>, Series> lines;
@@ -1320,8 +1348,7 @@ void addSettingSections(Document& doc, const StudyView& study, FigureWriter& fig
                           bi > 0,
                           true,
                           {}};
-          line.points.push_back(
-              {*k.settings[i].number, st.mean, standardError(st)});
+          line.points.push_back({*k.settings[i].number, st.mean, standardError(st)});
         }
       }
       for (auto& [_, line] : lines) p.series.push_back(std::move(line));
@@ -1383,7 +1410,12 @@ void addProfileFigures(Document& doc, const StudyView& study, FigureWriter& figu
     }
     for (const std::string& col : columnOrder) {
       Plot p{fmt::format("profile_{:03d}_{}", ++figureIndex, base),
-             fmt::format("{}: {} for {}", base, col, seriesText(sk)), xLabel, col, byColumn[col], {}, false};
+             fmt::format("{}: {} for {}", base, col, seriesText(sk)),
+             xLabel,
+             col,
+             byColumn[col],
+             {},
+             false};
       doc.figure(figures.draw(p));
     }
   }
@@ -1520,7 +1552,9 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
 }
 
 // A number of a table file: full precision, so that reading it back gives the same double.
-std::string exact(double v) { return fmt::format("{:.17g}", v); }
+std::string exact(double v) {
+  return fmt::format("{:.17g}", v);
+}
 
 // The CSV of one table group: a row per (quantity, configuration), per backend the mean, the
 // sample standard deviation and the number of replicas that finished, and the difference of the
@@ -1539,7 +1573,7 @@ void writeQuantityTable(const fs::path& path, const StudyView& study, const std:
   std::vector<std::vector<std::string>> rows;
   for (const std::string& key : keys)
     for (const auto& [k, _] : study.groups) {
-      std::vector<std::string> row = {key,          familyOf(k.shape, k.xs), exact(k.xs), exact(k.width),
+      std::vector<std::string> row = {key,         familyOf(k.shape, k.xs), exact(k.xs), exact(k.width),
                                       exact(k.mu), k.periodic ? "1" : "0"};
       for (const SettingValue& v : k.settings) row.push_back(v.text);
       std::vector<ReplicaStat> stats;
@@ -1565,8 +1599,7 @@ void writeQuantityTable(const fs::path& path, const StudyView& study, const std:
 void addQuantityTables(Document& doc, const StudyView& study, const fs::path& reportDir) {
   std::vector<std::vector<std::string>> groupKeys(tableGroups().size());
   std::vector<std::string> notApplicable;
-  for (const std::string& k : study.keys)
-    (study.applies(k) ? groupKeys[tableGroupOf(k)] : notApplicable).push_back(k);
+  for (const std::string& k : study.keys) (study.applies(k) ? groupKeys[tableGroupOf(k)] : notApplicable).push_back(k);
   std::string files;
   for (std::size_t g = 0; g < tableGroups().size(); ++g) {
     if (groupKeys[g].empty()) continue;

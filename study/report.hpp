@@ -59,8 +59,8 @@ BackendDifference backendDifference(const ReplicaStat& a, const ReplicaStat& b);
 struct RunRecord {
   SweepRun run;
   RunStatus status = RunStatus::Pending;
-  nlohmann::json result;  ///< result.json (null unless done)
-  nlohmann::json marker;  ///< done.json or failed.json
+  nlohmann::json result;                                ///< result.json (null unless done)
+  nlohmann::json marker;                                ///< done.json or failed.json
   std::map<std::string, std::optional<double>> values;  ///< flattened numeric leaves ("coordination/Z")
   bool settle = false;  ///< a table run's settle (RUN/settled/): its second result, not a run of its own
 };
@@ -81,7 +81,7 @@ std::vector<RunRecord> loadStudy(const std::filesystem::path& sweepDir, SweepSpe
 std::map<std::string, std::optional<double>> flattenResult(const nlohmann::json& result);
 
 struct ReportOptions {
-  std::filesystem::path gnuplot = "gnuplot";  ///< executable; empty = do not draw figures
+  std::filesystem::path gnuplot = "gnuplot";                            ///< executable; empty = do not draw figures
   std::chrono::milliseconds figureTimeout = std::chrono::seconds(120);  ///< gnuplot is killed after this, per figure
   /// Published values shown next to the study's (`--reference FILE`, study/reference_values.hpp):
   /// a "reference" column beside each quantity of the summary that has one, the citations below

@@ -13,11 +13,20 @@ std::string htmlEscape(std::string_view s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -51,8 +60,10 @@ std::string htmlText(std::string_view s) {
 std::string mdEscape(std::string_view s) {
   std::string out;
   for (char c : s) {
-    if (c == '|') out += "\\|";
-    else out += c;
+    if (c == '|')
+      out += "\\|";
+    else
+      out += c;
   }
   return out;
 }
@@ -63,7 +74,9 @@ bool flagged(const std::string& c) {
 }
 
 // Why a figure has no drawing, after "not drawn".
-std::string notDrawnReason(const Figure& f) { return f.error.empty() ? "" : ": " + f.error; }
+std::string notDrawnReason(const Figure& f) {
+  return f.error.empty() ? "" : ": " + f.error;
+}
 
 template <class... F>
 struct Overloaded : F... {
@@ -97,9 +110,10 @@ void markdownBlock(std::ostream& md, const Block& block) {
                  },
                  [&](const Figure& f) {
                    if (f.svg.empty())
-                     md << fmt::format("*Figure {}: {}* (not drawn{}; data in [figures/{}.csv](figures/{}.csv), "
-                                       "script figures/{}.gp)\n\n",
-                                       f.stem, f.caption, notDrawnReason(f), f.stem, f.stem, f.stem);
+                     md << fmt::format(
+                         "*Figure {}: {}* (not drawn{}; data in [figures/{}.csv](figures/{}.csv), "
+                         "script figures/{}.gp)\n\n",
+                         f.stem, f.caption, notDrawnReason(f), f.stem, f.stem, f.stem);
                    else
                      md << fmt::format("![{}](figures/{}.svg)\n\n*{}* (data: [figures/{}.csv](figures/{}.csv))\n\n",
                                        f.caption, f.stem, f.caption, f.stem, f.stem);
@@ -148,8 +162,10 @@ std::string link(std::string_view text, std::string_view target) {
   std::string encoded;
   for (const char c : target) {
     const auto u = static_cast<unsigned char>(c);
-    if (std::isalnum(u) || c == '/' || c == '.' || c == '-' || c == '_' || c == '~') encoded += c;
-    else encoded += fmt::format("%{:02X}", u);
+    if (std::isalnum(u) || c == '/' || c == '.' || c == '-' || c == '_' || c == '~')
+      encoded += c;
+    else
+      encoded += fmt::format("%{:02X}", u);
   }
   return fmt::format("[{}]({})", text, encoded);
 }

@@ -39,8 +39,10 @@ std::string gnuplotScript(const Plot& p) {
     // Rows of other series give an undefined x and are skipped; rows of one series are
     // contiguous in the CSV, so its line is not broken.
     const std::string sel = fmt::format("(strcol(1) eq \"{}\" ? $2 : 1/0)", s.name);
-    const std::string style =
-        fmt::format("lc {} dt {} pt {}", s.color, s.dashed ? 2 : 1, s.pointType ? s.pointType : s.dashed ? 6 : 7);
+    const std::string style = fmt::format("lc {} dt {} pt {}", s.color, s.dashed ? 2 : 1,
+                                          s.pointType ? s.pointType
+                                          : s.dashed  ? 6
+                                                      : 7);
     bool hasErr = false;
     for (const auto& pt : s.points) hasErr = hasErr || pt[2] > 0.0;
     if (hasErr)
@@ -65,9 +67,9 @@ FigureWriter::FigureWriter(fs::path dir, fs::path gnuplot, std::chrono::millisec
   available_ = probe.ok();
   // A program that ran and failed is not one that is missing: say which, with its exit status.
   if (!available_)
-    problem_ = probe.started ? fmt::format("failed its check (`{} --version` {})", gnuplot_.string(),
-                                           probe.describe(timeout_))
-                             : fmt::format("was not found ({})", probe.error);
+    problem_ = probe.started
+                   ? fmt::format("failed its check (`{} --version` {})", gnuplot_.string(), probe.describe(timeout_))
+                   : fmt::format("was not found ({})", probe.error);
 }
 
 Figure FigureWriter::draw(const Plot& p) {

@@ -99,8 +99,12 @@ void addRelaxationSection(Document& doc, FigureWriter& figures, const std::vecto
     if (times.empty()) continue;
     for (std::size_t q = 0; q < kQuantities.size(); ++q) {
       Plot p{fmt::format("{}_{}", family.stem, kQuantities[q].key),
-             fmt::format("{}: {} against t", family.name, kQuantities[q].title), "t (t0)", kQuantities[q].title, {},
-             {}, true};
+             fmt::format("{}: {} against t", family.name, kQuantities[q].title),
+             "t (t0)",
+             kQuantities[q].title,
+             {},
+             {},
+             true};
       for (const RelaxationLine& line : family.lines) {
         Series s{line.label, line.color, line.dashed, true, {}};
         s.markers = false;

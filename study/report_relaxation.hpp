@@ -14,8 +14,8 @@ namespace confpack::study {
 
 /// The replicas of one configuration and backend: their result.json timing.history arrays.
 struct RelaxationLine {
-  std::string label;  ///< "W=10 nscd (n=3)"
-  int color = 1;      ///< one per width
+  std::string label;    ///< "W=10 nscd (n=3)"
+  int color = 1;        ///< one per width
   bool dashed = false;  ///< backends after the first
   std::vector<nlohmann::json> histories;
 };

@@ -42,8 +42,9 @@ constexpr std::array<std::string_view, 10> kCompactionKeys = {
 // phi of the bulk, Z by type (null without a bulk region, or without a grain in it).
 nlohmann::json settleSide(const core::Packing& p) {
   const analysis::BulkRegion region = analysis::bulkRegion(p);
-  if (region.empty()) return {{"solid_fraction", nullptr}, {"Z", nullptr}, {"simple", nullptr},
-                              {"double", nullptr}, {"triple", nullptr}, {"wall", nullptr}};
+  if (region.empty())
+    return {{"solid_fraction", nullptr}, {"Z", nullptr},      {"simple", nullptr},
+            {"double", nullptr},         {"triple", nullptr}, {"wall", nullptr}};
   const analysis::Coordination c = analysis::bulkCoordination(p, region);
   const auto perGrain = [&](double v) { return c.bulkGrains > 0 ? nlohmann::json(v) : nlohmann::json(nullptr); };
   return {{"solid_fraction", analysis::solidFraction(p, region).phi},
@@ -69,8 +70,8 @@ nlohmann::json settleRecord(const core::RunConfig& cfg, const compaction::Deposi
           {"after", settleSide(out.packing)}};
 }
 
-nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit& deposit, const compaction::CompactionOutcome& out,
-                          const analysis::Analysis& measured) {
+nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit& deposit,
+                          const compaction::CompactionOutcome& out, const analysis::Analysis& measured) {
   nlohmann::json r = analysis::toJson(measured);
   // Every key set here is one of kCompactionKeys, which reanalyseRun keeps.
   r["backend"] = cfg.backend;
@@ -108,7 +109,8 @@ Reanalysed reanalyseRun(const std::filesystem::path& runDir) {
 
 FinishedRun runProtocol(const core::RunConfig& cfg, const std::filesystem::path& vtkDir, const RunProgressFn& progress,
                         const compaction::Deposit* shared, const compaction::Checkpointing& checkpointing) {
-  const compaction::Deposit dep = shared ? *shared : compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::Deposit dep =
+      shared ? *shared : compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   compaction::CompactionOutcome out = compaction::compact(cfg, dep, vtkDir, progress, checkpointing);
   analysis::Analysis measured = analysis::analyze(out.packing, analysisOptions());
   nlohmann::json result = makeResult(cfg, dep, out, measured);

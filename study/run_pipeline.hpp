@@ -31,8 +31,8 @@ void checkRunCells(const core::RunConfig& cfg, double grains);
 
 /// The result.json of a run (docs/model.md, "Results"): the measurements of the final packing, the
 /// equilibrium block, timing, backend, seed and the resolved configuration.
-nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit& deposit, const compaction::CompactionOutcome& out,
-                          const analysis::Analysis& measured);
+nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit& deposit,
+                          const compaction::CompactionOutcome& out, const analysis::Analysis& measured);
 
 /// result.json's settle block of a run from a packing (`run --from`, docs/model.md, "Settling"):
 /// how far its grains moved to reach rest (largest and mean centre displacement [d_L]), in how
@@ -59,9 +59,9 @@ Reanalysed reanalyseRun(const std::filesystem::path& runDir);
 
 /// A run done in memory: the final packing, its measurements and result.json's content.
 struct FinishedRun {
-  core::Packing packing;       ///< final poses with the last step's contacts and forces
-  analysis::Analysis measured; ///< its measurements (the profiles come from here)
-  nlohmann::json result;       ///< result.json (makeResult)
+  core::Packing packing;        ///< final poses with the last step's contacts and forces
+  analysis::Analysis measured;  ///< its measurements (the profiles come from here)
+  nlohmann::json result;        ///< result.json (makeResult)
 };
 
 /// Deposit (unless `shared` is given) + compact + analyse, writing nothing but the ParaView frames

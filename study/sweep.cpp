@@ -35,7 +35,9 @@ namespace {
 }
 
 // A list value may be given as a scalar for convenience ("backend": "nscd").
-json asList(const json& v) { return v.is_array() ? v : json::array({v}); }
+json asList(const json& v) {
+  return v.is_array() ? v : json::array({v});
+}
 
 // Keys of `given` that the configuration does not know are typos: refuse them rather than
 // silently running the default. Recurses where both sides are objects; an object that is empty by
@@ -285,14 +287,18 @@ std::string depositKey(const core::RunConfig& cfg) {
   return json{{"box", box}, {"population", pop}, {"deposition", dep}, {"seed", cfg.seed}}.dump();
 }
 
-std::string trimNumber(double v) { return fmt::format("{:g}", v); }
+std::string trimNumber(double v) {
+  return fmt::format("{:g}", v);
+}
 
 // The leaves of a configuration's JSON, keyed by their path joined with '.'.
 void flattenConfig(const json& j, const std::string& path, std::map<std::string, const json*>& out) {
   for (const auto& [key, v] : j.items()) {
     const std::string here = path.empty() ? key : path + "." + key;
-    if (v.is_object()) flattenConfig(v, here, out);
-    else out[here] = &v;
+    if (v.is_object())
+      flattenConfig(v, here, out);
+    else
+      out[here] = &v;
   }
 }
 
@@ -334,8 +340,10 @@ class VariedSettings {
       if (it == b.end()) {
         // The whole subtree is missing from b.
         std::map<std::string, const json*> leaves;
-        if (v.is_object()) flattenConfig(v, here, leaves);
-        else leaves[here] = &v;
+        if (v.is_object())
+          flattenConfig(v, here, leaves);
+        else
+          leaves[here] = &v;
         for (const auto& [p, _] : leaves) varied_.insert(p);
       } else if (v.is_object() && it->is_object()) {
         compare(v, *it, here);
@@ -461,7 +469,9 @@ std::string utcTimestamp() {
   return buf;
 }
 
-std::string SweepRun::depositName() const { return fmt::format("d{:04d}", depositIndex); }
+std::string SweepRun::depositName() const {
+  return fmt::format("d{:04d}", depositIndex);
+}
 
 std::string familyName(const core::RunConfig& cfg) {
   const bool bidisperse = cfg.population.smallFraction > 0.0;
@@ -493,8 +503,8 @@ std::string settingText(const json& cfg, const std::string& path) {
 }  // namespace
 
 std::string SweepRun::label(const std::vector<std::string>& settings) const {
-  const std::string w = config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width))
-                                             : trimNumber(config.box.width);
+  const std::string w =
+      config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width)) : trimNumber(config.box.width);
   std::string text =
       fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config), trimNumber(config.population.smallFraction), w,
                   trimNumber(config.walls.friction), config.seed, config.backend);
@@ -539,8 +549,8 @@ std::vector<std::string> settingNames(const std::vector<std::string>& paths) {
     std::size_t k = 1;
     for (;; ++k) {
       const std::string name = tail(p, k);
-      const bool unique = std::none_of(paths.begin(), paths.end(),
-                                       [&](const std::string& q) { return q != p && tail(q, k) == name; });
+      const bool unique =
+          std::none_of(paths.begin(), paths.end(), [&](const std::string& q) { return q != p && tail(q, k) == name; });
       if (unique || name == p) break;
     }
     names.push_back(tail(p, k));
@@ -550,17 +560,21 @@ std::vector<std::string> settingNames(const std::vector<std::string>& paths) {
 
 std::string_view toString(RunStatus s) {
   switch (s) {
-    case RunStatus::Pending: return "pending";
-    case RunStatus::Incomplete: return "incomplete";
-    case RunStatus::Failed: return "failed";
-    case RunStatus::Done: return "done";
+    case RunStatus::Pending:
+      return "pending";
+    case RunStatus::Incomplete:
+      return "incomplete";
+    case RunStatus::Failed:
+      return "failed";
+    case RunStatus::Done:
+      return "done";
   }
   return "?";
 }
 
 SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t maxRuns) {
   if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
-  static const std::set<std::string> known = {"format", "version", "name",   "base",       "biperiodic_width",
+  static const std::set<std::string> known = {"format", "version", "name",        "base",       "biperiodic_width",
                                               "vary",   "groups",  "description", "settle_with"};
   for (const auto& [key, v] : doc.items())
     if (!known.count(key))
@@ -598,7 +612,8 @@ SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t m
     // Only nscd has the quasi-static finisher that brings a pile to rest whatever its state.
     const json& w = doc.at("settle_with");
     if (w != "nscd")
-      bad(source, "settle_with", fmt::format("expected \"nscd\", the backend with a finisher (got {})", core::jsonExcerpt(w)));
+      bad(source, "settle_with",
+          fmt::format("expected \"nscd\", the backend with a finisher (got {})", core::jsonExcerpt(w)));
     spec.settleWith = w.get<std::string>();
   }
   if (doc.contains("vary") == doc.contains("groups"))
@@ -640,8 +655,7 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
     // An empty list takes the base value; writing it as a one-element list keeps one loop nest.
     const auto shapes = g.shapes.empty() ? std::vector{base.population.shape} : g.shapes;
     const auto fractions = g.smallFractions.empty() ? std::vector{base.population.smallFraction} : g.smallFractions;
-    const auto widths =
-        g.widths.empty() ? std::vector{WidthChoice{base.box.width, base.box.periodicY}} : g.widths;
+    const auto widths = g.widths.empty() ? std::vector{WidthChoice{base.box.width, base.box.periodicY}} : g.widths;
     const auto frictions = g.wallFrictions.empty() ? std::vector{base.walls.friction} : g.wallFrictions;
     const auto seeds = g.seeds.empty() ? std::vector{base.seed} : g.seeds;
     const auto backendList = g.backends.empty() ? std::vector{base.backend} : g.backends;
@@ -742,10 +756,10 @@ void prepareSweepDir(const fs::path& dir, const SweepSpec& spec, const std::vect
       return true;
     };
     if (!existing.contains("runs") || !sameTable(existing.at("runs")))
-      throw std::invalid_argument(fmt::format(
-          "{}: holds a different sweep (its run table differs from this sweep file's); resume it with the "
-          "sweep file that made it, or choose a new output folder",
-          dir.string()));
+      throw std::invalid_argument(
+          fmt::format("{}: holds a different sweep (its run table differs from this sweep file's); resume it with the "
+                      "sweep file that made it, or choose a new output folder",
+                      dir.string()));
     return;
   }
   // Several tasks of a job array may get here at once: each writes the same bytes atomically.
@@ -852,8 +866,8 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const SweepRun& r = runs[k];
     if (taskIndex && !slice.count(r.index)) continue;
-    const std::string w = r.config.box.periodicY ? fmt::format("bi{}", trimNumber(r.config.box.width))
-                                                 : trimNumber(r.config.box.width);
+    const std::string w =
+        r.config.box.periodicY ? fmt::format("bi{}", trimNumber(r.config.box.width)) : trimNumber(r.config.box.width);
     out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(), familyName(r.config),
                        trimNumber(r.config.population.smallFraction), w, trimNumber(r.config.walls.friction),
                        r.config.seed, r.config.backend);

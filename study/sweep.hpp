@@ -57,7 +57,7 @@ struct SweepGroup {
   std::vector<double> wallFrictions;   ///< mu_w [-]
   std::vector<std::uint64_t> seeds;
   std::vector<std::string> backends;
-  std::vector<SettingAxis> settings;   ///< every other key of the group, in the order of their paths
+  std::vector<SettingAxis> settings;  ///< every other key of the group, in the order of their paths
 };
 
 /// A parsed, validated sweep file.
@@ -70,7 +70,7 @@ struct SweepSpec {
   /// another backend on to rest from its final packing, kept beside it in RUN/settled/
   /// (docs/sweeps.md); empty: none.
   std::string settleWith;
-  nlohmann::json source;                           ///< the document as given (kept in sweep.json)
+  nlohmann::json source;  ///< the document as given (kept in sweep.json)
 };
 
 /// One run of the table.
@@ -126,8 +126,7 @@ std::string familyName(const core::RunConfig& cfg);
 /// Runs of one task of a job array: deposit groups are dealt round-robin over the tasks (group g
 /// goes to task g mod taskCount), so every run belongs to exactly one task and the runs sharing a
 /// deposit stay together (the deposit is computed once). Returns run indices in table order.
-std::vector<std::size_t> sliceRuns(const std::vector<SweepRun>& runs, std::size_t taskIndex,
-                                   std::size_t taskCount);
+std::vector<std::size_t> sliceRuns(const std::vector<SweepRun>& runs, std::size_t taskIndex, std::size_t taskCount);
 
 enum class RunStatus { Pending, Incomplete, Failed, Done };
 std::string_view toString(RunStatus s);
@@ -151,22 +150,22 @@ using SweepRunFn = std::function<nlohmann::json(const core::RunConfig& cfg, cons
 using SweepDepositFn = std::function<compaction::Deposit(const core::RunConfig& cfg)>;
 
 struct SweepOptions {
-  int jobs = 1;                ///< runs at the same time in this process
-  std::size_t taskIndex = 0;   ///< this task's slice, in [0, taskCount)
-  std::size_t taskCount = 1;   ///< number of tasks sharing the sweep
+  int jobs = 1;                   ///< runs at the same time in this process
+  std::size_t taskIndex = 0;      ///< this task's slice, in [0, taskCount)
+  std::size_t taskCount = 1;      ///< number of tasks sharing the sweep
   std::vector<std::size_t> runs;  ///< when not empty: these runs (indices in the table) instead of the slice
-  LivenessFn alive;            ///< judges the holder of a run's claim; empty = holderLiveness
-  bool quiet = false;          ///< no progress lines
-  std::ostream* log = nullptr; ///< progress stream; nullptr = std::cerr
-  bool live = false;           ///< redraw a live status line (only on a terminal)
+  LivenessFn alive;               ///< judges the holder of a run's claim; empty = holderLiveness
+  bool quiet = false;             ///< no progress lines
+  std::ostream* log = nullptr;    ///< progress stream; nullptr = std::cerr
+  bool live = false;              ///< redraw a live status line (only on a terminal)
 };
 
 struct SweepSummary {
-  std::size_t total = 0;        ///< runs in the table
-  std::size_t inSlice = 0;      ///< runs of this task
-  std::size_t alreadyDone = 0;  ///< found finished and skipped
-  std::size_t ran = 0;          ///< finished now
-  std::size_t failed = 0;       ///< threw; failed.json written, retried by the next invocation
+  std::size_t total = 0;          ///< runs in the table
+  std::size_t inSlice = 0;        ///< runs of this task
+  std::size_t alreadyDone = 0;    ///< found finished and skipped
+  std::size_t ran = 0;            ///< finished now
+  std::size_t failed = 0;         ///< threw; failed.json written, retried by the next invocation
   std::size_t heldElsewhere = 0;  ///< claimed by another live process (study/run_claim.hpp): left to it
   double wallSeconds = 0.0;
 };

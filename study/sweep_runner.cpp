@@ -26,7 +26,8 @@ SweepRunFn pipelineRunner(int threads, double checkpointEvery, const std::string
 }
 
 SweepDepositFn pipelineDepositor() {
-  return [](const core::RunConfig& cfg) { return compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed); };
+  return
+      [](const core::RunConfig& cfg) { return compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed); };
 }
 
 }  // namespace confpack::study

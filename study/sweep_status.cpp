@@ -5,8 +5,8 @@
 #include <map>
 #include <sstream>
 
-#include "core/json_input.hpp"
 #include "compaction/checkpoint.hpp"
+#include "core/json_input.hpp"
 #include "study/process.hpp"
 #include "study/slurm.hpp"
 

@@ -30,7 +30,8 @@ const core::SettingsTable<BulletSettings>& settingsTable() {
                 "gap below which a manifold point is made and above which it is dropped")
         .integer("friction_directions", &S::frictionDirections, Range::closed(1.0, 2.0), "-",
                  "friction rows per contact point (2: a square Coulomb cone)")
-        .flag("skip_zero_friction_rows", &S::skipZeroFrictionRows, "no friction rows where mu = 0 (same physics, faster)")
+        .flag("skip_zero_friction_rows", &S::skipZeroFrictionRows,
+              "no friction rows where mu = 0 (same physics, faster)")
         .flag("sat_convex", &S::satConvex, "polyhedron contact normals by the separating-axis test instead of GJK/EPA")
         .integer("plane_perturbation_iterations", &S::planePerturbationIterations, Range::atLeast(0.0), "-",
                  "extra wall contact points of a polyhedron by small rotations")
@@ -44,9 +45,13 @@ const core::SettingsTable<BulletSettings>& settingsTable() {
   return table;
 }
 
-void BulletSettings::validate() const { settingsTable().validate(*this); }
+void BulletSettings::validate() const {
+  settingsTable().validate(*this);
+}
 
-void to_json(nlohmann::json& j, const BulletSettings& s) { j = settingsTable().write(s); }
+void to_json(nlohmann::json& j, const BulletSettings& s) {
+  j = settingsTable().write(s);
+}
 
 BulletSettings bulletSettingsFromJson(const nlohmann::json& j) {
   BulletSettings s;

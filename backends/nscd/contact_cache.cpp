@@ -7,8 +7,12 @@ namespace confpack::nscd {
 
 namespace {
 
-bool keyLess(const CachedContact& l, const CachedContact& r) { return l.key < r.key; }
-bool keyBefore(const CachedContact& c, const ContactKey& k) { return c.key < k; }
+bool keyLess(const CachedContact& l, const CachedContact& r) {
+  return l.key < r.key;
+}
+bool keyBefore(const CachedContact& c, const ContactKey& k) {
+  return c.key < k;
+}
 
 }  // namespace
 
@@ -24,8 +28,8 @@ const CachedContact* ContactCache::find(const ContactKey& key, std::size_t& curs
     hi = std::min(n, cursor + bound + 1);
   }
   const auto first = entries_.begin();
-  const auto it =
-      std::lower_bound(first + static_cast<std::ptrdiff_t>(lo), first + static_cast<std::ptrdiff_t>(hi), key, keyBefore);
+  const auto it = std::lower_bound(first + static_cast<std::ptrdiff_t>(lo), first + static_cast<std::ptrdiff_t>(hi),
+                                   key, keyBefore);
   cursor = static_cast<std::size_t>(it - first);
   return it != entries_.end() && it->key == key ? &*it : nullptr;
 }

@@ -87,8 +87,7 @@ double NarrowPhase::maxReach() const {
 }
 
 void NarrowPhase::collidePair(const CandidatePair& pair, const std::vector<Vec3>& positions,
-                              const std::vector<core::Quat>& orientations,
-                              std::vector<ContactGeometry>& out) const {
+                              const std::vector<core::Quat>& orientations, std::vector<ContactGeometry>& out) const {
   collidePairIn(pair, positions, orientations, nullptr, out);
 }
 
@@ -154,8 +153,7 @@ void NarrowPhase::collidePairIn(const CandidatePair& pair, const std::vector<Vec
   out.push_back(c);
 }
 
-void NarrowPhase::collideWalls(int i, const std::vector<Vec3>& positions,
-                               const std::vector<core::Quat>& orientations,
+void NarrowPhase::collideWalls(int i, const std::vector<Vec3>& positions, const std::vector<core::Quat>& orientations,
                                std::vector<ContactGeometry>& out) const {
   const double alert = alertFraction_ * size_[i];
   const Vec3& p = positions[i];
@@ -178,11 +176,9 @@ void NarrowPhase::collideWalls(int i, const std::vector<Vec3>& positions,
     return;
   }
   // Cheap rejection on the bounding radius before the exact routine.
-  if (p.z() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::Floor, box_, alert, c))
-    out.push_back(c);
+  if (p.z() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::Floor, box_, alert, c)) out.push_back(c);
   if (box_.periodicY) return;
-  if (p.y() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::SideLow, box_, alert, c))
-    out.push_back(c);
+  if (p.y() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::SideLow, box_, alert, c)) out.push_back(c);
   if (box_.width - p.y() - radius_[i] < alert && collideSphereWall(p, radius_[i], WallId::SideHigh, box_, alert, c))
     out.push_back(c);
 }

@@ -23,11 +23,11 @@ inline constexpr int kMaxContactPoints = collision::kMaxPolyhedronContactPoints;
 /// One contact plane between grain a and grain b (or a wall, b < 0) with its points.
 struct ContactGeometry {
   int a = 0;
-  int b = 0;                       ///< grain index, or a core::WallId value
-  std::int8_t shiftX = 0;          ///< b's image: position_b + shiftX L_x e_x + shiftY W e_y
+  int b = 0;               ///< grain index, or a core::WallId value
+  std::int8_t shiftX = 0;  ///< b's image: position_b + shiftX L_x e_x + shiftY W e_y
   std::int8_t shiftY = 0;
   core::ContactType type = core::ContactType::Simple;
-  std::uint32_t feature = 0;       ///< feature pair (polyhedra), part of the cache key; 0 for spheres
+  std::uint32_t feature = 0;                ///< feature pair (polyhedra), part of the cache key; 0 for spheres
   core::Vec3 normal = core::Vec3::UnitZ();  ///< unit, from a towards b
   int pointCount = 0;
   std::array<core::Vec3, kMaxContactPoints> points{};  ///< world frame, near a (midway across the gap)
@@ -114,8 +114,8 @@ class NarrowPhase {
   double alertFraction_ = 0.0;
   double commonPlaneBand_ = 0.0;  ///< > 0: polyhedron pairs read on the common plane
   std::vector<core::ShapeKind> shape_;
-  std::vector<double> radius_;  ///< sphere radius or bounding radius [d_L]
-  std::vector<double> size_;    ///< d or L [d_L]
+  std::vector<double> radius_;                ///< sphere radius or bounding radius [d_L]
+  std::vector<double> size_;                  ///< d or L [d_L]
   std::vector<core::ConvexPolyhedron> poly_;  ///< body-frame shape of pinacoids (empty for spheres)
 };
 

@@ -71,11 +71,13 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
   return table;
 }
 
-void NscdSettings::validate() const { settingsTable().validate(*this); }
+void NscdSettings::validate() const {
+  settingsTable().validate(*this);
+}
 
-
-void to_json(nlohmann::json& j, const NscdSettings& s) { j = settingsTable().write(s); }
-
+void to_json(nlohmann::json& j, const NscdSettings& s) {
+  j = settingsTable().write(s);
+}
 
 NscdSettings defaultsFor(SolverKind kind) {
   NscdSettings s;

@@ -4,9 +4,10 @@
 // Every key of the options JSON is a field below; unknown keys are refused so that a typo never
 // silently runs with a default. The measurements behind the defaults are in docs/performance.md,
 // "nscd settings: the measurements behind the defaults".
-#include "core/settings_table.hpp"
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "core/settings_table.hpp"
 
 namespace confpack::nscd {
 

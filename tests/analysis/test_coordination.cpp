@@ -70,7 +70,6 @@ TEST_CASE("force threshold and merged contacts", "[analysis][coordination]") {
   CHECK_THROWS_AS(analysis::forceCarryingContacts(p, contacts, false), std::invalid_argument);
 }
 
-
 TEST_CASE("contact types by a tolerance band: a face tilted by 3 degrees is triple in the band, not exactly",
           "[analysis][coordination]") {
   using confpack::testing::pinacoid;

@@ -17,8 +17,8 @@ TEST_CASE("displacement: the largest and mean centre displacement, the minimum i
                                            testing::sphere(1.0, core::Vec3(2.0, 1.5, 0.5)),
                                            testing::sphere(1.0, core::Vec3(3.0, 1.5, 2.0))};
   std::vector<core::Grain> after = before;
-  after[0].position.x() = 3.9;                        // across the period: 0.2, not 3.8
-  after[1].position += core::Vec3(0.0, 0.3, -0.4);   // 0.5
+  after[0].position.x() = 3.9;                      // across the period: 0.2, not 3.8
+  after[1].position += core::Vec3(0.0, 0.3, -0.4);  // 0.5
   const analysis::Displacement d = analysis::displacement(box, before, after);
   CHECK(d.max == Approx(0.5));
   CHECK(d.maxGrain == 1);
@@ -32,7 +32,9 @@ TEST_CASE("displacement: the largest and mean centre displacement, the minimum i
     box.periodicY = true;
     CHECK(analysis::displacement(box, before, across).max == Approx(1.5));
   }
-  SECTION("grains at rest moved by nothing") { CHECK(analysis::displacement(box, before, before).max == 0.0); }
+  SECTION("grains at rest moved by nothing") {
+    CHECK(analysis::displacement(box, before, before).max == 0.0);
+  }
   SECTION("two lists of different grains are refused") {
     after.pop_back();
     CHECK_THROWS_AS(analysis::displacement(box, before, after), std::invalid_argument);

@@ -40,8 +40,8 @@ TEST_CASE("contact types of hand-placed pinacoids", "[analysis][coordination][pi
   }
   SECTION("crossed ridges: edge-edge, simple") {
     p.grains.push_back(pinacoid(1.0, core::Vec3(3, 3, 2.0), core::Quat::Identity()));
-    p.grains.push_back(
-        pinacoid(1.0, core::Vec3(3, 3, 3.0), core::Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, core::Vec3::UnitZ()))));
+    p.grains.push_back(pinacoid(1.0, core::Vec3(3, 3, 3.0),
+                                core::Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, core::Vec3::UnitZ()))));
     CHECK(onlyType(p, false) == core::ContactType::Simple);
   }
   SECTION("face on the opposite face of a copy: face-face, triple") {

@@ -64,4 +64,3 @@ TEST_CASE("fit through the origin and the profile-integral C", "[analysis][fit]"
   }
   CHECK(analysis::profileIntegralC(p, 0.64) == Approx(2 * 0.6 * 0.14));
 }
-

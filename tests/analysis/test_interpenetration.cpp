@@ -44,7 +44,8 @@ TEST_CASE("pinacoid overlap: exact volume inside the lattice bounds", "[analysis
   // Two aligned pinacoids (L = G = E = 1) shifted by 0.1 along y overlap over a translated copy:
   // V(A ∩ (A + t)) for t along y; cross-checked by the lattice bounds below.
   p.grains.push_back(pinacoid(1.0, core::Vec3(3.0, 2.0, 5.0), q0));
-  p.grains.push_back(pinacoid(1.0, core::Vec3(3.05, 2.93, 5.02), core::Quat(Eigen::AngleAxisd(0.3, core::Vec3::UnitZ()))));
+  p.grains.push_back(
+      pinacoid(1.0, core::Vec3(3.05, 2.93, 5.02), core::Quat(Eigen::AngleAxisd(0.3, core::Vec3::UnitZ()))));
   const analysis::BulkRegion region{10.0, 3.0, 7.0};
   const double exactPair =
       analysis::grainOverlapVolume(p.grains[0], p.grains[1], p.grains[1].position - p.grains[0].position);

@@ -63,8 +63,8 @@ TEST_CASE("a box or a pile far larger than its grains gets a grid sized by the g
     double lengthX, width, zSpread;
     bool periodicY;
   };
-  for (const Case& c : {Case{1e5, 1e5, 5.0, true}, Case{3.0, 18110810196449834.0, 5.0, false},
-                        Case{1e9, 50.0, 1e12, false}}) {
+  for (const Case& c :
+       {Case{1e5, 1e5, 5.0, true}, Case{3.0, 18110810196449834.0, 5.0, false}, Case{1e9, 50.0, 1e12, false}}) {
     core::Packing p;
     p.box.lengthX = c.lengthX;
     p.box.width = c.width;
@@ -73,9 +73,8 @@ TEST_CASE("a box or a pile far larger than its grains gets a grid sized by the g
     // A cluster near the origin, with pairs across the periodic boundary of x, and lone grains
     // far away along every axis.
     for (int k = 0; k < 40; ++k)
-      p.grains.push_back(testing::sphere(
-          1.0, core::Vec3(std::fmod(c.lengthX + rng.uniform(-2.0, 2.0), c.lengthX), rng.uniform(0.5, 3.0),
-                          rng.uniform(0.5, 5.0))));
+      p.grains.push_back(testing::sphere(1.0, core::Vec3(std::fmod(c.lengthX + rng.uniform(-2.0, 2.0), c.lengthX),
+                                                         rng.uniform(0.5, 3.0), rng.uniform(0.5, 5.0))));
     p.grains.push_back(testing::sphere(1.0, core::Vec3(0.5 * c.lengthX, 0.5 * c.width, 0.5)));
     p.grains.push_back(testing::sphere(1.0, core::Vec3(1.0, 1.0, c.zSpread)));
     std::vector<core::Vec3> positions;

@@ -77,4 +77,3 @@ TEST_CASE("phi(y) profile of one sphere follows pi (r^2 - y^2)", "[analysis][phi
   for (double v : wrapped.phi) sum += v * wrapped.slice * norm;
   CHECK(sum == Approx(analysis::sphereVolume(r)).epsilon(1e-12));
 }
-

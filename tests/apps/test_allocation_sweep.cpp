@@ -68,7 +68,8 @@ const std::string kSpheres = "run --length-x 4 --width 4 --height 5 -q";
 
 }  // namespace
 
-TEST_CASE("allocation failures: run with nscd (quasi-static, spheres) fails cleanly or succeeds", "[apps][cli][memory]") {
+TEST_CASE("allocation failures: run with nscd (quasi-static, spheres) fails cleanly or succeeds",
+          "[apps][cli][memory]") {
   const FaultSession s("allocation_sweep_nscd");
   CHECK(s.sweep(kSpheres + " --time-limit 3 --protocol quasi-static", "out", 40) > 0);
 }

@@ -209,11 +209,13 @@ TEST_CASE("a small deposit writes a readable packing inside the box, its config 
   for (const auto& e : fs::directory_iterator(s.dir / "a")) CHECK(e.path().filename() == "dep");
 
   // Same seed, same pile, bit for bit; --quiet silences stderr; an existing --out is refreshed.
-  const CommandResult again = s.run("deposit --length-x 6 --width 4 --height 4 --seed 3 --wall-friction 0.3 --quiet --out b");
+  const CommandResult again =
+      s.run("deposit --length-x 6 --width 4 --height 4 --seed 3 --wall-friction 0.3 --quiet --out b");
   REQUIRE(again.code == 0);
   CHECK(again.err.empty());
   CHECK(slurp(s.dir / "b" / "packing.json") == slurp(dir / "packing.json"));
-  const CommandResult other = s.run("deposit --length-x 6 --width 4 --height 4 --seed 4 --wall-friction 0.3 -q --out b");
+  const CommandResult other =
+      s.run("deposit --length-x 6 --width 4 --height 4 --seed 4 --wall-friction 0.3 -q --out b");
   REQUIRE(other.code == 0);
   CHECK(slurp(s.dir / "b" / "packing.json") != slurp(dir / "packing.json"));
   CHECK(core::readPacking(s.dir / "b" / "packing.json").grains.size() > 10);
@@ -250,12 +252,14 @@ TEST_CASE("values that can be refused before any work are: exit 2, one line, the
   const std::string out = " --out out";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"deposit --length-x 6 --height 4 --width 0.5" + out,
-       "confpack deposit: error: box.width: 0.5 d_L is less than a grain's circumscribed diameter (1.1 d_L): no grain fits"},
+       "confpack deposit: error: box.width: 0.5 d_L is less than a grain's circumscribed diameter (1.1 d_L): no grain "
+       "fits"},
       {"run --length-x 0.5 --width 4 --height 4" + out, "confpack run: error: box.length_x: 0.5 d_L is less than"},
       {"deposit --length-x 6 --width 4 --height 1e-9" + out,
        "confpack deposit: error: box.height: a box of 6 x 4 x 1e-09 d_L at expected_solid_fraction 0.6 holds no "
        "grain"},
-      {"run --length-x 6 --width 4 --height 4 --dt 1e-300" + out, "confpack run: error: compaction.dt: 1e-300 is below"},
+      {"run --length-x 6 --width 4 --height 4 --dt 1e-300" + out,
+       "confpack run: error: compaction.dt: 1e-300 is below"},
       {"run --length-x 6 --width 4 --height 4 --dt 5" + out,
        "confpack run: error: --dt: must be 0 or a time step of at most 0.1 t0 (got 5) (see --help)"},
       {"run --length-x 6 --width 4 --height 4 --dt 1e300" + out, "confpack run: error: --dt: must be 0 or a time step"},

@@ -102,8 +102,8 @@ TEST_CASE("a committed staged output appears whole, or replaces the entries it s
 TEST_CASE("a commit into an existing target that fails between two renames puts the old files back") {
   // Issue 23, failure 4: a failed move left old and new files mixed. The rename that fails is
   // injected, in turn at every rename a commit makes (3 old entries moved aside, 5 new ones moved
-  // in, the output marker among them): whichever fails, the target holds exactly its old files afterwards, and no staging folder
-  // is left.
+  // in, the output marker among them): whichever fails, the target holds exactly its old files afterwards, and no
+  // staging folder is left.
   const fs::path root = confpack::testing::freshDir("cli_common_rollback");
   auto writeOld = [&] {
     fs::remove_all(root / "run");
@@ -179,8 +179,9 @@ TEST_CASE("an --out that is an existing file is refused, and JSON is written who
   fs::remove_all(root);
 }
 
-
-TEST_CASE("the output rule: --out must be new, empty or confpack's own, and the root or a folder of other files are refused") {
+TEST_CASE(
+    "the output rule: --out must be new, empty or confpack's own, and the root or a folder of other files are "
+    "refused") {
   // The failure this guards against: `run --out /` wrote into the file system's root, and a folder of the
   // user's was filled or its entries replaced.
   using confpack::app::checkOutputTarget;

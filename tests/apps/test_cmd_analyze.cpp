@@ -273,7 +273,8 @@ TEST_CASE("SIGTERM stops a long analysis: one line saying where, exit 143, nothi
   const pid_t pid = confpack::testing::startConfpack(
       s.dir, {"analyze", "dep/packing.json", "--slice", "2e-5", "--out", "out", "-q"}, err);
   REQUIRE(pid >= 0);
-  const confpack::testing::Stopped stopped = confpack::testing::stopAfter(pid, std::chrono::milliseconds(1000), SIGTERM, err);
+  const confpack::testing::Stopped stopped =
+      confpack::testing::stopAfter(pid, std::chrono::milliseconds(1000), SIGTERM, err);
   const int status = stopped.status;
   const std::string& message = stopped.message;
   INFO(message);

@@ -28,7 +28,8 @@ TEST_CASE("SIGTERM or SIGINT stops a deposit: one line saying where, exit 128 + 
     const pid_t pid = confpack::testing::startConfpack(
         s.dir, {"deposit", "--length-x", "60", "--width", "60", "--height", "60", "--out", "out", "-q"}, err);
     REQUIRE(pid >= 0);
-    const confpack::testing::Stopped stopped = confpack::testing::stopAfter(pid, std::chrono::milliseconds(500), signal, err);
+    const confpack::testing::Stopped stopped =
+        confpack::testing::stopAfter(pid, std::chrono::milliseconds(500), signal, err);
     const int status = stopped.status;
     const std::string& message = stopped.message;
     INFO(message);

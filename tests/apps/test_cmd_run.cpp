@@ -5,15 +5,15 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
-#include <csignal>
-#include <thread>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/packing_io.hpp"
@@ -153,10 +153,10 @@ TEST_CASE("run --compaction-options sets compaction keys (over the flags) and re
   CHECK_FALSE(result["equilibrium"]["reached"].get<bool>());
   CHECK(result["timing"]["stages"]["quasi_static"]["steps"].get<long>() == 2);
 
-  for (const auto& [options, named] : std::vector<std::pair<std::string, std::string>>{
-           {"{\"trust_radius\": 0.9}", "compaction.trust_radius"},
-           {"{\"no_such_key\": 1}", "no_such_key"},
-           {"{not json", "--compaction-options"}}) {
+  for (const auto& [options, named] :
+       std::vector<std::pair<std::string, std::string>>{{"{\"trust_radius\": 0.9}", "compaction.trust_radius"},
+                                                        {"{\"no_such_key\": 1}", "no_such_key"},
+                                                        {"{not json", "--compaction-options"}}) {
     const auto bad = s.run("run --from column.json --out bad --compaction-options '" + options + "'");
     INFO(bad.err);
     CHECK(bad.code == 2);

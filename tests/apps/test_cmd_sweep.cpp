@@ -117,8 +117,9 @@ TEST_CASE("confpack sweep refuses a sweep file listing more runs than --max-runs
   std::ofstream(s.dir / "two.json") << R"({"vary": {"width": [4, 5]}})";
   const auto huge = s.run("sweep huge.json --list");
   CHECK(huge.code == 2);
-  CHECK(huge.err == "confpack sweep: error: huge.json: vary: lists 1e+08 runs, more than the limit of 100000 (check "
-                    "the lists and replicas, or raise the limit with --max-runs)\n");
+  CHECK(huge.err ==
+        "confpack sweep: error: huge.json: vary: lists 1e+08 runs, more than the limit of 100000 (check "
+        "the lists and replicas, or raise the limit with --max-runs)\n");
   const auto two = s.run("sweep two.json --list --max-runs 1");
   CHECK(two.code == 2);
   CHECK_THAT(two.err, Catch::Contains("lists 2 runs, more than the limit of 1"));
@@ -176,8 +177,9 @@ TEST_CASE("a sweep over a configuration path: two real runs, listed, run and rep
   std::ofstream(s.dir / "typo.json") << R"({"vary": {"population.pinacoid.alpha": [60]}})";
   const auto typo = s.run("sweep typo.json --out typo");
   CHECK(typo.code == 2);
-  CHECK(typo.err == "confpack sweep: error: typo.json: vary.population.pinacoid.alpha: unknown configuration path: "
-                    "population.pinacoid has no key alpha (its keys: E, G, alpha_deg)\n");
+  CHECK(typo.err ==
+        "confpack sweep: error: typo.json: vary.population.pinacoid.alpha: unknown configuration path: "
+        "population.pinacoid has no key alpha (its keys: E, G, alpha_deg)\n");
   CHECK_FALSE(fs::exists(s.dir / "typo"));
 }
 
@@ -199,10 +201,12 @@ TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs,
 
   // Refused before any work, one line each, nothing written.
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {"--slurm --time 2h", "confpack sweep: error: --time: expected MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS "
-                            "(got '2h')\n"},
-      {"--slurm --mem 4GB", "confpack sweep: error: --mem: expected a positive integer with an optional unit K, M, G "
-                            "or T (got '4GB')\n"},
+      {"--slurm --time 2h",
+       "confpack sweep: error: --time: expected MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS "
+       "(got '2h')\n"},
+      {"--slurm --mem 4GB",
+       "confpack sweep: error: --mem: expected a positive integer with an optional unit K, M, G "
+       "or T (got '4GB')\n"},
       {"--slurm --sbatch-line=--array=1-3",
        "confpack sweep: error: --sbatch-line: --array: not here (the array is the unfinished runs')\n"},
       {"--submit", "confpack sweep: error: --submit requires --slurm (see --help)\n"},
@@ -221,22 +225,26 @@ TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs,
 
   // Two runs done by hand first: the array takes the other four, both backends of a pile in one task.
   REQUIRE(s.run("sweep s.json --out sw --runs r0000,r0001 -q").code == 0);
-  const auto r = s.run("sweep s.json --out sw --slurm --partition short --time 0:30:00 --mem 1G --account lab "
-                       "--cpus-per-task 2 --array-limit 4 --sbatch-line=--qos=low");
+  const auto r = s.run(
+      "sweep s.json --out sw --slurm --partition short --time 0:30:00 --mem 1G --account lab "
+      "--cpus-per-task 2 --array-limit 4 --sbatch-line=--qos=low");
   REQUIRE(r.code == 0);
   const fs::path script = fs::canonical(s.dir / "sw") / "slurm" / "study.sbatch";
-  CHECK(r.out == "wrote " + script.string() + ": 2 array tasks over 4 unfinished runs (2 done, 0 running or queued); "
-                 "submit with: sbatch " + script.string() + "\n");
+  CHECK(r.out == "wrote " + script.string() +
+                     ": 2 array tasks over 4 unfinished runs (2 done, 0 running or queued); "
+                     "submit with: sbatch " +
+                     script.string() + "\n");
   const std::string text = testing::slurp(script);
   CHECK_THAT(text, Catch::Contains("#SBATCH --array=0-1%4\n"));
   CHECK_THAT(text,
              Catch::Contains("#SBATCH --output=" + fs::canonical(s.dir / "sw").string() + "/slurm/logs/%A_%a.out\n"));
-  for (const char* line : {"#SBATCH --partition=short\n", "#SBATCH --time=0:30:00\n", "#SBATCH --mem=1G\n",
-                           "#SBATCH --account=lab\n", "#SBATCH --cpus-per-task=2\n", "#SBATCH --qos=low\n",
-                           "runs=(\n  r0002,r0003\n  r0004,r0005\n)\n"})
+  for (const char* line :
+       {"#SBATCH --partition=short\n", "#SBATCH --time=0:30:00\n", "#SBATCH --mem=1G\n", "#SBATCH --account=lab\n",
+        "#SBATCH --cpus-per-task=2\n", "#SBATCH --qos=low\n", "runs=(\n  r0002,r0003\n  r0004,r0005\n)\n"})
     CHECK_THAT(text, Catch::Contains(line));
   CHECK_THAT(text, Catch::Contains("exec '" + fs::canonical(CONFPACK_BINARY).string() + "' sweep '" +
-                                   fs::canonical(s.dir / "sw").string() + "' --runs \"${runs[$SLURM_ARRAY_TASK_ID]}\" "
+                                   fs::canonical(s.dir / "sw").string() +
+                                   "' --runs \"${runs[$SLURM_ARRAY_TASK_ID]}\" "
                                    "--jobs 2\n"));
   CHECK(fs::is_directory(s.dir / "sw" / "slurm" / "logs"));
 

@@ -1,7 +1,7 @@
 // The quasi-static finisher (compaction/quasi_static_finisher.hpp) on nscd, against static equilibria
 // known in closed form: the finisher must end at the exact resting pose with the exact forces.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -137,7 +137,8 @@ TEST_CASE("finisher: a tilted pinacoid falls flat on a trapezoid face, the floor
   const core::Quat tilted(Eigen::AngleAxisd(std::numbers::pi / 4.0 + 5.0 * std::numbers::pi / 180.0, Vec3::UnitX()));
   core::SystemDef s = boxSystem(4.0, 4.0, false, 0.0);
   s.grains.push_back(withBottomAt(pinacoid(1.0, {2.0, 2.0, 0.0}, tilted), 0.01));
-  REQUIRE(withBottomAt(pinacoid(1.0, {2.0, 2.0, 0.0}, onFace), 0.0).position.z() == Approx(1.0 / (2.0 * std::sqrt(2.0))).epsilon(1e-12));
+  REQUIRE(withBottomAt(pinacoid(1.0, {2.0, 2.0, 0.0}, onFace), 0.0).position.z() ==
+          Approx(1.0 / (2.0 * std::sqrt(2.0))).epsilon(1e-12));
   auto b = nscd::makeNscdBackend(s, kTight);
   REQUIRE(settle(*b, 1000).settled());
   const core::BodyState& st = b->states()[0];

@@ -11,9 +11,9 @@
 #include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using confpack::testing::CommandResult;
 using confpack::testing::ConfpackSession;
+using nlohmann::json;
 
 // The scaling series times the cost per step of a pile that carries its weight (the regime of a
 // whole compaction), not of the first steps after the deposit, where grains barely touch (0.17
@@ -23,8 +23,8 @@ TEST_CASE("bench --case scaling times loaded piles with both backends and fits t
   // glibc's tunables change the memory the solver runs on (2 MiB pages): the bench records them.
   const char* tunables = "glibc.malloc.hugetlb=1";
   REQUIRE(::setenv("GLIBC_TUNABLES", tunables, 1) == 0);
-  const CommandResult r = s.run(
-      "--case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --out b.json");
+  const CommandResult r =
+      s.run("--case scaling --scale 0.5 --scaling-sizes 300 450 --scaling-steps 20 --scaling-fall 3 --out b.json");
   ::unsetenv("GLIBC_TUNABLES");
   INFO(r.err);
   REQUIRE(r.code == 0);

@@ -11,10 +11,10 @@
 #include "tests/support/read_file.hpp"
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using confpack::testing::CommandResult;
 using confpack::testing::ConfpackSession;
 using confpack::testing::lineCount;
+using nlohmann::json;
 
 TEST_CASE("bench --micro writes Google Benchmark's JSON with a positive sphere-sphere rate") {
   ConfpackSession s("micro_run", CONFPACK_BENCH_BINARY);
@@ -67,11 +67,11 @@ TEST_CASE("bench --micro with repetitions reports the aggregates only, median in
 TEST_CASE("bench --micro refuses bad input with one line, exit 2 and nothing written") {
   ConfpackSession s("micro_bad", CONFPACK_BENCH_BINARY);
   for (const char* args :
-       {"--micro --case msp-w10 --out m.json", "--micro --scale 0.5 --out m.json",
-        "--micro --threads 2 --out m.json", "--micro --micro-repetitions 0 --out m.json",
-        "--micro --micro-repetitions two --out m.json", "--micro --micro-min-time -1 --out m.json",
-        "--micro --micro-filter 'NoSuchBenchmark' --out m.json", "--micro --micro-filter '(' --out m.json",
-        "--micro-filter 'NarrowPhase' --out m.json", "--micro --out no/such/dir/m.json"}) {
+       {"--micro --case msp-w10 --out m.json", "--micro --scale 0.5 --out m.json", "--micro --threads 2 --out m.json",
+        "--micro --micro-repetitions 0 --out m.json", "--micro --micro-repetitions two --out m.json",
+        "--micro --micro-min-time -1 --out m.json", "--micro --micro-filter 'NoSuchBenchmark' --out m.json",
+        "--micro --micro-filter '(' --out m.json", "--micro-filter 'NarrowPhase' --out m.json",
+        "--micro --out no/such/dir/m.json"}) {
     INFO(args);
     const CommandResult r = s.run(args);
     CHECK(r.code == 2);

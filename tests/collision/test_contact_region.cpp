@@ -1,8 +1,8 @@
 // Contact features, regions and points (collision/contact_region): hand-placed pinacoid pairs
 // with known types and points, random near-contact pairs whose points sit midway between the
 // surfaces, and the reduction of large polygons.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -319,8 +319,8 @@ TEST_CASE("contact: a polygon of more than 8 vertices is reduced to 4 points, th
     const double t = k * std::numbers::pi / 4;
     v.emplace_back(std::cos(t), std::sin(t), -0.5);
     v.emplace_back(std::cos(t), std::sin(t), 0.5);
-    f[0].push_back(2 * (7 - k));   // bottom cap, outward -z: clockwise seen from above
-    f[1].push_back(2 * k + 1);     // top cap, outward +z
+    f[0].push_back(2 * (7 - k));  // bottom cap, outward -z: clockwise seen from above
+    f[1].push_back(2 * k + 1);    // top cap, outward +z
     f.push_back({2 * k, 2 * ((k + 1) % 8), 2 * ((k + 1) % 8) + 1, 2 * k + 1});
   }
   const ConvexPolyhedron prism(v, f);

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/pinacoid.hpp"
 #include "collision/polyhedron_clip.hpp"
+#include "core/pinacoid.hpp"
 #include "tests/support/polyhedra.hpp"
 
 using namespace confpack::core;

@@ -2,8 +2,8 @@
 // against FCL's libccd distance.
 #include <fcl/fcl.h>
 
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
 

@@ -14,10 +14,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "compaction/deposition.hpp"
-#include "core/run_config.hpp"
 #include "compaction/checkpoint.hpp"
 #include "compaction/compaction.hpp"
+#include "compaction/deposition.hpp"
+#include "core/run_config.hpp"
 #include "tests/support/scratch.hpp"
 #include "tests/support/systems.hpp"
 

@@ -18,18 +18,20 @@
 
 #include "analysis/coordination.hpp"
 #include "analysis/rigidity.hpp"
-#include "core/box.hpp"
-#include "compaction/deposition.hpp"
-#include "core/grain.hpp"
 #include "compaction/compaction.hpp"
+#include "compaction/deposition.hpp"
 #include "compaction/time_step.hpp"
+#include "core/box.hpp"
+#include "core/grain.hpp"
 #include "tests/support/systems.hpp"
 
 using namespace confpack;
 
 namespace {
 
-core::Grain sphereOf(double d) { return testing::sphere(d, core::Vec3::Zero()); }
+core::Grain sphereOf(double d) {
+  return testing::sphere(d, core::Vec3::Zero());
+}
 
 core::BodyState moving(const core::Vec3& v, const core::Vec3& omega = core::Vec3::Zero()) {
   core::BodyState s;
@@ -87,7 +89,8 @@ TEST_CASE("adaptive step: v dt + g dt^2 / 2 equals a hundredth of the smallest g
     CHECK(compaction::AdaptiveTimeStep(withPinacoid, g, floor).next(previous, spinning) ==
           Approx(std::sqrt(r * r + 0.02) - r).epsilon(1e-12));
     // The sphere's spin leaves its boundary where it is: the step of grains at rest.
-    CHECK(compaction::AdaptiveTimeStep(mono, g, floor).next(previous, spinning) == Approx(std::sqrt(0.02)).epsilon(1e-12));
+    CHECK(compaction::AdaptiveTimeStep(mono, g, floor).next(previous, spinning) ==
+          Approx(std::sqrt(0.02)).epsilon(1e-12));
   }
   SECTION("a bidisperse sample is bounded by its small grains: s = d_S / 100") {
     const std::vector<core::Grain> bi = {sphereOf(1.0), sphereOf(0.5), sphereOf(1.0)};

@@ -32,12 +32,12 @@ BoxDef makeBox(double lx, double w, bool periodicY, double h = 6.0) {
 }
 
 struct PileCheck {
-  double maxOverlap = 0.0;       // [D]
-  std::size_t unstable = 0;      // placeholders neither on the floor nor on a stable triple
+  double maxOverlap = 0.0;   // [D]
+  std::size_t unstable = 0;  // placeholders neither on the floor nor on a stable triple
   std::size_t onFloor = 0;
-  std::size_t onWall = 0;        // placeholders with a side wall among their contacts
-  std::size_t wallSeats = 0;     // seated on a triple that includes a side wall
-  std::size_t outside = 0;       // placeholders outside the box
+  std::size_t onWall = 0;     // placeholders with a side wall among their contacts
+  std::size_t wallSeats = 0;  // seated on a triple that includes a side wall
+  std::size_t outside = 0;    // placeholders outside the box
   // Centres between 1e-9 D and 1e-4 D from a wall plane y = D/2 (or W - D/2): a placeholder
   // that slid down a wall must sit on it exactly; a free one lands that close with odds ~1e-4.
   std::size_t wallNearMiss = 0;
@@ -235,8 +235,8 @@ TEST_CASE("random placeholder piles overlap nothing and every placeholder is sea
   REQUIRE(pile.centres.size() == n);
   CHECK(pile.unsettledCount == 0);
   const PileCheck check = checkPile(box, kD, pile.centres);
-  INFO("periodic y: " << periodicY << ", floor " << check.onFloor << ", wall " << check.onWall
-                      << ", mean moves " << pile.meanMoves);
+  INFO("periodic y: " << periodicY << ", floor " << check.onFloor << ", wall " << check.onWall << ", mean moves "
+                      << pile.meanMoves);
   CHECK(check.maxOverlap < 1e-9);
   CHECK(check.unstable == 0);
   CHECK(check.outside == 0);
@@ -347,7 +347,8 @@ TEST_CASE("deposit: grain count, composition, substitution and solid fractions",
     CHECK(dep.placeholderSolidFraction > 0.42);
     CHECK(dep.placeholderSolidFraction < 0.56);
     // Real grains are smaller than the placeholders: <v> / v_D = (1 + 3/900) / 1.1^3 = 0.754.
-    CHECK(dep.solidFraction / dep.placeholderSolidFraction == Approx((1.0 + 3.0 / 900.0) / (kD * kD * kD)).epsilon(0.01));
+    CHECK(dep.solidFraction / dep.placeholderSolidFraction ==
+          Approx((1.0 + 3.0 / 900.0) / (kD * kD * kD)).epsilon(0.01));
     const PileCheck check = checkPile(box, kD, dep.placeholders);
     CHECK(check.maxOverlap < 1e-9);
     CHECK(check.unstable == 0);

@@ -1,7 +1,6 @@
 // BoxDef (core/box.hpp): periodic wrapping and the minimum image, the walls, JSON and validation.
 #include <catch2/catch.hpp>
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "core/box.hpp"

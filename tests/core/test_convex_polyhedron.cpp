@@ -13,7 +13,8 @@ TEST_CASE("divergence-theorem mass properties of a unit cube") {
   std::vector<Vec3> v;
   for (int i = 0; i < 8; ++i) v.emplace_back(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5);
   // Faces CCW from outside.
-  std::vector<std::vector<int>> f = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  std::vector<std::vector<int>> f = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                     {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   const MassProperties mp = ConvexPolyhedron(v, f).massProperties();
   CHECK(mp.volume == Approx(1.0));
   CHECK((mp.inertia() - Mat3::Identity() / 6.0).norm() < 1e-14);

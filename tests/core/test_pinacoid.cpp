@@ -60,7 +60,8 @@ TEST_CASE("pinacoid triangles and trapezoids are isosceles") {
 }
 
 TEST_CASE("pinacoid mass properties: closed forms equal the divergence theorem") {
-  for (const PinacoidParams& params : {PinacoidParams{}, PinacoidParams{0.7, 0.5, 45.0}, PinacoidParams{1.2, 0.9, 70.0}}) {
+  for (const PinacoidParams& params :
+       {PinacoidParams{}, PinacoidParams{0.7, 0.5, 45.0}, PinacoidParams{1.2, 0.9, 70.0}}) {
     for (double L : {1.0, 0.5, 1.37}) {
       const MassProperties closed = pinacoidMassProperties(L, params);
       const MassProperties numeric = makePinacoid(L, params).massProperties();

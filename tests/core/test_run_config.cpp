@@ -51,10 +51,9 @@ TEST_CASE("the run configuration round-trips through JSON") {
   for (const char* k :
        {"box", "population", "deposition", "compaction", "backend", "backend_options", "seed", "threads"})
     CHECK(j.contains(k));
-  for (const char* k :
-       {"dt", "adaptive_dt", "time_limit", "fall_time_limit", "check_interval", "frame_interval", "force_ratio", "moment_ratio",
-        "kinetic_ratio", "protocol", "switch_kinetic_ratio", "trust_radius", "settle_tolerance", "finisher_max_step",
-        "finisher_max_steps"})
+  for (const char* k : {"dt", "adaptive_dt", "time_limit", "fall_time_limit", "check_interval", "frame_interval",
+                        "force_ratio", "moment_ratio", "kinetic_ratio", "protocol", "switch_kinetic_ratio",
+                        "trust_radius", "settle_tolerance", "finisher_max_step", "finisher_max_steps"})
     CHECK(j.at("compaction").contains(k));
   // A partial document takes the defaults for the rest (sweeps override a base this way).
   const auto partial = json::parse(R"({"box": {"width": 5}, "seed": 9})").get<core::RunConfig>();
@@ -77,7 +76,8 @@ TEST_CASE("the run configuration refuses bad values naming the field") {
   refused([](core::RunConfig& c) { c.population.smallFraction = 101; }, "population.small_fraction");
   refused([](core::RunConfig& c) { c.compaction.timeLimit = 0; }, "compaction.time_limit");
   // 1e20 t0 once overflowed the step count and ran 0 steps with exit 0.
-  refused([](core::RunConfig& c) { c.compaction.timeLimit = 1e20; }, "compaction.time_limit: must be in (0, 1e+09] (got 1e+20)");
+  refused([](core::RunConfig& c) { c.compaction.timeLimit = 1e20; },
+          "compaction.time_limit: must be in (0, 1e+09] (got 1e+20)");
   refused([](core::RunConfig& c) { c.compaction.dt = -1e-3; }, "compaction.dt");
   refused([](core::RunConfig& c) { c.compaction.checkInterval = 0; }, "compaction.check_interval");
   refused([](core::RunConfig& c) { c.compaction.kineticRatio = -1; }, "compaction.kinetic_ratio");

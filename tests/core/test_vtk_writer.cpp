@@ -153,7 +153,6 @@ Packing mixedPacking(int spheres, int pinacoids, bool withContacts) {
   return p;
 }
 
-
 }  // namespace
 
 TEST_CASE("the grains file holds one vertex per sphere and eight world-space faces per pinacoid") {

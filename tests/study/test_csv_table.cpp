@@ -1,7 +1,7 @@
 // The CSV reader and writer (study/csv_table.hpp): the runs' profiles, the report's tables.
-#include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 
 #include "study/csv_table.hpp"

@@ -587,7 +587,7 @@ TEST_CASE("cross-solver verdict with Bullet's piles settled: a difference that v
   CHECK_THAT(md, Catch::Contains("bullet_settled"));
   const auto row = rowCells(verdict, "| MSP: spheres x_S = 0, mu_w = 0 | phi_bulk |");
   REQUIRE(row.size() == 12);
-  CHECK(row[6] == "yes: differ (*)");   // nscd against bullet as it stopped: 0.01 apart
+  CHECK(row[6] == "yes: differ (*)");        // nscd against bullet as it stopped: 0.01 apart
   CHECK(row[7].rfind("0.6400 ± ", 0) == 0);  // bullet settled: nscd's law
   CHECK(row[10] == "no: agree");
   CHECK(row[11] == "not at rest");
@@ -607,7 +607,8 @@ TEST_CASE("the summary opens with a warning where a family's boxes are too small
     const fs::path dir = makeStudy("adequacy_small", false);
     gSizes = {};
     const std::string md = slurp(study::writeReport(dir, dir / "report").markdown);
-    const std::string summary = md.substr(md.find("## Summary"), md.find("## Cross-solver verdict") - md.find("## Summary"));
+    const std::string summary =
+        md.substr(md.find("## Summary"), md.find("## Cross-solver verdict") - md.find("## Summary"));
     CHECK_THAT(summary, Catch::Contains("Warning: these numbers cannot carry their physics."));
     CHECK_THAT(summary, Catch::Contains("its bulk region is 1.2 d_L thick (fewer than 4)"));
     CHECK_THAT(summary, Catch::Contains("it holds 40 grains (fewer than 300)"));
@@ -781,9 +782,8 @@ TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json")
     values[{"timing/wall_s", backend, w, periodic}].push_back(result["timing"]["wall_s"].get<double>());
   }
   REQUIRE(values.size() == 3 * 2 * 5 - 3);  // bullet at W = 20 failed for every seed
-  const std::map<std::string, std::string> fileOf = {{"solid_fraction", "solid_fraction.csv"},
-                                                     {"coordination/Z", "coordination.csv"},
-                                                     {"timing/wall_s", "cost.csv"}};
+  const std::map<std::string, std::string> fileOf = {
+      {"solid_fraction", "solid_fraction.csv"}, {"coordination/Z", "coordination.csv"}, {"timing/wall_s", "cost.csv"}};
   for (const auto& [where, v] : values) {
     const auto& [key, backend, w, periodic] = where;
     INFO(key << " " << backend << " W=" << w << (periodic ? " biperiodic" : ""));
@@ -812,7 +812,7 @@ TEST_CASE("report with reference values: a reference column beside each quantity
       ],
       "BSP": { "lambda_L_over_d_avg": { "value": 9, "uncertainty": 1, "citation": "never shown: no BSP series" } }
     }})json"),
-                                                "test-reference.json");
+                                            "test-reference.json");
   const study::ReportSummary s = study::writeReport(dir, dir / "report", o);
   const std::string md = slurp(s.markdown);
   const std::string html = slurp(s.html);
@@ -902,13 +902,15 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
   CHECK(at60 < at75);
   // Without confined widths there is no phi_bulk to fit: the summary gives the biperiodic sample's
   // phi and Z, and the pinacoids' contact types and nematic order, each with its definition.
-  CHECK(md.find("| family | backend | runs at equilibrium / total | bulk d_L / grains | widths fitted | phi | Z | Z_s | "
-                "Z_d | Z_t | S |\n",
-                summaryAt) !=
-        std::string::npos);
-  CHECK(md.find("| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | - | - | 0.575 (1 run) | 8.75 (1 run) | "
-                "5 (1 run) | 2.75 (1 run) | 1 (1 run) | 0.75 (1 run) |",
-                summaryAt) != std::string::npos);
+  CHECK(
+      md.find("| family | backend | runs at equilibrium / total | bulk d_L / grains | widths fitted | phi | Z | Z_s | "
+              "Z_d | Z_t | S |\n",
+              summaryAt) != std::string::npos);
+  CHECK(
+      md.find(
+          "| MPP: pinacoids x_S = 0, mu_w = 0, alpha_deg = 75 | nscd | 1 / 1 | - | - | 0.575 (1 run) | 8.75 (1 run) | "
+          "5 (1 run) | 2.75 (1 run) | 1 (1 run) | 0.75 (1 run) |",
+          summaryAt) != std::string::npos);
   CHECK(md.find("- Z_t: pinacoids: triple contacts per grain (face-face), on the biperiodic sample") !=
         std::string::npos);
   // The runs say their value.
@@ -928,8 +930,9 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
   // phi and Z against the setting: one line through both values.
   CHECK(md.find("## Solid fraction and coordination against alpha_deg") != std::string::npos);
   const std::string csv = slurp(dir / "report" / "figures" / "phi_vs_alpha_deg.csv");
-  CHECK(csv == "series,x,y,err\nMPP x_S=0 mu_w=0 W=biperiodic (20) nscd,60,0.56,0\n"
-               "MPP x_S=0 mu_w=0 W=biperiodic (20) nscd,75,0.575,0\n");
+  CHECK(csv ==
+        "series,x,y,err\nMPP x_S=0 mu_w=0 W=biperiodic (20) nscd,60,0.56,0\n"
+        "MPP x_S=0 mu_w=0 W=biperiodic (20) nscd,75,0.575,0\n");
   CHECK(fs::exists(dir / "report" / "figures" / "Z_vs_alpha_deg.csv"));
   if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
 }

@@ -71,7 +71,8 @@ void makeStudy(const fs::path& dir) {
     // A layering decaying over 1 d_L, for the lambda_L figures (study/report_lambda.hpp).
     for (int i = 0; i < 100; ++i) {
       const double y = 0.02 * (i + 0.5);
-      phi << y << ',' << (1.0 - std::exp(-y / 0.08)) * (0.6 + 0.2 * std::exp(-y) * std::cos(3.3 * (2.0 * y - 1.0))) + s * 0.01
+      phi << y << ','
+          << (1.0 - std::exp(-y / 0.08)) * (0.6 + 0.2 * std::exp(-y) * std::cos(3.3 * (2.0 * y - 1.0))) + s * 0.01
           << '\n';
     }
     for (int i = 0; i < 20; ++i) z << 0.25 * i << ',' << 5.5 + 0.02 * i << ',' << 5.0 << '\n';

@@ -1,11 +1,12 @@
 // study/report_relaxation.hpp: the replicas' relaxation histories averaged against t, and the
 // report section drawn from them.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "study/report_relaxation.hpp"
@@ -18,7 +19,8 @@ namespace {
 // A history of checks at `times` with phi(t) = a + b t and a force ratio 10^(-t).
 json linearHistory(const std::vector<double>& times, double a, double b) {
   json h = json::array();
-  for (double t : times) h.push_back({{"time", t}, {"solid_fraction", a + b * t}, {"Z", 6.0}, {"max_force_ratio", std::pow(10.0, -t)}});
+  for (double t : times)
+    h.push_back({{"time", t}, {"solid_fraction", a + b * t}, {"Z", 6.0}, {"max_force_ratio", std::pow(10.0, -t)}});
   return h;
 }
 
@@ -26,7 +28,7 @@ json linearHistory(const std::vector<double>& times, double a, double b) {
 
 TEST_CASE("relaxation: the replicas' mean at each time, linear between checks, a finished run held at its end") {
   const json first = linearHistory({0.0, 1.0, 2.0, 4.0}, 0.60, 0.01);  // checks not evenly spaced
-  const json second = linearHistory({0.5, 1.5}, 0.62, 0.0);              // ended at t = 1.5
+  const json second = linearHistory({0.5, 1.5}, 0.62, 0.0);            // ended at t = 1.5
   const std::vector<double> t = {0.0, 1.0, 3.0, 4.0};
   const std::vector<double> phi = study::meanHistory({first, second}, "solid_fraction", t);
   REQUIRE(phi.size() == 4);
@@ -56,7 +58,8 @@ TEST_CASE("relaxation section: three figures per family against t, drawn over th
   const fs::path dir = fs::temp_directory_path() / ("confpack_test_relaxation_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   study::RelaxationFamily family{"MSP", "relaxation_01", {}};
-  family.lines.push_back({"W=5 nscd (n=2)", 1, false, {linearHistory({0.0, 2.0}, 0.6, 0.01), linearHistory({0.0, 8.0}, 0.6, 0.0)}});
+  family.lines.push_back(
+      {"W=5 nscd (n=2)", 1, false, {linearHistory({0.0, 2.0}, 0.6, 0.01), linearHistory({0.0, 8.0}, 0.6, 0.0)}});
   family.lines.push_back({"W=5 bullet (n=1)", 1, true, {linearHistory({0.0, 4.0}, 0.58, 0.0)}});
   const std::vector<double> times = study::relaxationTimes(family, 5);
   REQUIRE(times.size() == 5);

@@ -1,9 +1,10 @@
 // study/run_pipeline.hpp: a run from a packing records its settle (docs/model.md, "Settling a pile
 // from another backend"): how far the grains moved to rest, and phi and Z before and after.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 #include "analysis/coordination.hpp"
 #include "analysis/rigidity.hpp"
@@ -45,7 +46,8 @@ TEST_CASE("settle: a pile already at rest moves by nothing and keeps its phi and
   // moves by more than the solver's tolerance allows (a millionth of a grain over the run).
   CHECK(s["max_displacement"].get<double>() < 1e-6);
   CHECK(s["mean_displacement"].get<double>() <= s["max_displacement"].get<double>());
-  CHECK(s["after"]["solid_fraction"].get<double>() == Approx(s["before"]["solid_fraction"].get<double>()).epsilon(1e-9));
+  CHECK(s["after"]["solid_fraction"].get<double>() ==
+        Approx(s["before"]["solid_fraction"].get<double>()).epsilon(1e-9));
   CHECK(s["after"]["Z"].get<double>() == Approx(s["before"]["Z"].get<double>()).margin(1e-9));
 }
 
@@ -84,7 +86,8 @@ TEST_CASE("settle: a Bullet pile of frictionless spheres stopped early, brought 
   CHECK(rigidity->selfStresses() == 0);
   const study::FinishedRun own = study::runProtocol(nscd);
   REQUIRE(own.result["equilibrium"]["reached"].get<bool>());
-  const double zOwn = own.result["coordination"]["Z"].get<double>() + 2.0 * own.result["coordination"]["wall"].get<double>();
+  const double zOwn =
+      own.result["coordination"]["Z"].get<double>() + 2.0 * own.result["coordination"]["wall"].get<double>();
   const double zSettled = s["after"]["Z"].get<double>() + 2.0 * s["after"]["wall"].get<double>();
   CHECK(zSettled == Approx(zOwn).epsilon(0.02));
   // Bullet's own count, as it stopped, is not: its impulses are not converged forces.

@@ -179,7 +179,8 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
   CHECK_THAT(message(json::parse(R"({"vary": {}, "colour": 1})")), Contains("colour"));
   CHECK(message(json::parse(R"({"vary": {"width": [5, "biperiodic"]}})")) == "accepted");
   // Only nscd has the finisher that brings any pile to rest.
-  CHECK_THAT(message(json::parse(R"({"vary": {}, "settle_with": "bullet"})")), Contains("s.json: settle_with: expected \"nscd\""));
+  CHECK_THAT(message(json::parse(R"({"vary": {}, "settle_with": "bullet"})")),
+             Contains("s.json: settle_with: expected \"nscd\""));
   CHECK_THAT(message(json::parse(R"({"vary": {}, "settle_with": 1})")), Contains("settle_with"));
   CHECK(message(json::parse(R"({"vary": {}, "settle_with": "nscd"})")) == "accepted");
   CHECK(study::parseSweepSpec(json::parse(R"({"vary": {}, "settle_with": "nscd"})")).settleWith == "nscd");

@@ -42,8 +42,8 @@ struct ConfpackSession {
   /// it, so that the folder shows only what confpack wrote.
   CommandResult run(const std::string& args) const {
     const std::filesystem::path outFile = dir.string() + ".stdout", errFile = dir.string() + ".stderr";
-    const std::string cmd = "cd '" + dir.string() + "' && '" + program + "' " + args + " > '" +
-                            outFile.string() + "' 2> '" + errFile.string() + "'";
+    const std::string cmd = "cd '" + dir.string() + "' && '" + program + "' " + args + " > '" + outFile.string() +
+                            "' 2> '" + errFile.string() + "'";
     const int status = std::system(cmd.c_str());
     CommandResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -37,7 +37,8 @@ inline core::Packing faceCentredCubic(int ncell, int ncz, double z0 = 0.5) {
     for (int j = 0; j < ncell; ++j)
       for (int i = 0; i < ncell; ++i)
         for (const auto& b : basis) {
-          p.grains.push_back(sphere(1.0, core::Vec3((i + b[0] + 0.25) * a, (j + b[1] + 0.25) * a, (k + b[2]) * a + z0)));
+          p.grains.push_back(
+              sphere(1.0, core::Vec3((i + b[0] + 0.25) * a, (j + b[1] + 0.25) * a, (k + b[2]) * a + z0)));
         }
   return p;
 }

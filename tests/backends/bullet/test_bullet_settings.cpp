@@ -11,7 +11,6 @@ using namespace confpack;
 using testing::boxSystem;
 using testing::sphere;
 
-
 TEST_CASE("bullet settings: defaults round-trip, unknown keys and bad values are refused", "[bullet]") {
   const bullet::BulletSettings d;
   const nlohmann::json j = d;

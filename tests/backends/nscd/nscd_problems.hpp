@@ -9,8 +9,8 @@
 #include "backends/nscd/contact_solver.hpp"
 #include "backends/nscd/narrow_phase.hpp"
 #include "backends/nscd/nscd_settings.hpp"
-#include "core/backend.hpp"
 #include "compaction/deposition.hpp"
+#include "core/backend.hpp"
 #include "tests/support/same_bits.hpp"
 #include "tests/support/systems.hpp"
 

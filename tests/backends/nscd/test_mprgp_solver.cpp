@@ -1,13 +1,12 @@
 // The MPRGP contact solver (backends/nscd/mprgp_solver.hpp) on one cold step's contact problem:
 // its preconditioner's blocks, its norm bound, and the velocities its variants reach.
-#include <catch2/catch.hpp>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <iterator>
 #include <set>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 #include "backends/nscd/mprgp_solver.hpp"
 #include "tests/backends/nscd/nscd_problems.hpp"
@@ -18,8 +17,9 @@ using testing::boxSystem;
 using testing::ColdStep;
 using testing::touchingSpheres;
 
-TEST_CASE("nscd mprgp: the preconditioner's two sweep blocks share no grain, and two threads sweep them to the bits of one",
-          "[nscd]") {
+TEST_CASE(
+    "nscd mprgp: the preconditioner's two sweep blocks share no grain, and two threads sweep them to the bits of one",
+    "[nscd]") {
   // Spheres (rows without lever arms across the normal) and pinacoids (angular rows, multi-point
   // contacts, side walls with friction), each in a box long enough for the rows to be split.
   const bool pinacoids = GENERATE(false, true);
@@ -90,7 +90,8 @@ TEST_CASE("nscd mprgp: the bound of the scaled Delassus norm is its Gershgorin b
     if (b >= 0) bMatrix.block<3, 1>(3 * b, static_cast<Eigen::Index>(k)) = sk * std::sqrt(wb) * normal;
   }
   const Eigen::MatrixXd a = bMatrix.transpose() * bMatrix;
-  const double exact = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  const double exact =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
   const double gershgorin = a.cwiseAbs().rowwise().sum().maxCoeff();
   INFO("rows " << rows.size() << ", exact " << exact << ", bound " << solver.operatorBound() << ", Gershgorin "
                << gershgorin);
@@ -116,10 +117,10 @@ TEST_CASE("nscd mprgp: the projected-CG and Dostal expansions reach the same vel
   nscd::NscdSettings gradient = projected;
   gradient.expansion = nscd::ExpansionKind::Gradient;
   const ColdStep a(s, projected), b(s, gradient);
-  INFO("rows " << a.solver.rowCount() << "; iterations projected " << a.iterations << " (cg " << a.solver.mprgpSteps().conjugate
-       << ", projected " << a.solver.mprgpSteps().projected << ", gradient " << a.solver.mprgpSteps().gradient
-       << "), gradient " << b.iterations << " (cg " << b.solver.mprgpSteps().conjugate << ", gradient "
-       << b.solver.mprgpSteps().gradient << ")");
+  INFO("rows " << a.solver.rowCount() << "; iterations projected " << a.iterations << " (cg "
+               << a.solver.mprgpSteps().conjugate << ", projected " << a.solver.mprgpSteps().projected << ", gradient "
+               << a.solver.mprgpSteps().gradient << "), gradient " << b.iterations << " (cg "
+               << b.solver.mprgpSteps().conjugate << ", gradient " << b.solver.mprgpSteps().gradient << ")");
   REQUIRE(a.solver.mprgpSteps().projected > 0);
   REQUIRE(b.solver.mprgpSteps().gradient > 0);
   CHECK(b.solver.mprgpSteps().projected == 0);

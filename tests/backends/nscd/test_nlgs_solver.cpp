@@ -1,8 +1,8 @@
 // The nonlinear Gauss-Seidel solver (backends/nscd/nlgs_solver.hpp) on one cold step's contact
 // problem: a resting column is stopped exactly, and on a pile it reaches the velocities of the
 // other solver of the same problem (MPRGP).
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 
 #include "backends/nscd/nlgs_solver.hpp"

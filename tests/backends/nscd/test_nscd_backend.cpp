@@ -2,8 +2,8 @@
 // damping, resting contacts, warm start, pinacoid contact types, determinism and thread-count
 // independence (the conformance suite covers what both backends share; the phases have their own
 // files).
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -81,8 +81,6 @@ void requireSameRun(const core::SystemDef& s, int steps, double dt, bool teamRow
   CHECK(sameBits(one->profile().residual, two->profile().residual));
 }
 
-
-
 }  // namespace
 
 TEST_CASE("nscd free fall error is (theta - 1/2) g t dt", "[nscd]") {
@@ -119,7 +117,8 @@ TEST_CASE("nscd damping: a loaded grain tends to F / (m c), and free flight and 
     CHECK(std::abs(b->states()[0].velocity.z()) < 1e-12);
     // Undamped, or faster than damping_speed from step 1 on (v_1 = F_x dt), the same grain keeps
     // the full acceleration.
-    for (const nlohmann::json& options : {nlohmann::json::object(), nlohmann::json{{"damping", c}, {"damping_speed", 0.1 * fx * dt}}}) {
+    for (const nlohmann::json& options :
+         {nlohmann::json::object(), nlohmann::json{{"damping", c}, {"damping_speed", 0.1 * fx * dt}}}) {
       auto free = nscd::makeNscdBackend(s, options);
       for (int k = 0; k < n; ++k) free->step(dt);
       CHECK(free->states()[0].velocity.x() == Approx(fx * n * dt).epsilon(1e-12));
@@ -165,8 +164,8 @@ TEST_CASE("nscd: a sphere falling on the floor stops dead at contact (no bounce,
       if (touched) maxUp = std::max(maxUp, st.velocity.z());
     }
     CHECK(touched);
-    CHECK(minGap > -1e-12);                // never below the floor
-    CHECK(maxUp < 1e-12);                  // never moves up: e_n = 0
+    CHECK(minGap > -1e-12);  // never below the floor
+    CHECK(maxUp < 1e-12);    // never moves up: e_n = 0
     CHECK(b->states()[0].velocity.norm() < 1e-12);
     CHECK(b->states()[0].position.z() == Approx(0.5).margin(1e-12));
   }
@@ -221,7 +220,8 @@ TEST_CASE("nscd pinacoid pairs: face on face is Triple, edge on face is Double",
   s.grains.push_back(withBottomAt(pinacoid(1.0, {10.0, 5.0, 0.0}, onFace), 0.0));
   const double top = topOf(s.grains[0]);
   SECTION("face on face") {
-    s.grains.push_back(withBottomAt(pinacoid(1.0, {10.0, 5.0, 0.0}, onFace), top));  // same orientation: its lower face on the top face
+    s.grains.push_back(withBottomAt(pinacoid(1.0, {10.0, 5.0, 0.0}, onFace),
+                                    top));  // same orientation: its lower face on the top face
   }
   SECTION("edge on face") {
     // Identity orientation: the lower ridge (an edge along x) points down onto the top face.
@@ -255,8 +255,8 @@ TEST_CASE("nscd determinism: a fixed-seed run hashes to a constant", "[nscd]") {
   core::Rng rng(99, core::StreamId::Test);
   for (int k = 0; k < 24; ++k)
     s.grains.push_back(sphere(rng.uniform(0.8, 1.0), Vec3(0.6 + 1.25 * (k % 4) + rng.uniform(-0.05, 0.05),
-                                                           0.75 + 1.5 * ((k / 4) % 2) + rng.uniform(-0.1, 0.1),
-                                                           0.6 + 1.1 * (k / 8) + rng.uniform(0.0, 0.05))));
+                                                          0.75 + 1.5 * ((k / 4) % 2) + rng.uniform(-0.1, 0.1),
+                                                          0.6 + 1.1 * (k / 8) + rng.uniform(0.0, 0.05))));
   // Both solvers: Gauss-Seidel (rows, friction in the same visit) and MPRGP (blocked sums, body
   // rows, block Gauss-Seidel with the wall friction).
   const std::string solver = GENERATE("nlgs", "mprgp");
@@ -356,9 +356,10 @@ TEST_CASE("nscd: a pinacoid pile stepped on 2 threads is bitwise the single-thre
   requireSameRun(s, 30, 2e-3, false);
 }
 
-TEST_CASE("nscd: a pressed pinacoid pile between rough walls, warm started on 2 threads, is bitwise the "
-          "single-thread run",
-          "[nscd][threads]") {
+TEST_CASE(
+    "nscd: a pressed pinacoid pile between rough walls, warm started on 2 threads, is bitwise the "
+    "single-thread run",
+    "[nscd][threads]") {
   // Grown by half, the grains overlap their neighbours from the first step: thousands of rows
   // (angular, multi-point, wall friction), so that the solver's passes run on the team, and the
   // later steps are warm started from the cache.
