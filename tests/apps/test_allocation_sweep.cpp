@@ -8,27 +8,24 @@
 #include <fstream>
 #include <string>
 
-#include "tests/support/confpack_binary.hpp"
+#include "tests/support/fault_session.hpp"
 
 using confpack::testing::CommandResult;
-using confpack::testing::ConfpackSession;
 using confpack::testing::lineCount;
 namespace fs = std::filesystem;
 
 namespace {
 
-/// A session whose program is env(1), which sets the variables of the test build.
-struct FaultSession : ConfpackSession {
-  explicit FaultSession(const std::string& name) : ConfpackSession(name, "/usr/bin/env") {}
+struct AllocationSession : confpack::testing::FaultSession {
+  using FaultSession::FaultSession;
 
   CommandResult failingAt(long k, const std::string& args) const {
-    return run("CONFPACK_FAIL_ALLOCATION=" + std::to_string(k) + " '" + CONFPACK_ALLOCATION_FAULT_BINARY + "' " + args);
+    return runFaulty("CONFPACK_FAIL_ALLOCATION=" + std::to_string(k), args);
   }
   /// The allocations `args` makes when none fails.
   long allocations(const std::string& args) const {
     const fs::path file = dir.string() + ".count";
-    const CommandResult r =
-        run("CONFPACK_COUNT_ALLOCATIONS='" + file.string() + "' '" + CONFPACK_ALLOCATION_FAULT_BINARY + "' " + args);
+    const CommandResult r = runFaulty("CONFPACK_COUNT_ALLOCATIONS='" + file.string() + "'", args);
     REQUIRE(r.code == 0);
     long n = 0;
     std::ifstream(file) >> n;
@@ -70,22 +67,22 @@ const std::string kSpheres = "run --length-x 4 --width 4 --height 5 -q";
 
 TEST_CASE("allocation failures: run with nscd (quasi-static, spheres) fails cleanly or succeeds",
           "[apps][cli][memory]") {
-  const FaultSession s("allocation_sweep_nscd");
+  const AllocationSession s("allocation_sweep_nscd");
   CHECK(s.sweep(kSpheres + " --time-limit 3 --protocol quasi-static", "out", 40) > 0);
 }
 
 TEST_CASE("allocation failures: run with Bullet fails cleanly or succeeds", "[apps][cli][memory]") {
-  const FaultSession s("allocation_sweep_bullet");
+  const AllocationSession s("allocation_sweep_bullet");
   CHECK(s.sweep(kSpheres + " --time-limit 3 --backend bullet", "out", 40) > 0);
 }
 
 TEST_CASE("allocation failures: run with nscd on pinacoids fails cleanly or succeeds", "[apps][cli][memory]") {
-  const FaultSession s("allocation_sweep_pinacoids");
+  const AllocationSession s("allocation_sweep_pinacoids");
   CHECK(s.sweep("run --shape pinacoid --length-x 4 --width 4 --height 4 --time-limit 5 -q", "out", 40) > 0);
 }
 
 TEST_CASE("allocation failures: analyze and report fail cleanly or succeed", "[apps][cli][memory]") {
-  const FaultSession s("allocation_sweep_analysis");
+  const AllocationSession s("allocation_sweep_analysis");
   REQUIRE(s.failingAt(0, kSpheres + " --time-limit 4 --out pile").code == 0);
   CHECK(s.sweep("analyze pile/packing.json -q", "analysis", 40) > 0);
   {

@@ -4,21 +4,16 @@
 #include <catch2/catch.hpp>
 #include <string>
 
-#include "tests/support/confpack_binary.hpp"
+#include "tests/support/fault_session.hpp"
 
 using confpack::testing::CommandResult;
-using confpack::testing::ConfpackSession;
+using confpack::testing::FaultSession;
 
 namespace {
 
-/// A session whose program is env(1), which sets the variable for the test build (runFailingAt).
-struct FaultSession : ConfpackSession {
-  explicit FaultSession(const std::string& name) : ConfpackSession(name, "/usr/bin/env") {}
-};
-
 /// `confpack-allocation-fault <args>` in `s` with its k-th allocation failing (0: none).
-CommandResult runFailingAt(const ConfpackSession& s, long k, const std::string& args) {
-  return s.run("CONFPACK_FAIL_ALLOCATION=" + std::to_string(k) + " '" + CONFPACK_ALLOCATION_FAULT_BINARY + "' " + args);
+CommandResult runFailingAt(const FaultSession& s, long k, const std::string& args) {
+  return s.runFaulty("CONFPACK_FAIL_ALLOCATION=" + std::to_string(k), args);
 }
 
 }  // namespace

@@ -7,25 +7,25 @@
 #include <fstream>
 #include <string>
 
-#include "tests/support/confpack_binary.hpp"
+#include "tests/support/fault_session.hpp"
 
 using confpack::testing::CommandResult;
-using confpack::testing::ConfpackSession;
 using confpack::testing::lineCount;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct FaultSession : ConfpackSession {
-  explicit FaultSession(const std::string& name) : ConfpackSession(name, "/usr/bin/env") {}
+struct WriteSession : confpack::testing::FaultSession {
+  using FaultSession::FaultSession;
 
   /// `command --out out` with its k-th write failing with `error` (ENOSPC or EIO), for every k up
   /// to the number of files it writes; returns that number.
   int sweep(const std::string& command, const std::string& out, const std::string& error,
             const std::string& reason) const {
     for (int k = 1; k <= 200; ++k) {
-      const CommandResult r = run("CONFPACK_FAIL_WRITE=" + std::to_string(k) + " CONFPACK_FAIL_WRITE_ERRNO=" + error +
-                                  " '" + CONFPACK_ALLOCATION_FAULT_BINARY + "' " + command + " --out " + out);
+      const CommandResult r =
+          runFaulty("CONFPACK_FAIL_WRITE=" + std::to_string(k) + " CONFPACK_FAIL_WRITE_ERRNO=" + error,
+                    command + " --out " + out);
       CAPTURE(command, k, r.code, r.err);
       if (r.code == 0) {
         CHECK(fs::exists(dir / out / ".confpack-output"));
@@ -49,7 +49,7 @@ struct FaultSession : ConfpackSession {
 
 TEST_CASE("write failures: every file of run, analyze and report, on a full disk and on an I/O error",
           "[apps][cli][io]") {
-  const FaultSession s("write_failures");
+  const WriteSession s("write_failures");
   const std::string run = "run --length-x 4 --width 4 --height 5 --time-limit 3 --frame-interval 500 -q";
   CHECK(s.sweep(run, "out", "ENOSPC", "No space left on device") >= 8);
   CHECK(s.sweep(run + " --backend bullet", "out", "EIO", "Input/output error") >= 8);
