@@ -52,22 +52,21 @@ std::optional<PolyhedronContact> collideCommonPlane(const WorldPolyhedron& A, co
   Vec3 n;
   double gap;
   if (!pairNormal(A, B, alert, n, gap)) return std::nullopt;
-  PolyhedronContact c = buildContact(A, B, n, gap, kFeatureAngleTol, alert);
   const double hA = A.maxAlong(n), hB = B.minAlong(n);
   const double mid = 0.5 * (hA + hB);
   const double ref = std::min(hA - n.dot(A.centre), n.dot(B.centre) - hB);
   const double reach = std::max(0.0, 0.5 * gap) + band * ref;
   const Frame fr = frameFor(n);
-  Polygon2 keptA, keptB;
-  for (const Vec3& x : A.v)
-    if (n.dot(x) >= mid - reach) keptA.push_back(fr.lateral(x));
-  for (const Vec3& x : B.v)
-    if (n.dot(x) <= mid + reach) keptB.push_back(fr.lateral(x));
-  if (keptA.size() < 3 || keptB.size() < 3) return c;
+  const Polygon2 keptA = touchingProjections(A, fr, mid - reach, 1.0);
+  const Polygon2 keptB = touchingProjections(B, fr, mid + reach, -1.0);
+  if (keptA.size() < 3 || keptB.size() < 3) return buildContact(A, B, n, gap, kFeatureAngleTol, alert);
 
+  // Face to face: the exact contact's features (the cache's key) without its points within reach,
+  // which the common plane's points replace.
+  PolyhedronContact c = buildContact(A, B, n, gap, kFeatureAngleTol);
   const Polygon2 hullA = convexHull(keptA), hullB = convexHull(keptB);
   const double lenTol = kRelativeLengthTol * (A.radius + B.radius);
-  Polygon2 region = hullA.size() >= 3 && hullB.size() >= 3 ? clipPolygon(hullA, hullB) : Polygon2{};
+  const Polygon2 region = hullA.size() >= 3 && hullB.size() >= 3 ? clipPolygon(hullA, hullB) : Polygon2{};
   c.type = ContactType::Triple;
   c.points.clear();
   c.pointGaps.clear();

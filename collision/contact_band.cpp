@@ -20,13 +20,6 @@ void checkWidth(double width, const char* who) {
     throw std::invalid_argument(fmt::format("{}: band width must be positive and finite (got {})", who, width));
 }
 
-Vec3 unitOrThrow(const Vec3& n, const char* who) {
-  const double len = n.norm();
-  if (!(len > 0.0) || !std::isfinite(len))
-    throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
-  return n / len;
-}
-
 double segmentDistance(const Vec2& p, const Vec2& a, const Vec2& b) {
   const Vec2 d = b - a;
   const double len2 = d.squaredNorm();
@@ -93,14 +86,6 @@ ContactType typeOfPositions(const Polygon2& pts, double tol) {
   for (const Vec2& p : pts)
     if (std::abs(cross2(axis, p - pts[i0])) > tol) return ContactType::Triple;
   return ContactType::Double;
-}
-
-// The projections on the frame's plane of the vertices of w with sign * n.x >= sign * level.
-Polygon2 touchingProjections(const WorldPolyhedron& w, const Frame& fr, double level, double sign) {
-  Polygon2 out;
-  for (const Vec3& x : w.v)
-    if (sign * fr.n.dot(x) >= sign * level) out.push_back(fr.lateral(x));
-  return out;
 }
 
 ContactType bandType(const WorldPolyhedron& A, const WorldPolyhedron& B, const Vec3& normal, double width) {

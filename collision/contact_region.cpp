@@ -1,6 +1,10 @@
 #include "collision/contact_region.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 #include <utility>
 
 #include "collision/polyhedron_distance.hpp"
@@ -428,6 +432,20 @@ Polygon2 convexHull(Polygon2 pts) {
   hull.pop_back();  // the last point repeats the first
   Polygon2 out;
   for (const Vec2& p : hull) out.push_back(p);
+  return out;
+}
+
+Vec3 unitOrThrow(const Vec3& n, const char* who) {
+  const double len = n.norm();
+  if (!(len > 0.0) || !std::isfinite(len))
+    throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
+  return n / len;
+}
+
+Polygon2 touchingProjections(const WorldPolyhedron& w, const Frame& fr, double level, double sign) {
+  Polygon2 out;
+  for (const Vec3& x : w.v)
+    if (sign * fr.n.dot(x) >= sign * level) out.push_back(fr.lateral(x));
   return out;
 }
 

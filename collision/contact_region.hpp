@@ -68,6 +68,9 @@ inline double cross2(const Vec2& a, const Vec2& b) {
 /// a 2D hull of a handful of points.
 Polygon2 convexHull(Polygon2 pts);
 
+/// n / |n|; throws std::invalid_argument naming `who` unless n is non-zero and finite.
+Vec3 unitOrThrow(const Vec3& n, const char* who);
+
 /// Signed area of a polygon (> 0 counter-clockwise) [d_L^2].
 double polygonArea(std::span<const Vec2> p);
 
@@ -83,6 +86,11 @@ struct Frame {
 
 /// The frame of unit normal n (u = any unit vector orthogonal to n, v = n x u).
 Frame frameFor(const Vec3& n);
+
+/// The vertices of w on the far side of the level `level` along fr.n, `sign` 1: n.x >= level (a
+/// body below the contact plane), -1: n.x <= level (a body above it), projected on the plane: a
+/// body's vertices within a band of the plane, or past it.
+Polygon2 touchingProjections(const WorldPolyhedron& w, const Frame& fr, double level, double sign);
 
 /// Indices of the contact points kept from a region's candidates (lateral positions pts and
 /// gaps): all of them up to kMaxPolyhedronContactPoints, else 4 (the deepest and the 3 others of

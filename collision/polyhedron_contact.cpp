@@ -25,13 +25,6 @@ void checkAlert(double alert, const char* who) {
   if (!(alert >= 0.0)) throw std::invalid_argument(fmt::format("{}: alert must be >= 0 (got {})", who, alert));
 }
 
-Vec3 unitOrThrow(const Vec3& n, const char* who) {
-  const double len = n.norm();
-  if (!(len > 0.0) || !std::isfinite(len))
-    throw std::invalid_argument(fmt::format("{}: normal must be a non-zero finite vector", who));
-  return n / len;
-}
-
 }  // namespace
 
 std::optional<PolyhedronContact> collidePolyhedra(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double alert,

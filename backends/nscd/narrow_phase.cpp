@@ -114,34 +114,29 @@ void NarrowPhase::collidePairIn(const CandidatePair& pair, const std::vector<Vec
     return;
   }
   // Polyhedra: the exact SAT routines of collision/polyhedron_contact (shared with analysis), with
-  // every point that can touch within the alert distance (contact_region.hpp, "Points within reach").
+  // every point that can touch within the alert distance (contact_region.hpp, "Points within reach"),
+  // or the common plane's reading of them (contact_detection "common_plane").
   auto placed = [&](int i, const Vec3& p) {
     return collision::PlacedPolyhedron{&poly_[i], p, orientations[i].toRotationMatrix()};
   };
   std::optional<collision::PolyhedronContact> pc;
   bool flip = false;
-  if (!sphereA && !sphereB && world != nullptr) {
-    // As collidePolyhedra: the bounding spheres first, then the placed bodies; an image across a
-    // periodic side is placed for the pair (placing it by shifting the grain's copy would round
-    // differently).
+  if (!sphereA && !sphereB) {
+    // The bounding spheres first, then the pair in world coordinates: each grain's own from
+    // `world` when given; an image across a periodic side is placed for the pair (placing it by
+    // shifting the grain's copy would round differently).
     const double reach = poly_[a].boundingRadius() + poly_[b].boundingRadius() + alert;
     if ((pb - positions[a]).squaredNorm() > reach * reach) return;
     const auto collide = [&](const collision::WorldPolyhedron& A, const collision::WorldPolyhedron& B) {
       return commonPlaneBand_ > 0.0 ? collision::collideCommonPlane(A, B, alert, commonPlaneBand_)
                                     : collision::collideWorldPolyhedra(A, B, alert, collision::kFeatureAngleTol, alert);
     };
-    if (pair.shiftX == 0 && pair.shiftY == 0)
+    if (world == nullptr)
+      pc = collide(collision::WorldPolyhedron(placed(a, positions[a])), collision::WorldPolyhedron(placed(b, pb)));
+    else if (pair.shiftX == 0 && pair.shiftY == 0)
       pc = collide((*world)[a], (*world)[b]);
     else
       pc = collide((*world)[a], collision::WorldPolyhedron(placed(b, pb)));
-  } else if (!sphereA && !sphereB) {
-    const double reach = poly_[a].boundingRadius() + poly_[b].boundingRadius() + alert;
-    if (commonPlaneBand_ > 0.0 && (pb - positions[a]).squaredNorm() <= reach * reach)
-      pc = collision::collideCommonPlane(collision::WorldPolyhedron(placed(a, positions[a])),
-                                         collision::WorldPolyhedron(placed(b, pb)), alert, commonPlaneBand_);
-    else if (commonPlaneBand_ == 0.0)
-      pc = collision::collidePolyhedra(placed(a, positions[a]), placed(b, pb), alert, collision::kFeatureAngleTol,
-                                       alert);
   } else if (!sphereA) {
     pc = collision::collidePolyhedronSphere(placed(a, positions[a]), pb, radius_[b], alert);
   } else {
