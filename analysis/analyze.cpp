@@ -27,10 +27,7 @@ void AnalysisOptions::validate() const {
   if (!(density > 0.0) || !std::isfinite(density))
     throw std::invalid_argument(fmt::format("analysis: density must be positive (got {})", density));
   checkInflation(inflate);
-  if (!(typeBand == 0.0 || (typeBand > 0.0 && typeBand <= kMaxTypeBand)))
-    throw std::invalid_argument(
-        fmt::format("analysis: type_band must be 0 (off) or a fraction in (0, {}] of the grain size (got {})",
-                    kMaxTypeBand, typeBand));
+  if (typeBand != 0.0) checkTypeBand(typeBand);  // 0: off
 }
 
 double estimatedCells(const core::BoxDef& box, double grains, const AnalysisOptions& options, std::string* what) {

@@ -90,11 +90,15 @@ std::vector<CountedContact> forceCarryingContacts(const core::Packing& packing,
   return out;
 }
 
-std::vector<CountedContact> bandTypedContacts(const core::Packing& packing, std::vector<CountedContact> counted,
-                                              double band) {
+void checkTypeBand(double band) {
   if (!(band > 0.0 && band <= kMaxTypeBand))
     throw std::invalid_argument(fmt::format(
-        "coordination: type_band must be a fraction in (0, {}] of the grain size (got {})", kMaxTypeBand, band));
+        "analysis: type_band must be a fraction in (0, {}] of the grain size (got {})", kMaxTypeBand, band));
+}
+
+std::vector<CountedContact> bandTypedContacts(const core::Packing& packing, std::vector<CountedContact> counted,
+                                              double band) {
+  checkTypeBand(band);
   for (CountedContact& c : counted) {
     const core::Grain& ga = packing.grains[c.a];
     if (ga.shape != core::ShapeKind::Pinacoid) continue;

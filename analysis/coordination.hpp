@@ -61,6 +61,9 @@ struct CountedContact {
 /// wider band would read every contact as triple.
 inline constexpr double kMaxTypeBand = 0.5;
 
+/// Throws std::invalid_argument unless 0 < band <= kMaxTypeBand (finite).
+void checkTypeBand(double band);
+
 /// The force-carrying contacts (definition above), merged by pair and classified.
 /// `geometric`: all contacts count whatever their force. Throws std::invalid_argument for a grain
 /// index out of range.

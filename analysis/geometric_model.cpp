@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <gsl/gsl_cdf.h>
 #include <gsl/gsl_fit.h>
+#include <gsl/gsl_statistics_double.h>
 
 #include <algorithm>
 #include <cmath>
@@ -76,6 +77,8 @@ LineFit fitLine(const std::vector<double>& x, const std::vector<double>& y, cons
   f.interceptError = std::sqrt(std::max(0.0, cov00));
   f.slopeError = std::sqrt(std::max(0.0, cov11));
   f.covariance = cov01;
+  const auto [ylo, yhi] = std::minmax_element(y.begin(), y.end());
+  if (*yhi > *ylo) f.correlation = gsl_stats_correlation(x.data(), 1, y.data(), 1, n);
   return f;
 }
 

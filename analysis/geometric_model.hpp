@@ -56,6 +56,7 @@ struct LineFit {
   int dof = 0;                    ///< n - 2
   std::optional<double> quality;  ///< Q of the chi^2 (weighted fits with dof > 0)
   bool weighted = false;
+  double correlation = 0.0;  ///< Pearson's r of the points, unweighted; 0 where y does not vary
 };
 
 /// Fits y = intercept + slope x (e.g. lambda_L / d_avg against x_S), weighted by 1/sigma^2

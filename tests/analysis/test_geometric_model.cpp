@@ -64,3 +64,24 @@ TEST_CASE("fit through the origin and the profile-integral C", "[analysis][fit]"
   }
   CHECK(analysis::profileIntegralC(p, 0.64) == Approx(2 * 0.6 * 0.14));
 }
+
+TEST_CASE("line fit recovers intercept, slope and Pearson's r", "[analysis][fit]") {
+  const std::vector<double> x{0.0, 10.0, 25.0, 40.0};
+  std::vector<double> y;
+  for (double v : x) y.push_back(1.5 - 0.02 * v);
+  const analysis::LineFit exact = analysis::fitLine(x, y);
+  CHECK(exact.intercept == Approx(1.5).epsilon(1e-12));
+  CHECK(exact.slope == Approx(-0.02).epsilon(1e-10));
+  CHECK(exact.correlation == Approx(-1.0).epsilon(1e-12));  // every point on a falling line
+  // Weighted, with points scattered by +-sigma: the chi^2 is the scatter's, r below 1 in size.
+  const std::vector<double> noisy{1.6, 1.2, 1.1, 0.6}, sigma{0.1, 0.1, 0.1, 0.1};
+  const analysis::LineFit w = analysis::fitLine(x, noisy, sigma);
+  CHECK(w.weighted);
+  CHECK(w.quality.has_value());
+  CHECK(w.slope < 0.0);
+  CHECK(w.correlation < -0.9);
+  CHECK(w.correlation > -1.0);
+  // A flat line has no correlation to speak of.
+  CHECK(analysis::fitLine(x, {1.0, 1.0, 1.0, 1.0}).correlation == 0.0);
+  CHECK_THROWS_AS(analysis::fitLine({2.0, 2.0}, {1.0, 3.0}), std::invalid_argument);
+}
