@@ -15,6 +15,7 @@
 #include "analysis/geometric_model.hpp"
 #include "core/build_info.hpp"
 #include "core/packing_io.hpp"
+#include "core/settings_table.hpp"
 #include "study/csv_table.hpp"
 #include "study/report_compare.hpp"
 #include "study/report_document.hpp"
@@ -219,10 +220,6 @@ SeriesKey seriesOf(const ConfKey& k) {
   return {k.shape, k.xs, k.mu, k.settings};
 }
 
-std::string num(double v) {
-  return fmt::format("{:g}", v);
-}
-
 // "Backend" of "backend": a name at the start of a sentence.
 std::string capitalized(std::string name) {
   if (!name.empty()) name[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(name[0])));
@@ -241,11 +238,12 @@ std::string settingsText(const std::vector<SettingValue>& settings, const char* 
 }
 
 std::string widthText(const ConfKey& k) {
-  return k.periodic ? fmt::format("biperiodic ({})", num(k.width)) : num(k.width);
+  return k.periodic ? fmt::format("biperiodic ({})", core::numberText(k.width)) : core::numberText(k.width);
 }
 
 std::string seriesText(const SeriesKey& s) {
-  return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), num(s.xs), num(s.mu), settingsText(s.settings));
+  return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), core::numberText(s.xs), core::numberText(s.mu),
+                     settingsText(s.settings));
 }
 
 // The published values of --reference as the sections show them: found per series, each citation
@@ -698,8 +696,8 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
 
 std::string familyName(const SeriesKey& s) {
   return fmt::format("{}: {} x_S = {}, mu_w = {}{}", familyOf(s.shape, s.xs),
-                     s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids", num(s.xs),
-                     num(s.mu), settingsText(s.settings, ", ", " = "));
+                     s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids",
+                     core::numberText(s.xs), core::numberText(s.mu), settingsText(s.settings, ", ", " = "));
 }
 
 // The families' samples for lambda_L (study/report_lambda.hpp): per series and backend, the
@@ -841,8 +839,8 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits, cons
       if (familyName(k) == l.family) sk = &k;
     if (!sk || !l.fit.ok) continue;
     const analysis::FittedLength& v = l.fit.lambdaLOverDAvg;
-    lambda.values[{*sk, l.backend}] = {v.value, v.error,
-                                       fmt::format("{:.3g} ± {:.2g} (W = {})", v.value, v.error, num(l.width))};
+    lambda.values[{*sk, l.backend}] = {
+        v.value, v.error, fmt::format("{:.3g} ± {:.2g} (W = {})", v.value, v.error, core::numberText(l.width))};
   }
   out.lambdaFindings = lambdaFindings(lambdas);
   if (!lambda.values.empty()) out.quantities.push_back(std::move(lambda));
@@ -969,8 +967,8 @@ std::string bulkSizeText(const FamilySize& f) {
 
 std::string widthSpanText(const FamilySize& f) {
   return f.widths == 0   ? "-"
-         : f.widths == 1 ? num(f.widthMin)
-                         : fmt::format("{} to {}", num(f.widthMin), num(f.widthMax));
+         : f.widths == 1 ? core::numberText(f.widthMin)
+                         : fmt::format("{} to {}", core::numberText(f.widthMin), core::numberText(f.widthMax));
 }
 
 // The warning that opens the summary where a family's numbers cannot carry its physics: a bulk too
@@ -986,8 +984,9 @@ void addAdequacyWarning(Document& doc, const StudyView& study, const StudySummar
     if (std::isfinite(f.grains) && f.grains < kMinBulkGrains)
       why.push_back(fmt::format("it holds {:.0f} grains (fewer than {:g})", f.grains, kMinBulkGrains));
     if (f.widths >= 2 && f.widthMax < kMinWidthSpan * f.widthMin)
-      why.push_back(fmt::format("its fits span W = {} to {}, a factor {:.2g} (less than {:g})", num(f.widthMin),
-                                num(f.widthMax), f.widthMax / f.widthMin, kMinWidthSpan));
+      why.push_back(fmt::format("its fits span W = {} to {}, a factor {:.2g} (less than {:g})",
+                                core::numberText(f.widthMin), core::numberText(f.widthMax), f.widthMax / f.widthMin,
+                                kMinWidthSpan));
     const auto first = summary.runs.find({sk, study.sides.front()});
     if (first != summary.runs.end() && first->second.done > first->second.equilibrated)
       why.push_back(fmt::format("{} of {}'s {} finished runs are not at rest",
@@ -1717,7 +1716,7 @@ std::string boxSentence(const StudyView& study) {
       ", but where a box would hold more than {} grains (deposition.grain_cap), shortened along x to hold about "
       "that many:",
       cap);
-  for (const auto& [label, length] : shortened) text += fmt::format(" {} L_x = {};", label, num(length));
+  for (const auto& [label, length] : shortened) text += fmt::format(" {} L_x = {};", label, core::numberText(length));
   text.back() = '.';
   return text;
 }

@@ -9,24 +9,7 @@
 
 namespace confpack::study {
 
-namespace {
-
 using nlohmann::json;
-
-// The value at a dotted path of a configuration as JSON (core::to_json), null where it has none.
-const json* settingAt(const json& cfg, const std::string& path) {
-  const json* at = &cfg;
-  for (std::size_t from = 0;;) {
-    const std::size_t dot = path.find('.', from);
-    const std::string key = path.substr(from, dot == std::string::npos ? std::string::npos : dot - from);
-    if (!at->is_object() || !at->contains(key)) return nullptr;
-    at = &at->at(key);
-    if (dot == std::string::npos) return at;
-    from = dot + 1;
-  }
-}
-
-}  // namespace
 
 std::string ComparedSetting::sideOf(const SweepRun& run) const {
   return backend() ? run.config.backend : settingText(run.config, key);
@@ -74,7 +57,7 @@ ComparedSetting compareSetting(const std::string& key, const std::vector<SweepRu
       throw std::invalid_argument(fmt::format("{}: {} is a section of the run configuration ({}), not a setting", what,
                                               key, fmt::join(keys, ", ")));
     }
-    const std::string value = settingText(r.config, key);
+    const std::string value = settingText(cfg, key);
     if (std::find(values.begin(), values.end(), value) == values.end()) values.push_back(value);
   }
   if (!tableRuns.empty() && lacking.size() == tableRuns.size())

@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "core/settings_table.hpp"
 #include "study/csv_table.hpp"
 
 namespace confpack::study {
@@ -43,10 +44,6 @@ void fitLambdaSamples(std::vector<LambdaSample>& samples) {
 }
 
 namespace {
-
-std::string num(double v) {
-  return fmt::format("{:g}", v);
-}
 
 // "1.23 ± 0.045"
 std::string withError(double v, double e) {
@@ -110,20 +107,6 @@ std::string qualityText(const analysis::LineFit& f) {
   return fmt::format("chi²/dof {:.2g}, Q {:.2g}", f.chiSquare / f.dof, f.quality.value_or(0.0));
 }
 
-// Pearson's r of the points.
-double pearson(const std::vector<double>& x, const std::vector<double>& y) {
-  const double n = static_cast<double>(x.size());
-  double mx = 0, my = 0;
-  for (std::size_t i = 0; i < x.size(); ++i) mx += x[i] / n, my += y[i] / n;
-  double sxy = 0, sxx = 0, syy = 0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    sxy += (x[i] - mx) * (y[i] - my);
-    sxx += (x[i] - mx) * (x[i] - mx);
-    syy += (y[i] - my) * (y[i] - my);
-  }
-  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
-}
-
 // "falls" / "rises" / "shows no trend": a slope beyond twice its error either way.
 std::string trend(double slope, double error, const char* falls, const char* rises, const char* none) {
   if (slope + 2.0 * error < 0.0) return falls;
@@ -151,7 +134,6 @@ XsLine xsLineFit(const std::vector<const LambdaSample*>& samples) {
 struct CLine {
   std::vector<const LambdaSample*> points;
   std::optional<analysis::LineFit> fit;
-  double r = 0.0;
 };
 
 // lambda_L against C: weighted by sigma_lambda^2 + b^2 sigma_C^2 (the effective variance of a
@@ -172,7 +154,6 @@ CLine cLineFit(const std::vector<const LambdaSample*>& samples) {
     std::vector<double> eff(e.size());
     for (std::size_t i = 0; i < e.size(); ++i) eff[i] = std::hypot(e[i], out.fit->slope * ec[i]);
     out.fit = lineOf(x, y, eff);
-    out.r = pearson(x, y);
   }
   return out;
 }
@@ -240,22 +221,23 @@ std::vector<LambdaFinding> lambdaFindings(const std::vector<LambdaSample>& sampl
       out.push_back({b, fmt::format("{}: lambda_L/d_avg of the spheres (mu_w = {}) {} with x_S: slope {} per 100 % "
                                     "of small grains over x_S = {} to {} ({}). Polydispersity weakening the wall's "
                                     "reach {}.",
-                                    b, num(xs.points.front()->mu),
+                                    b, core::numberText(xs.points.front()->mu),
                                     trend(f.slope, f.slopeError, "falls", "rises", "shows no trend"),
-                                    withError(100.0 * f.slope, 100.0 * f.slopeError), num(xs.points.front()->xs),
-                                    num(xs.points.back()->xs), qualityText(f),
-                                    f.slope + 2.0 * f.slopeError < 0.0 ? "holds" : "does not hold")});
+                                    withError(100.0 * f.slope, 100.0 * f.slopeError),
+                                    core::numberText(xs.points.front()->xs), core::numberText(xs.points.back()->xs),
+                                    qualityText(f), f.slope + 2.0 * f.slopeError < 0.0 ? "holds" : "does not hold")});
     }
     if (const LambdaSample* p = pinacoidPoint(mine))
       if (const LambdaSample* s = sphereAt(mine, p->xs, p->mu)) {
         const double d = p->fit.lambdaLOverDAvg.value - s->fit.lambdaLOverDAvg.value;
         const double e = std::hypot(p->fit.lambdaLOverDAvg.error, s->fit.lambdaLOverDAvg.error);
-        out.push_back({b, fmt::format("{}: lambda_L/d_avg is {} for pinacoids against {} for spheres (x_S = {}, mu_w "
-                                      "= {}), a difference of {}. Smaller for pinacoids than for spheres {}.",
-                                      b, withError(p->fit.lambdaLOverDAvg.value, p->fit.lambdaLOverDAvg.error),
-                                      withError(s->fit.lambdaLOverDAvg.value, s->fit.lambdaLOverDAvg.error), num(p->xs),
-                                      num(p->mu), fmt::format("{:+.3g} ± {:.2g}", d, e),
-                                      d + 2.0 * e < 0.0 ? "holds" : "does not hold")});
+        out.push_back(
+            {b, fmt::format("{}: lambda_L/d_avg is {} for pinacoids against {} for spheres (x_S = {}, mu_w "
+                            "= {}), a difference of {}. Smaller for pinacoids than for spheres {}.",
+                            b, withError(p->fit.lambdaLOverDAvg.value, p->fit.lambdaLOverDAvg.error),
+                            withError(s->fit.lambdaLOverDAvg.value, s->fit.lambdaLOverDAvg.error),
+                            core::numberText(p->xs), core::numberText(p->mu), fmt::format("{:+.3g} ± {:.2g}", d, e),
+                            d + 2.0 * e < 0.0 ? "holds" : "does not hold")});
       }
     // lambda_L against C.
     const CLine c = cLineFit(mine);
@@ -266,7 +248,7 @@ std::vector<LambdaFinding> lambdaFindings(const std::vector<LambdaSample>& sampl
       out.push_back({b, fmt::format("{}: over {} families, lambda_L = {} + {} C (lambda_L and C in d_L; {}; "
                                     "Pearson r = {:.2f}). lambda_L correlating linearly with C {}.",
                                     b, c.points.size(), withError(f.intercept, f.interceptError),
-                                    withError(f.slope, f.slopeError), qualityText(f), c.r,
+                                    withError(f.slope, f.slopeError), qualityText(f), f.correlation,
                                     rises && linear ? "holds"
                                     : rises         ? "does not hold: lambda_L rises with C, but not on a line "
                                                       "within the errors"
@@ -284,19 +266,20 @@ void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<La
     if (std::find(widths.begin(), widths.end(), s.width) == widths.end()) widths.push_back(s.width);
   std::sort(widths.begin(), widths.end());
   std::string widthsText;
-  for (double w : widths) widthsText += (widthsText.empty() ? "" : ", ") + num(w);
+  for (double w : widths) widthsText += (widthsText.empty() ? "" : ", ") + core::numberText(w);
   doc.paragraph(fmt::format(
       "lambda_L (lambda_S) is the length, in d_L, over which the layering of the large (small) grains decays away "
       "from a wall: from the fit of phi(y) averaged over the replicas of each family at W = {} d_L ({}; the "
       "nearest width a family has when it lacks that one: read at W = {}). The uncertainty is the larger of the "
       "fit's standard error and the jackknife over the replicas (each left out in turn); d_avg is the mean grain "
       "size. Every number at full precision, with both uncertainties, is in {}.",
-      num(target), "the report's --lambda-width", widthsText, link("tables/lambda.csv", "tables/lambda.csv")));
+      core::numberText(target), "the report's --lambda-width", widthsText,
+      link("tables/lambda.csv", "tables/lambda.csv")));
   writeTable(reportDir / "tables" / "lambda.csv", samples);
   std::vector<std::vector<std::string>> rows;
   for (const LambdaSample& s : samples) {
     const analysis::AveragedProfileFit& f = s.fit;
-    rows.push_back({s.family, s.backend, num(s.width), std::to_string(f.seeds), lengthText(f, f.lambdaL),
+    rows.push_back({s.family, s.backend, core::numberText(s.width), std::to_string(f.seeds), lengthText(f, f.lambdaL),
                     s.xs > 0.0 ? lengthText(f, f.lambdaS) : "-", f.ok ? fmt::format("{:.4f}", f.meanSize) : "-",
                     lengthText(f, f.lambdaLOverDAvg), f.ok ? fmt::format("{:.3g}", f.fit.rms) : "-",
                     s.c ? withError(*s.c, s.cError.value_or(0.0)) : "-", f.ok ? "" : f.reason});
@@ -326,7 +309,8 @@ void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<La
     const std::vector<const LambdaSample*> mine = fitted(samples, b);
     const XsLine xs = xsLineFit(mine);
     if (!xs.points.empty()) {
-      Series line{fmt::format("spheres mu_w={} {}", num(xs.points.front()->mu), b), color, bi > 0, false, {}};
+      Series line{
+          fmt::format("spheres mu_w={} {}", core::numberText(xs.points.front()->mu), b), color, bi > 0, false, {}};
       for (const LambdaSample* s : xs.points)
         line.points.push_back({s->xs, s->fit.lambdaLOverDAvg.value, s->fit.lambdaLOverDAvg.error});
       byXs.series.push_back(std::move(line));
@@ -335,7 +319,7 @@ void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<La
                                              xs.fit->slope, color, bi > 0 ? 2 : 1));
     }
     if (const LambdaSample* p = pinacoidPoint(mine)) {
-      Series point{fmt::format("pinacoids mu_w={} {}", num(p->mu), b), color, bi > 0, false, {}};
+      Series point{fmt::format("pinacoids mu_w={} {}", core::numberText(p->mu), b), color, bi > 0, false, {}};
       point.pointType = bi > 0 ? 4 : 5;
       point.points.push_back({p->xs, p->fit.lambdaLOverDAvg.value, p->fit.lambdaLOverDAvg.error});
       byXs.series.push_back(std::move(point));

@@ -21,6 +21,7 @@
 #include "core/interrupt.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
+#include "core/settings_table.hpp"
 #include "study/deposit_store.hpp"
 
 namespace confpack::study {
@@ -287,10 +288,6 @@ std::string depositKey(const core::RunConfig& cfg) {
   return json{{"box", box}, {"population", pop}, {"deposition", dep}, {"seed", cfg.seed}}.dump();
 }
 
-std::string trimNumber(double v) {
-  return fmt::format("{:g}", v);
-}
-
 // The leaves of a configuration's JSON, keyed by their path joined with '.'.
 void flattenConfig(const json& j, const std::string& path, std::map<std::string, const json*>& out) {
   for (const auto& [key, v] : j.items()) {
@@ -479,19 +476,21 @@ std::string familyName(const core::RunConfig& cfg) {
   return fmt::format("{}{}", bidisperse ? "B" : "M", grains);
 }
 
-namespace {
-
-// The value at `path` of a configuration written as JSON.
-std::string settingText(const json& cfg, const std::string& path) {
+const json* settingAt(const json& cfg, const std::string& path) {
   const json* at = &cfg;
   for (std::size_t from = 0;;) {
     const std::size_t dot = path.find('.', from);
     const std::string key = path.substr(from, dot == std::string::npos ? std::string::npos : dot - from);
-    if (!at->is_object() || !at->contains(key)) return "-";
+    if (!at->is_object() || !at->contains(key)) return nullptr;
     at = &at->at(key);
-    if (dot == std::string::npos) break;
+    if (dot == std::string::npos) return at;
     from = dot + 1;
   }
+}
+
+std::string settingText(const json& cfg, const std::string& path) {
+  const json* at = settingAt(cfg, path);
+  if (!at) return "-";
   if (at->is_string()) return at->get<std::string>();
   // Shortest text that reads back as the same double ("45", "0.1", "1e-08"): runs that differ in
   // a setting must not share its text.
@@ -500,14 +499,12 @@ std::string settingText(const json& cfg, const std::string& path) {
   return at->dump();
 }
 
-}  // namespace
-
 std::string SweepRun::label(const std::vector<std::string>& settings) const {
-  const std::string w =
-      config.box.periodicY ? fmt::format("bi{}", trimNumber(config.box.width)) : trimNumber(config.box.width);
+  const std::string w = config.box.periodicY ? fmt::format("bi{}", core::numberText(config.box.width))
+                                             : core::numberText(config.box.width);
   std::string text =
-      fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config), trimNumber(config.population.smallFraction), w,
-                  trimNumber(config.walls.friction), config.seed, config.backend);
+      fmt::format("{} xS={} W={} mu={} s{} {}", familyName(config), core::numberText(config.population.smallFraction),
+                  w, core::numberText(config.walls.friction), config.seed, config.backend);
   if (settings.empty()) return text;
   const std::vector<std::string> names = settingNames(settings);
   json cfg;
@@ -866,11 +863,11 @@ std::string formatRunTable(const std::vector<SweepRun>& runs, const fs::path& di
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const SweepRun& r = runs[k];
     if (taskIndex && !slice.count(r.index)) continue;
-    const std::string w =
-        r.config.box.periodicY ? fmt::format("bi{}", trimNumber(r.config.box.width)) : trimNumber(r.config.box.width);
+    const std::string w = r.config.box.periodicY ? fmt::format("bi{}", core::numberText(r.config.box.width))
+                                                 : core::numberText(r.config.box.width);
     out << fmt::format("{:<7} {:<7} {:<6} {:>5} {:>8} {:>5} {:>6} {:<7}", r.name, r.depositName(), familyName(r.config),
-                       trimNumber(r.config.population.smallFraction), w, trimNumber(r.config.walls.friction),
-                       r.config.seed, r.config.backend);
+                       core::numberText(r.config.population.smallFraction), w,
+                       core::numberText(r.config.walls.friction), r.config.seed, r.config.backend);
     for (std::size_t i = 0; i < varied.size(); ++i) out << fmt::format(" {:<{}}", cells[k][i], widths[i]);
     if (!dir.empty()) out << ' ' << toString(runStatus(dir / "runs" / r.name));
     out << '\n';
@@ -998,7 +995,7 @@ class SweepWorkers {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - outcome.t0).count();
     const std::size_t n = finishedCount.fetch_add(1) + 1;
     const std::string w =
-        r.config.box.periodicY ? "bi" + trimNumber(r.config.box.width) : trimNumber(r.config.box.width);
+        r.config.box.periodicY ? "bi" + core::numberText(r.config.box.width) : core::numberText(r.config.box.width);
     // A run resumed from a checkpoint has run before: the marker and the log line give its
     // whole wall time, the earlier invocations' (up to their last checkpoint) and this one's.
     static const json::json_pointer kEarlier("/timing/checkpoint/earlier_s");

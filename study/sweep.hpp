@@ -92,9 +92,15 @@ struct SweepRun {
 /// in path order. Empty for a sweep over those named axes alone.
 std::vector<std::string> variedSettings(const std::vector<SweepRun>& runs);
 
+/// The value at `path` (keys joined by '.') of a configuration written as JSON, null where it has
+/// none.
+const nlohmann::json* settingAt(const nlohmann::json& cfg, const std::string& path);
+
 /// The value at `path` of a configuration as text ("45", "quasi-static"), "-" where it has none
 /// (a backend option the run does not set).
 std::string settingText(const core::RunConfig& cfg, const std::string& path);
+/// The same of a configuration written as JSON (core::to_json).
+std::string settingText(const nlohmann::json& cfg, const std::string& path);
 
 /// Names for configuration paths, as short as stays unambiguous: the last key ("alpha_deg"), or
 /// the last two ("pinacoid.E") and so on where two paths end alike.
