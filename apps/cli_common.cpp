@@ -184,8 +184,10 @@ std::atomic<StagedOutput*> openOutput{nullptr};
 // The last staging folder made and the user's folder it stands for: an error message names the
 // user's folder, not the internal one (a write that failed in it, a disk full).
 std::string stagingName, stagingTarget;
-// Set once a command's output is in place: what fails after it (its summary line) fails nothing.
+// Set once a command's output is in place: what fails after it (its summary line) fails nothing,
+// and says so in this line.
 std::atomic<bool> outputCommitted{false};
+constexpr const char* kAfterCommit = "warning: out of memory after the output was in place (it is complete)";
 
 /// "<program> <command>: out of memory while <step>" (or, given `instead`, that text after the
 /// colon), assembled on the stack and written with one write(2): nothing here allocates, so it
@@ -234,10 +236,10 @@ void writeOutOfMemoryLine(const char* instead = nullptr) noexcept {
   if (!outOfMemory) std::abort();
   std::free(unwindingReserve.exchange(nullptr));
   if (outputCommitted.load()) {
-    writeOutOfMemoryLine("warning: out of memory after the output was in place (it is complete)");
+    writeOutOfMemoryLine(kAfterCommit);
     std::_Exit(kExitOk);
   }
-  if (StagedOutput* out = openOutput.exchange(nullptr)) out->abandon();
+  if (StagedOutput* out = openOutput.exchange(nullptr)) out->discardStaging();
   writeOutOfMemoryLine();
   std::_Exit(kExitRuntimeFailure);
 }
@@ -308,7 +310,7 @@ void runStage(std::string_view command, const char* stepName, int failure, const
     throw;
   } catch (const std::bad_alloc&) {
     if (!outputCommitted.load()) throw;
-    writeOutOfMemoryLine("warning: out of memory after the output was in place (it is complete)");
+    writeOutOfMemoryLine(kAfterCommit);
   } catch (const core::Interrupted& e) {
     failWith(command, e, 128 + e.signal());
   } catch (const std::exception& e) {
@@ -469,10 +471,6 @@ void StagedOutput::discardStaging() noexcept {
     for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only if empty
   } catch (...) {
   }
-}
-
-void StagedOutput::abandon() noexcept {
-  discardStaging();
 }
 
 StagedOutput::~StagedOutput() {

@@ -136,9 +136,10 @@ class StagedOutput {
 
   /// Where to write.
   const std::filesystem::path& dir() const { return staging_; }
-  /// Removes the staging folder (and the parents it made) at once, for a process about to end
-  /// without unwinding (out of memory where no exception may leave, apps/cli_common.cpp).
-  void abandon() noexcept;
+  /// Removes the staging folder and the parents made for it, if it can (never throws): on a
+  /// failure, and at once for a process about to end without unwinding (out of memory where no
+  /// exception may leave).
+  void discardStaging() noexcept;
   /// The final directory.
   const std::filesystem::path& target() const { return target_; }
   void commit();
@@ -155,9 +156,6 @@ class StagedOutput {
   std::string warning_;
   bool committed_ = false;
   bool keepStaging_ = false;  ///< a failed commit could not put the old files back: they are in it
-
-  /// Removes the staging directory and the parents created for it, if it can (never throws).
-  void discardStaging() noexcept;
 };
 
 /// Writes `j` (indented) to `path` atomically.
