@@ -47,6 +47,9 @@ using core::Vec3;
 /// spheres).
 constexpr int kBroadPhaseSizes[] = {2000, 8000, 30000};
 constexpr int kSweepSizes[] = {2000, 8000, 30000};
+/// Grain counts of the whole-solve series (the factorisations of "cholesky" at 30,000 grains
+/// would take minutes a repetition).
+constexpr int kSolveSizes[] = {2000, 8000};
 /// Pairs per narrow-phase fixture: enough different poses that the branch predictor cannot learn
 /// them, few enough to stay in L2 (a sphere-sphere pass is ~10 us).
 constexpr int kPairsPerType = 512;
@@ -461,6 +464,34 @@ void mprgpBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
   state.counters["rows_per_grain"] = f->rowsPerGrain;
 }
 
+// Each timed iteration is one cold MPRGP solve to the default tolerance (1e-10) with the given
+// preconditioner, rows prepared afresh outside the timing: what the "cholesky" preconditioner's
+// fewer iterations cost against the sweeps' many (docs/performance.md, "The preconditioner and the creep's solve").
+// Items are solves; the counters say how many iterations and factorisations a solve took.
+void mprgpSolveBenchmark(benchmark::State& state, const std::string& preconditioner, int n, std::uint64_t seed) {
+  SolverFixture* f = cachedFixture<SolverFixture, int>(state, n, [&] { return makeSolverFixture(n, seed); });
+  if (!f) return;
+  nscd::NscdSettings settings = nscd::defaultsFor(nscd::SolverKind::Mprgp);
+  settings.preconditioner = preconditioner == "cholesky" ? nscd::PreconditionerKind::Cholesky
+                                                         : nscd::PreconditionerKind::SymmetricGaussSeidel;
+  std::int64_t iterations = 0, factorisations = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    f->reset(settings);
+    state.ResumeTiming();
+    iterations += f->solver.solve(f->velocities, settings);
+    factorisations += f->solver.mprgpSteps().factorisations + f->solver.mprgpSteps().factorUpdates;
+    benchmark::ClobberMemory();
+  }
+  const double solves = std::max<double>(1.0, static_cast<double>(state.iterations()));
+  state.SetItemsProcessed(state.iterations());
+  state.counters["iterations_per_solve"] = static_cast<double>(iterations) / solves;
+  // Only where it can be non-zero: a counter that is 0 in every repetition has an undefined
+  // coefficient of variation, which Google Benchmark writes as a NaN its JSON reader refuses.
+  if (settings.preconditioner == nscd::PreconditionerKind::Cholesky)
+    state.counters["factor_changes_per_solve"] = static_cast<double>(factorisations) / solves;
+}
+
 struct Entry {
   std::string name;
   std::function<void(benchmark::State&, std::uint64_t)> run;
@@ -484,6 +515,12 @@ const std::vector<Entry>& entries() {
     for (int n : kSweepSizes)
       e.push_back({fmt::format("MprgpIteration/spheres/{}", n),
                    [n](benchmark::State& s, std::uint64_t seed) { mprgpBenchmark(s, n, seed); }});
+    for (const char* preconditioner : {"sgs", "cholesky"})
+      for (int n : kSolveSizes)
+        e.push_back({fmt::format("MprgpSolve/{}/spheres/{}", preconditioner, n),
+                     [n, p = std::string(preconditioner)](benchmark::State& s, std::uint64_t seed) {
+                       mprgpSolveBenchmark(s, p, n, seed);
+                     }});
     return e;
   }();
   return list;

@@ -9,7 +9,7 @@ int ContactSolver::solve(std::vector<BodyVelocity>& vel, const NscdSettings& set
     return iterations;
   }
   if (settings.solver == SolverKind::Mprgp) {
-    const int iterations = mprgp_.solve(rows_, vel, settings, maxThreads);
+    const int iterations = mprgp_.solve(rows_, vel, settings, maxThreads, bodies_);
     residual_ = mprgp_.residual();
     return iterations;
   }

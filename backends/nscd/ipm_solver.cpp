@@ -7,10 +7,7 @@
 #include <limits>
 #include <span>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
+#include "backends/nscd/thread_choice.hpp"
 #include "core/blas_lock.hpp"
 
 namespace confpack::nscd {
@@ -60,26 +57,6 @@ constexpr std::ptrdiff_t kPolishFlips = 10;
 
 // CHOLMOD's factorisations and solves call BLAS: each holds core::blasLock() (core/blas_lock.hpp).
 using core::blasLock;
-
-/// CHOLMOD's supernodal factorisation (SuiteSparse 5) opens OpenMP teams of a fixed 4 threads
-/// for copy loops of a few hundred flops each: on 2 cores, 7.5 million futex calls in a 20 s
-/// finisher, a third of its time spent in the kernel. While one lives, OpenMP may
-/// give a team fewer threads than asked when the cores are busy (dynamic adjustment); those loops'
-/// results do not depend on their team.
-class DynamicOpenMpTeams {
- public:
-#ifdef _OPENMP
-  DynamicOpenMpTeams() : saved_(omp_get_dynamic()) {
-    omp_set_dynamic(1);
-  }
-  ~DynamicOpenMpTeams() {
-    omp_set_dynamic(saved_);
-  }
-
- private:
-  int saved_;
-#endif
-};
 
 /// One normal unknown: the Jacobian pieces of its bodies (b < 0: the static world).
 struct IpmRow {

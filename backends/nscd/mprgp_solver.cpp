@@ -293,6 +293,17 @@ bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int thr
   return true;
 }
 
+// The projected CG step at alphaCg; with the exact preconditioner, when that raises f, at half
+// the length, and so on kHalvings times: its direction is a Newton step on the face, whose
+// projection may need to be shorter to lower f, and a shorter one still changes many bounds at once
+// where Dostal's expansion changes one or two (docs/performance.md, "The preconditioner and the creep's solve").
+bool MprgpSolver::projectedSearch(double alphaCg, std::size_t bodyCount, int threads, double& phiAp) {
+  const int halvings = exact_ ? kHalvings : 0;
+  for (int h = 0; h <= halvings; ++h, alphaCg *= 0.5)
+    if (projectedCgStep(alphaCg, bodyCount, threads, phiAp)) return true;
+  return false;
+}
+
 // Symmetric Gauss-Seidel preconditioning in face (Dostal 2009, "Optimal Quadratic Programming
 // Algorithms", MPRGP with preconditioning in face): z = M_F^-1 phi with
 // M_F = (I + L_F) (I + L_F^T), L_F the strictly lower part of A restricted to the free rows
@@ -304,6 +315,7 @@ bool MprgpSolver::projectedCgStep(double alphaCg, std::size_t bodyCount, int thr
 // rows come in blocks that share no grain (ContactRows::build()), and only those run on two threads.
 double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
                                  std::optional<double> alphaCg) {
+  if (exact_) return preconditionExactly(rows, bodyCount, threads, alphaCg);
   const std::size_t m = scratch_.y.size();
   // Raw pointers: with the vectors as members, the compiler reloads their data pointers after
   // every store of a double.
@@ -406,6 +418,35 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
   return zAp;
 }
 
+// The conjugate gradient step first (as the forward sweep makes it), then z on the free set after
+// it; A z's body velocity changes left in scratch_.dvLinear / scratch_.dv, as the sweeps leave them.
+// A failed factorisation (K_F not positive definite to round-off) hands this solve to the sweeps.
+double MprgpSolver::preconditionExactly(const ContactRows& rows, std::size_t bodyCount, int threads,
+                                        std::optional<double> alphaCg) {
+  Scratch& s = scratch_;
+  const std::size_t m = s.y.size();
+  if (alphaCg) {
+    const double alpha = *alphaCg;
+    for (std::size_t k = 0; k < m; ++k) {
+      s.y[k] -= alpha * s.p[k];
+      s.g[k] -= alpha * s.ap[k];
+    }
+  }
+  if (!freeBlock_.factor(s.y)) {
+    exact_ = false;
+    return precondition(rows, bodyCount, threads);
+  }
+  freeBlock_.apply(s.g, s.z);
+  if (linearOnly_) {
+    s.dvLinear.resize(bodyCount);
+    applyLinearImpulses(s.z, s.dvLinear, threads);
+  } else {
+    s.dv.resize(bodyCount);
+    applyImpulses(s.z, s.dv, threads);
+  }
+  return blockedSum(m, threads, s.partial, [&](std::size_t k) { return s.z[k] * s.ap[k]; });
+}
+
 // Dostal & Schoeberl (2005), "Minimizing quadratic functions subject to bound constraints with
 // the rate of convergence and finite termination", Comput. Optim. Appl. 30; Dostal (2009),
 // "Optimal Quadratic Programming Algorithms", Springer, algorithm MPRGP. With the free set
@@ -424,13 +465,14 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
 // gradients on the free set (sqrt of the condition number, of M_F^-1 A_FF when preconditioned in
 // face) instead of Gauss-Seidel's; the projected CG expansion keeps the monotone decrease but not
 // that proof, and is measured instead (projectedCgStep).
-// The preconditioner is symmetric Gauss-Seidel because it needs as few iterations as an
+// The default preconditioner is symmetric Gauss-Seidel because it needs as few iterations as an
 // incomplete Cholesky factorisation without one: no matrix, nothing redone when the free set
-// changes. Near jamming the free block's softest modes extend over the whole pile; a coarse
-// correction or a deflation of them costs about what it saves in iterations (docs/performance.md,
-// "What we tried").
-int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings,
-                       int maxThreads) {
+// changes. Near jamming the free block's soft modes form a continuum spread over the pile, which a
+// coarse correction or a deflation does not remove; "cholesky" inverts the shifted free block
+// exactly (preconditionExactly) in a few iterations, for a factorisation whose cost exceeds what it
+// saves (docs/performance.md, "The preconditioner and the creep's solve").
+int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings, int maxThreads,
+                       const std::vector<BodyInverseMass>* bodies) {
   residual_ = 0.0;
   if (rows.rowCount() == 0) return 0;
   const std::size_t nN = rows.normalRows().size();
@@ -442,8 +484,17 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   if (threadChoice_.maxThreads() != maxThreads) threadChoice_ = ThreadChoice(maxThreads);
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
-  Iteration it = setUp(rows, vel, settings, threads);
   steps_ = MprgpSteps{};
+  exact_ = settings.preconditioner == PreconditionerKind::Cholesky && bodies != nullptr;
+  Iteration it = setUp(rows, vel, settings, threads);
+  if (exact_) {
+    std::vector<JacobianRow> jacobians(m);
+    for (std::size_t k = 0; k < m; ++k) {
+      const GatherRow& row = gatherRows_[k];
+      jacobians[k] = {row.n, row.axn, row.bxn, row.a, row.b};
+    }
+    freeBlock_.build(jacobians, *bodies, !linearOnly_, settings.preconditionerShift);
+  }
   int iterations = 0;
   double tangentChange = 0.0;
   const int outerCap = frictionRows.empty() ? 1 : settings.maxIterations;
@@ -467,6 +518,10 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
     innerTolerance = std::max(settings.tolerance, std::min(innerTolerance, 0.1 * tangentChange));
   }
   residual_ = std::max(residual_, tangentChange);
+  if (exact_) {
+    steps_.factorisations = freeBlock_.factorisations();
+    steps_.factorUpdates = freeBlock_.updates();
+  }
   // The impulses in contact order, for exportImpulses() and normalImpulse(), which read every
   // contact's points: through the rows in sweep order, each read missed the cache.
   rows.storeNormalImpulses([&](std::size_t k) { return scratch_.scale[k] * scratch_.y[k]; });
@@ -507,7 +562,7 @@ MprgpSolver::Iteration MprgpSolver::setUp(ContactRows& rows, std::vector<BodyVel
   const double bound = operatorBound_ = scaledOperatorBound(vel.size());
   it.alphaBar = bound > 0.0 ? 1.95 / bound : 1.0;  // safe: bound >= ||A||
   it.invAlphaBar = 1.0 / it.alphaBar;
-  it.preconditioned = settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel;
+  it.preconditioned = settings.preconditioner != PreconditionerKind::None;
   it.projectedCg = settings.expansion == ExpansionKind::ProjectedCg;
   contactVelocities(vel, s.g, threads);
   applyOperator(s.y, s.ap, vel.size(), threads);
@@ -610,7 +665,7 @@ void MprgpSolver::proportionalStep(Iteration& it, const Measures& now) {
   const double alphaCg = pAp > 0.0 ? now.gDotP / pAp : std::numeric_limits<double>::infinity();
   if (fitsBounds(it, alphaCg)) {
     conjugateGradientStep(it, alphaCg, pAp);
-  } else if (double phiAp = 0.0; it.projectedCg && projectedCgStep(alphaCg, it.bodyCount(), it.threads, phiAp)) {
+  } else if (double phiAp = 0.0; it.projectedCg && projectedSearch(alphaCg, it.bodyCount(), it.threads, phiAp)) {
     ++steps_.projected;  // an expansion by the projected CG step; CG goes on from it
     it.conjugate = (it.preconditioned ? precondition(it.rows, it.bodyCount(), it.threads) : phiAp) / pAp;
     it.checkDescent = true;

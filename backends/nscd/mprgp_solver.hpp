@@ -10,7 +10,8 @@
 // law. Its conjugate gradients are preconditioned on the free set by a forward and a backward
 // Gauss-Seidel sweep (NscdSettings::preconditioner): the sweeps of nlgs serve inside MPRGP, where
 // they cut the iterations 2.5 to 3.5 times. For two threads they run over blocks of rows that
-// share no grain (contact_rows.hpp).
+// share no grain (contact_rows.hpp). Or ("cholesky", free_block_inverse.hpp) by the shifted free
+// block's exact inverse, with projected steps searched back by halves.
 // Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
 // every normal impulse with the tangential ones fixed, then one projected pass over the
 // tangential impulses, over-relaxed by NscdSettings::frictionRelaxation, until both have
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "backends/nscd/contact_rows.hpp"
+#include "backends/nscd/free_block_inverse.hpp"
 #include "backends/nscd/nscd_settings.hpp"
 #include "backends/nscd/thread_choice.hpp"
 
@@ -29,10 +31,12 @@ namespace confpack::nscd {
 /// What the MPRGP iterations of the last solve were (their sum is its iteration count, less the
 /// tangential passes with wall friction).
 struct MprgpSteps {
-  int conjugate = 0;      ///< conjugate gradient steps
-  int projected = 0;      ///< expansions by a projected conjugate gradient step
-  int gradient = 0;       ///< expansions by Dostal's step (first bound, then projected gradient)
-  int proportioning = 0;  ///< proportioning steps (release of bound unknowns)
+  int conjugate = 0;       ///< conjugate gradient steps
+  int projected = 0;       ///< expansions by a projected conjugate gradient step
+  int gradient = 0;        ///< expansions by Dostal's step (first bound, then projected gradient)
+  int proportioning = 0;   ///< proportioning steps (release of bound unknowns)
+  int factorisations = 0;  ///< "cholesky" preconditioner: factorisations afresh
+  int factorUpdates = 0;   ///< "cholesky" preconditioner: updates and downdates for a changed free set
 };
 
 /// Dostal's MPRGP on the normal impulses of a ContactRows (with a tangential pass for side-wall
@@ -49,7 +53,10 @@ class MprgpSolver {
   /// passes with wall friction (0 without rows).
   /// `maxThreads` (the run's threads, SystemDef::threads): the most its passes run on; each solve
   /// times the team against one thread and keeps the faster (thread_choice.hpp), to the same bits.
-  int solve(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings, int maxThreads = 1);
+  /// `bodies` (the inverse masses, the last the static world) serve the "cholesky" preconditioner;
+  /// without them it falls back on "sgs".
+  int solve(ContactRows& rows, std::vector<BodyVelocity>& velocities, const NscdSettings& settings, int maxThreads = 1,
+            const std::vector<BodyInverseMass>* bodies = nullptr);
   /// The residual of the last solve: the projected gradient relative to ||b|| (or the last
   /// tangential change, if larger); 0 without rows.
   double residual() const { return residual_; }
@@ -74,6 +81,8 @@ class MprgpSolver {
   double applyOperator(const std::vector<double>& x, std::vector<double>& out, std::size_t bodyCount, int threads);
   double scaledOperatorBound(std::size_t bodyCount);
   bool projectedCgStep(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
+  static constexpr int kHalvings = 4;
+  bool projectedSearch(double alphaCg, std::size_t bodyCount, int threads, double& phiAp);
   // z = M_F^-1 g on the free set F = {y > 0} (0 elsewhere), M_F the symmetric Gauss-Seidel
   // splitting of A restricted to F, leaving M^-1 H S z in scratch_.dvLinear / scratch_.dv; returns z . scratch_.ap.
   // Given alphaCg, the forward sweep first makes the conjugate gradient step y -= alphaCg p,
@@ -81,6 +90,10 @@ class MprgpSolver {
   // With threads > 1 the two sweep blocks (rows.sweepBlockEnd()) run at once, to the same bits.
   double precondition(const ContactRows& rows, std::size_t bodyCount, int threads,
                       std::optional<double> alphaCg = std::nullopt);
+  // The same contract with z = (A_FF + eps I)^-1 phi (the "cholesky" preconditioner,
+  // free_block_inverse.hpp), factored afresh when the free set has changed.
+  double preconditionExactly(const ContactRows& rows, std::size_t bodyCount, int threads,
+                             std::optional<double> alphaCg);
   double dvAlongRow(std::size_t k) const;
   double frictionTangentPass(ContactRows& rows, std::vector<BodyVelocity>& velocities, double omega);
 
@@ -169,7 +182,9 @@ class MprgpSolver {
   std::vector<SweepMass> sweepMass_;
   std::vector<SweepAngular> sweepAngular_;
   bool linearOnly_ = false;
-  ThreadChoice threadChoice_;  // MPRGP's team against one thread, timed
+  ThreadChoice threadChoice_;   // MPRGP's team against one thread, timed
+  FreeBlockInverse freeBlock_;  // the "cholesky" preconditioner's factor
+  bool exact_ = false;          // this solve preconditions with freeBlock_ (until a factorisation fails)
   std::vector<LinearRow> linearRows_;
   std::vector<LinearEntry> linearEntries_;
   std::vector<int> bodyEntryStart_, bodyCursor_;

@@ -27,8 +27,13 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
                 {{"projected_cg", ExpansionKind::ProjectedCg}, {"gradient", ExpansionKind::Gradient}},
                 "mprgp: the step taken when a conjugate gradient step would make an impulse negative")
         .choice("preconditioner", &S::preconditioner,
-                {{"sgs", PreconditionerKind::SymmetricGaussSeidel}, {"none", PreconditionerKind::None}},
-                "mprgp: symmetric Gauss-Seidel sweeps over the free rows, or Jacobi scaling only")
+                {{"sgs", PreconditionerKind::SymmetricGaussSeidel},
+                 {"none", PreconditionerKind::None},
+                 {"cholesky", PreconditionerKind::Cholesky}},
+                "mprgp: symmetric Gauss-Seidel sweeps over the free rows, Jacobi scaling only, or the shifted free "
+                "block's exact inverse by a sparse Cholesky factorisation in body space")
+        .number("preconditioner_shift", &S::preconditionerShift, Range::positive(), "-",
+                "mprgp, cholesky: the shift eps of (A_FF + eps I)^-1")
         .number("tolerance", &S::tolerance, Range::positive(), "-",
                 "stopping threshold: mprgp and ipm relative projected gradient (1e-10), nlgs relative impulse change "
                 "(1e-6)")

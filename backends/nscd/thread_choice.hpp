@@ -6,6 +6,10 @@
 // phase, 2 cores, load 6 to 9: 8 s against 1.6 s over 791 steps); on free cores the team wins.
 #include <algorithm>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace confpack::nscd {
 
 /// Team-size chooser for one phase: in every epoch, the first kTrial calls run with
@@ -53,6 +57,26 @@ class ThreadChoice {
   int epoch_ = kEpoch;
   double teamTime_ = 0.0, oneTime_ = 0.0;
   bool teamWins_ = true;
+};
+
+/// CHOLMOD's supernodal factorisation (SuiteSparse 5) opens OpenMP teams of a fixed 4 threads
+/// for copy loops of a few hundred flops each: on 2 cores, 7.5 million futex calls in a 20 s
+/// finisher, a third of its time spent in the kernel. While one lives, OpenMP may
+/// give a team fewer threads than asked when the cores are busy (dynamic adjustment); those loops'
+/// results do not depend on their team.
+class DynamicOpenMpTeams {
+ public:
+#ifdef _OPENMP
+  DynamicOpenMpTeams() : saved_(omp_get_dynamic()) {
+    omp_set_dynamic(1);
+  }
+  ~DynamicOpenMpTeams() {
+    omp_set_dynamic(saved_);
+  }
+
+ private:
+  int saved_;
+#endif
 };
 
 }  // namespace confpack::nscd

@@ -91,7 +91,7 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
   const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
   std::map<std::string, json> byName;
   for (const json& b : report["benchmarks"]) byName[b["run_name"].get<std::string>()] = b;
-  REQUIRE(byName.size() == 4);
+  REQUIRE(byName.size() == 6);
   REQUIRE(byName.count("BroadPhase/spheres/2000") == 1);
   REQUIRE(byName.count("GaussSeidelSweep/spheres/2000") == 1);
   const json& broad = byName["BroadPhase/spheres/2000"];
@@ -117,4 +117,12 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
   CHECK(mprgp["items_per_second"].get<double>() > 0.0);
   CHECK(mprgp["iterations_per_solve"].get<double>() == Approx(50.0));
   CHECK(mprgp["rows_per_grain"].get<double>() == Approx(sweep["rows_per_grain"].get<double>()));
+  // Whole solves to 1e-10: the exact free-block preconditioner takes fewer iterations than the
+  // sweeps, each with a factorisation or a change of it.
+  REQUIRE(byName.count("MprgpSolve/sgs/spheres/2000") == 1);
+  REQUIRE(byName.count("MprgpSolve/cholesky/spheres/2000") == 1);
+  const json& sgsSolve = byName["MprgpSolve/sgs/spheres/2000"];
+  const json& exactSolve = byName["MprgpSolve/cholesky/spheres/2000"];
+  CHECK(exactSolve["iterations_per_solve"].get<double>() < sgsSolve["iterations_per_solve"].get<double>());
+  CHECK(exactSolve["factor_changes_per_solve"].get<double>() >= 1.0);
 }

@@ -316,7 +316,7 @@ TEST_CASE("nscd mprgp: a column of face-on-face pinacoids carries k m g at its k
   // Rows with lever arms across their normals (three points per face-on-face contact, sharing
   // bodies) take the angular path of the operator and of the preconditioner's sweeps. At rest on
   // the floor, the k-th contact from the top carries the weight of the k grains above it.
-  const std::string preconditioner = GENERATE("sgs", "none");
+  const std::string preconditioner = GENERATE("sgs", "none", "cholesky");
   core::SystemDef s = boxSystem(20.0, 10.0, false, 0.0);
   const core::Quat onFace(Eigen::AngleAxisd(std::numbers::pi / 4.0, Vec3::UnitX()));
   constexpr int kColumn = 5;
