@@ -159,7 +159,7 @@ void bindRun(py::module_& m) {
   m.def(
       "_analyze",
       [](const PyPacking& p, bool allowImplausible, double margin, double surfaceCell, double slice, double latticeCell,
-         bool lattice, double forceThreshold, double gapTolerance) {
+         bool lattice, double forceThreshold, double gapTolerance, double inflate, double typeBand) {
         analysis::AnalysisOptions options;  // those of `confpack analyze`, with its flags
         options.region.margin = margin;
         options.region.cellSize = surfaceCell;
@@ -168,6 +168,8 @@ void bindRun(py::module_& m) {
         options.interpenetration.lattice = lattice;
         options.coordination.forceThreshold = forceThreshold;
         options.geometricContacts.absTolerance = gapTolerance;
+        options.inflate = inflate;
+        options.typeBand = typeBand;
         options.validate();
         analysis::checkPlausible(p.packing, p.source.empty() ? "packing" : p.source, allowImplausible);
         std::optional<analysis::Analysis> a;
@@ -181,7 +183,8 @@ void bindRun(py::module_& m) {
       "surface_cell"_a = defaults.region.cellSize, "slice"_a = defaults.profile.slice,
       "lattice_cell"_a = defaults.interpenetration.cell, "lattice"_a = defaults.interpenetration.lattice,
       "force_threshold"_a = defaults.coordination.forceThreshold,
-      "gap_tolerance"_a = defaults.geometricContacts.absTolerance);
+      "gap_tolerance"_a = defaults.geometricContacts.absTolerance, "inflate"_a = defaults.inflate,
+      "type_band"_a = defaults.typeBand);
 }
 
 }  // namespace confpack::python

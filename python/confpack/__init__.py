@@ -72,8 +72,9 @@ def run(config=None, backend=None, progress=None):
 def analyze(packing, allow_implausible=False, **options):
     """Every measurement of `confpack analyze` on a Packing: the dict of its result.json blocks
     plus "profiles". Options as the command's flags: margin, surface_cell, slice, lattice_cell,
-    lattice (False: --no-lattice), force_threshold, gap_tolerance. An implausible packing
-    raises ValueError unless allow_implausible."""
+    lattice (False: --no-lattice), force_threshold, gap_tolerance, inflate (--inflate S: every
+    grain scaled by S) and type_band (--type-band B: coordination_band, 0 for none). An
+    implausible packing raises ValueError unless allow_implausible."""
     text, profiles = _confpack._analyze(packing, allow_implausible, **options)
     result = json.loads(text)
     result["profiles"] = profiles

@@ -58,3 +58,24 @@ def test_analyze_options_are_the_flags(cli, cli_run, tmp_path):
                               force_threshold=0.1)
     assert_same_blocks(result, cli_result)
     assert_same_profiles(result["profiles"], tmp_path / "cli")
+
+
+def test_the_published_readings_are_the_flags(cli, cli_run, tmp_path):
+    # --inflate and --type-band: the inflated grains' numbers and the band's contact types.
+    source = cli_run[1] / "packing.json"
+    run_cli(cli, "analyze", source, "--out", tmp_path / "cli", "-q", "--inflate", "1.02", "--type-band", "0.05")
+    cli_result = json.loads((tmp_path / "cli" / "result.json").read_text())
+    result = confpack.analyze(confpack.read_packing(source), inflate=1.02, type_band=0.05)
+    assert_same_blocks(result, cli_result)
+    assert result["inflate"] == 1.02
+    assert "coordination_band" in result
+    # Grains scaled by 1.02 take 1.02^3 of the volume: the bulk's solid fraction grows by about that
+    # factor (not exactly: the bulk region follows the free surface, which the inflation raises).
+    plain = confpack.analyze(confpack.read_packing(source))
+    assert result["solid_fraction"] == pytest.approx(1.02 ** 3 * plain["solid_fraction"], rel=5e-3)
+    assert result["solid_fraction"] != pytest.approx(plain["solid_fraction"], rel=1e-2)
+
+
+def test_a_bad_inflation_is_refused_with_the_flags_message(cli, cli_run):
+    with pytest.raises(ValueError, match="inflat"):
+        confpack.analyze(confpack.read_packing(cli_run[1] / "packing.json"), inflate=0.9)
