@@ -316,7 +316,7 @@ void registerSweep(CLI::App& app) {
       ->check(CLI::Range(1, 1000000))
       ->needs(slurm);
   sub->add_option("--array-tasks", so.maxTasks,
-                  "With --slurm: at most this many array tasks, deposits dealt round-robin (default: one per deposit)")
+                  "With --slurm: at most this many array tasks, runs dealt round-robin (default: one per run)")
       ->check(CLI::Range(1, 1000000))
       ->needs(slurm);
   sub->add_option("--sbatch-line", so.extraLines, "With --slurm: one more #SBATCH option, e.g. --qos=long (repeatable)")

@@ -111,20 +111,13 @@ void checkSlurmPath(const fs::path& sweepDir) {
 
 std::vector<ArrayTask> planArrayTasks(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
                                       std::size_t maxTasks) {
-  std::vector<ArrayTask> tasks;
-  std::map<std::size_t, std::size_t> taskOfDeposit;
-  for (std::size_t i : todo) {
-    const SweepRun& r = runs.at(i);
-    auto it = taskOfDeposit.find(r.depositIndex);
-    if (it == taskOfDeposit.end()) {
-      const std::size_t group = taskOfDeposit.size();
-      const std::size_t task = maxTasks > 0 ? group % maxTasks : group;
-      if (task == tasks.size()) tasks.emplace_back();
-      it = taskOfDeposit.emplace(r.depositIndex, task).first;
-    }
-    tasks[it->second].runs.push_back(r.name);
-  }
-  // Dealing may interleave the groups: keep each task's runs in table order.
+  // One run a task: the study takes as long as its slowest run, not as its slowest deposit group
+  // (up to 8 runs in series). A run reads its deposit or makes it, the same bytes either way (a
+  // function of its configuration and seed); two tasks that make one at once both write it whole.
+  const std::size_t count = maxTasks > 0 ? std::min(maxTasks, todo.size()) : todo.size();
+  std::vector<ArrayTask> tasks(count);
+  for (std::size_t j = 0; j < todo.size(); ++j) tasks[j % count].runs.push_back(runs.at(todo[j]).name);
+  // Dealing interleaves the table: keep each task's runs in table order.
   std::map<std::string, std::size_t> order;
   for (const SweepRun& r : runs) order[r.name] = r.index;
   for (ArrayTask& t : tasks)
@@ -145,7 +138,7 @@ std::string sbatchScript(const SlurmOptions& opt, const std::vector<ArrayTask>& 
   std::string s = "#!/bin/bash\n";
   s += fmt::format(
       "# The unfinished runs of sweep {} as a Slurm job array, written by `confpack sweep --slurm`: {} run{} in {} "
-      "task{}, the runs of one deposit in one task.\n"
+      "task{}.\n"
       "# Each task runs `confpack sweep SWEEPDIR --runs LIST`, which skips a run that is finished or held by a "
       "live task, so no run is done twice. docs/cluster.md.\n",
       sweepName, runCount, runCount == 1 ? "" : "s", tasks.size(), tasks.size() == 1 ? "" : "s");

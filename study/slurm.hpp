@@ -1,8 +1,8 @@
 #pragma once
 // A sweep as a Slurm job array (docs/cluster.md): the batch script over the runs that are still
 // unfinished, its submission through sbatch, and what Slurm says of a job (squeue). Each array
-// task runs `confpack sweep SWEEPDIR --runs LIST`; the runs of one deposit stay in one task, so
-// that each deposit is made once.
+// task runs `confpack sweep SWEEPDIR --runs LIST`, one run a task by default, so that the study
+// takes as long as its slowest run; each run reads its deposit or makes it (the same bytes).
 //
 // SWEEPDIR/slurm/study.sbatch        the last script written
 // SWEEPDIR/slurm/submitted.json      every submission: the job id and the runs of each task
@@ -21,13 +21,13 @@ namespace confpack::study {
 /// What `confpack sweep --slurm` puts in the script's #SBATCH lines. Empty strings are left out
 /// (the cluster's defaults apply).
 struct SlurmOptions {
-  std::string partition;     ///< --partition
-  std::string time;          ///< --time, Slurm's forms: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM, D-HH:MM:SS
-  std::string mem;           ///< --mem, an integer with an optional unit K, M, G or T (default M)
-  std::string account;       ///< --account
-  int cpusPerTask = 1;       ///< --cpus-per-task; also the runs a task runs at once (--jobs)
-  int arrayLimit = 0;        ///< tasks running at once (--array=0-N%LIMIT); 0 = no limit
-  std::size_t maxTasks = 0;  ///< at most this many array tasks (deposits dealt round-robin); 0 = one per deposit
+  std::string partition;                ///< --partition
+  std::string time;                     ///< --time, Slurm's forms: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM, D-HH:MM:SS
+  std::string mem;                      ///< --mem, an integer with an optional unit K, M, G or T (default M)
+  std::string account;                  ///< --account
+  int cpusPerTask = 1;                  ///< --cpus-per-task; also the runs a task runs at once (--jobs)
+  int arrayLimit = 0;                   ///< tasks running at once (--array=0-N%LIMIT); 0 = no limit
+  std::size_t maxTasks = 0;             ///< at most this many array tasks (runs dealt round-robin); 0 = one per run
   std::vector<std::string> extraLines;  ///< more #SBATCH options, each "--option[=value]"
 };
 
@@ -43,9 +43,9 @@ struct ArrayTask {
   std::vector<std::string> runs;
 };
 
-/// Deals `todo` (indices into `runs`) into array tasks: one deposit group per task, or with
-/// maxTasks > 0 and fewer tasks than groups, group g (in order of first appearance) to task
-/// g mod maxTasks.
+/// Deals `todo` (indices into `runs`) into array tasks: one run per task, or with maxTasks > 0
+/// and fewer tasks than runs, the j-th run of `todo` to task j mod maxTasks; each task's runs in
+/// table order.
 std::vector<ArrayTask> planArrayTasks(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
                                       std::size_t maxTasks = 0);
 

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
@@ -223,7 +224,7 @@ TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs,
     CHECK(s.entries() == std::vector<std::string>{"s.json"});
   }
 
-  // Two runs done by hand first: the array takes the other four, both backends of a pile in one task.
+  // Two runs done by hand first: the array takes the other four, one run a task.
   REQUIRE(s.run("sweep s.json --out sw --runs r0000,r0001 -q").code == 0);
   const auto r = s.run(
       "sweep s.json --out sw --slurm --partition short --time 0:30:00 --mem 1G --account lab "
@@ -231,16 +232,16 @@ TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs,
   REQUIRE(r.code == 0);
   const fs::path script = fs::canonical(s.dir / "sw") / "slurm" / "study.sbatch";
   CHECK(r.out == "wrote " + script.string() +
-                     ": 2 array tasks over 4 unfinished runs (2 done, 0 running or queued); "
+                     ": 4 array tasks over 4 unfinished runs (2 done, 0 running or queued); "
                      "submit with: sbatch " +
                      script.string() + "\n");
   const std::string text = testing::slurp(script);
-  CHECK_THAT(text, Catch::Contains("#SBATCH --array=0-1%4\n"));
+  CHECK_THAT(text, Catch::Contains("#SBATCH --array=0-3%4\n"));
   CHECK_THAT(text,
              Catch::Contains("#SBATCH --output=" + fs::canonical(s.dir / "sw").string() + "/slurm/logs/%A_%a.out\n"));
   for (const char* line :
        {"#SBATCH --partition=short\n", "#SBATCH --time=0:30:00\n", "#SBATCH --mem=1G\n", "#SBATCH --account=lab\n",
-        "#SBATCH --cpus-per-task=2\n", "#SBATCH --qos=low\n", "runs=(\n  r0002,r0003\n  r0004,r0005\n)\n"})
+        "#SBATCH --cpus-per-task=2\n", "#SBATCH --qos=low\n", "runs=(\n  r0002\n  r0003\n  r0004\n  r0005\n)\n"})
     CHECK_THAT(text, Catch::Contains(line));
   CHECK_THAT(text, Catch::Contains("exec '" + fs::canonical(CONFPACK_BINARY).string() + "' sweep '" +
                                    fs::canonical(s.dir / "sw").string() +
@@ -264,7 +265,37 @@ TEST_CASE("confpack sweep --slurm writes the job array over the unfinished runs,
   CHECK_THAT(status.out, Catch::Contains("r0005   missing  -   MSP xS=0 W=5 mu=0 s1 bullet\n"));
   CHECK_THAT(status.out, Catch::EndsWith("6 runs: 3 done, 0 running, 0 queued, 0 failed, 3 missing\n"));
   REQUIRE(s.run("sweep sw --slurm -q").code == 0);
-  CHECK_THAT(testing::slurp(script), Catch::Contains("runs=(\n  r0002,r0003\n  r0005\n)\n"));
+  CHECK_THAT(testing::slurp(script), Catch::Contains("runs=(\n  r0002\n  r0003\n  r0005\n)\n"));
+}
+
+TEST_CASE("confpack sweep: the runs of one deposit in separate tasks make the same deposit") {
+  // One array task a run (study/slurm.hpp): a deposit is made by whichever of its runs comes
+  // first, in any task, and must not depend on which. Two tasks at once, each running one backend
+  // of the same pile, then the deposit made again by one alone: the same file but for the time it
+  // took to make.
+  const ConfpackSession s("cmd_sweep_task_deposit");
+  std::ofstream(s.dir / "s.json") << R"({"name": "td", "base": {"box": {"length_x": 3, "width": 3, "height": 3},
+    "compaction": {"time_limit": 0.2}}, "vary": {"backend": ["nscd", "bullet"]}})";
+  // The two processes in one shell line, `first & second; wait` (the second outside the session's
+  // `cd`: absolute paths).
+  const std::string sweep = "sweep '" + (s.dir / "s.json").string() + "' --out '" + (s.dir / "sw").string() + "'";
+  const auto both = s.run(sweep + " --runs r0000 -q & '" + s.program + "' " + sweep + " --runs r0001 -q; wait");
+  INFO(both.err);
+  REQUIRE(study::runStatus(s.dir / "sw" / "runs" / "r0000") == study::RunStatus::Done);
+  REQUIRE(study::runStatus(s.dir / "sw" / "runs" / "r0001") == study::RunStatus::Done);
+  const fs::path deposit = s.dir / "sw" / "deposits" / "d0000.json";
+  REQUIRE(fs::exists(deposit));
+  const auto withoutTime = [&] {
+    nlohmann::json j = nlohmann::json::parse(testing::slurp(deposit));
+    j.erase("seconds");
+    return j.dump();
+  };
+  const std::string together = withoutTime();
+  fs::remove(deposit);
+  fs::remove_all(s.dir / "sw" / "runs" / "r0001");
+  REQUIRE(s.run("sweep s.json --out sw --runs r0001 -q").code == 0);
+  CHECK(withoutTime() == together);
+  CHECK(study::runStatus(s.dir / "sw" / "runs" / "r0001") == study::RunStatus::Done);
 }
 
 TEST_CASE("confpack sweep --slurm --submit hands the script to sbatch and records the job, its failure exits 1") {

@@ -64,7 +64,7 @@ TEST_CASE("slurm: the batch script carries every option, the logs' folder and ea
   CHECK(s ==
         "#!/bin/bash\n"
         "# The unfinished runs of sweep paper scale as a Slurm job array, written by `confpack sweep --slurm`: 3 "
-        "runs in 2 tasks, the runs of one deposit in one task.\n"
+        "runs in 2 tasks.\n"
         "# Each task runs `confpack sweep SWEEPDIR --runs LIST`, which skips a run that is finished or held by a "
         "live task, so no run is done twice. docs/cluster.md.\n"
         "#SBATCH --job-name=confpack-paper_scale\n"
@@ -130,16 +130,19 @@ TEST_CASE("slurm: a bad option value is refused by its option") {
   CHECK_THROWS_AS(study::checkSlurmPath("/scratch/100%"), std::invalid_argument);
 }
 
-TEST_CASE("slurm: the runs given are dealt one deposit per task, or over at most K tasks") {
+TEST_CASE("slurm: the runs given are dealt one per task, or over at most K tasks") {
+  // One run a task, so that the study's wall time is its slowest run's; runs of one deposit go to
+  // different tasks, each reading or making the deposit.
   const auto runs = eightRuns();
   REQUIRE(runs.size() == 8);
   REQUIRE(runs[0].depositIndex == runs[1].depositIndex);
-  // r0002 is done: d0001 has only its bullet run left.
+  // r0002 is done.
   const std::vector<std::size_t> todo = {0, 1, 3, 4, 5, 6, 7};
   CHECK(names(study::planArrayTasks(runs, todo)) ==
-        std::vector<std::vector<std::string>>{{"r0000", "r0001"}, {"r0003"}, {"r0004", "r0005"}, {"r0006", "r0007"}});
-  CHECK(names(study::planArrayTasks(runs, todo, 2)) ==
-        std::vector<std::vector<std::string>>{{"r0000", "r0001", "r0004", "r0005"}, {"r0003", "r0006", "r0007"}});
+        std::vector<std::vector<std::string>>{
+            {"r0000"}, {"r0001"}, {"r0003"}, {"r0004"}, {"r0005"}, {"r0006"}, {"r0007"}});
+  CHECK(names(study::planArrayTasks(runs, todo, 3)) ==
+        std::vector<std::vector<std::string>>{{"r0000", "r0004", "r0007"}, {"r0001", "r0005"}, {"r0003", "r0006"}});
   CHECK(names(study::planArrayTasks(runs, {5}, 3)) == std::vector<std::vector<std::string>>{{"r0005"}});
   CHECK(study::planArrayTasks(runs, {}).empty());
 }
