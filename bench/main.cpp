@@ -122,6 +122,10 @@ void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
   sub->add_option("--micro-filter", st->microDef.filter, "Regex selecting micro-benchmarks by name")
       ->needs(micro)
       ->capture_default_str();
+  sub->add_option("--micro-pile", st->microDef.pile,
+                  "With --micro: also time MPRGP's solve of this packing's step (MprgpSolve/sgs|cholesky/pile), e.g. "
+                  "of a run stopped in its creep")
+      ->needs(micro);
   sub->add_option("--micro-repetitions", st->microDef.repetitions,
                   "Repetitions of each micro-benchmark (reported: mean, median, stddev, cv)")
       ->needs(micro)

@@ -26,6 +26,7 @@
 #include "collision/polyhedron_contact.hpp"
 #include "compaction/deposition.hpp"
 #include "core/build_info.hpp"
+#include "core/packing_io.hpp"
 #include "core/population.hpp"
 #include "core/random.hpp"
 
@@ -65,6 +66,12 @@ constexpr double kDt = 1e-3;
 /// 30,000).
 constexpr int kSettleSteps = 10;
 constexpr int kSettleSweeps = 50;
+/// Steps the nscd backend takes a `--micro-pile` packing from rest before its step is timed: enough
+/// to load the network and fill the contact cache, few enough to leave the pile where it was.
+constexpr int kPileSteps = 5;
+/// Their step [t0]: the adaptive step of a creep (0.04 to 0.07 on r0008 and msp-w10 at t = 30),
+/// whose solves take hundreds of iterations where a step of 1e-3 takes tens.
+constexpr double kPileDt = 0.05;
 /// Expected solid fraction used to size the deposit boxes (the deposition default) [-].
 constexpr double kSolidFraction = 0.6;
 constexpr double kPileHeight = 16.0;  // [d_L]
@@ -281,11 +288,12 @@ struct SolverFixture {
   std::vector<nscd::CandidatePair> pairs;
   nscd::ContactSolver solver;
   double rowsPerGrain = 0.0;
+  double dt = kDt;  ///< the step [t0]
 
   /// Rows prepared from the contacts with zero impulses, velocities back to v_free (a cold start).
   void reset(const nscd::NscdSettings& settings) {
     velocities = freeVelocities;
-    solver.prepare(contacts, positionMid, bodies, box, core::WallMaterial{}, kDt, settings);  // frictionless walls
+    solver.prepare(contacts, positionMid, bodies, box, core::WallMaterial{}, dt, settings);  // frictionless walls
   }
 };
 
@@ -315,6 +323,8 @@ nscd::NscdSettings mprgpSettings() {
 // as a connected network (Z about 6) with no fall to wait for. The nscd backend (Gauss-Seidel,
 // capped sweeps: the cheapest settling) then runs a few steps of gravity on it, and one step's
 // phases are rebuilt from its state: q_m, inverse masses, free velocities, pairs and contacts.
+SolverFixture fixtureAfter(const core::SystemDef& system, const core::ContactBackend& backend, double dt);
+
 SolverFixture makeSolverFixture(int n, std::uint64_t seed) {
   const core::BoxDef box = boxFor(n);
   const compaction::Deposit dep = sphereDeposit(box, n, seed);
@@ -328,23 +338,45 @@ SolverFixture makeSolverFixture(int n, std::uint64_t seed) {
   const nlohmann::json options = {{"solver", "nlgs"}, {"max_iterations", kSettleSweeps}, {"min_iterations", 1}};
   const std::unique_ptr<core::ContactBackend> backend = backends::makeBackend("nscd", system, options);
   for (int s = 0; s < kSettleSteps; ++s) backend->step(kDt);
+  return fixtureAfter(system, *backend, kDt);
+}
 
+// A pile of the user's (`--micro-pile`, a packing file, e.g. of a run stopped in its creep): the
+// nscd backend at its defaults takes it from rest for kPileSteps steps, which loads its contact
+// network and warms the impulses, and the next step's phases are rebuilt as above.
+SolverFixture makePileFixture(const std::filesystem::path& file) {
+  const core::Packing packing = core::readPacking(file);
+  core::SystemDef system;
+  system.box = packing.box;
+  system.grains = packing.grains;
+  system.walls = packing.walls;
+  const std::unique_ptr<core::ContactBackend> backend = backends::makeBackend("nscd", system, nlohmann::json::object());
+  for (int s = 0; s < kPileSteps; ++s) backend->step(kPileDt);
+  return fixtureAfter(system, *backend, kPileDt);
+}
+
+// One step's contact problem after the backend's last step: q_m, inverse masses, free velocities,
+// pairs and contacts, and the rows of a cold start.
+SolverFixture fixtureAfter(const core::SystemDef& system, const core::ContactBackend& backend, double dt) {
+  const core::BoxDef& box = system.box;
+  const std::size_t n = system.grains.size();
   SolverFixture f;
   f.box = box;
+  f.dt = dt;
   const nscd::NscdSettings settings;
-  const std::vector<core::BodyState>& states = backend->states();
+  const std::vector<core::BodyState>& states = backend.states();
   std::vector<Quat> orientations;
   f.bodies.resize(states.size() + 1);  // last: the static walls
   f.freeVelocities.resize(states.size() + 1);
   for (std::size_t i = 0; i < states.size(); ++i) {
     const Grain& g = system.grains[i];
     // q_m = q + dt (1 - theta) v; v_free = v + dt g (spheres: no gyroscopic term).
-    f.positionMid.push_back(states[i].position + kDt * (1.0 - settings.theta) * states[i].velocity);
+    f.positionMid.push_back(states[i].position + dt * (1.0 - settings.theta) * states[i].velocity);
     orientations.push_back(states[i].orientation);
     const core::Mat3 rot = states[i].orientation.toRotationMatrix();
     f.bodies[i].invMass = 1.0 / (system.density * g.volume());
     f.bodies[i].invInertia = rot * g.bodyInertia(system.density).inverse() * rot.transpose();
-    f.freeVelocities[i].v = states[i].velocity + kDt * system.gravity;
+    f.freeVelocities[i].v = states[i].velocity + dt * system.gravity;
     f.freeVelocities[i].w = states[i].angularVelocity;
   }
   nscd::NarrowPhase narrow(box, system.grains, settings.alertDistance);
@@ -355,7 +387,7 @@ SolverFixture makeSolverFixture(int n, std::uint64_t seed) {
   for (int i = 0; i < static_cast<int>(states.size()); ++i)
     narrow.collideWalls(i, f.positionMid, orientations, f.contacts);
   f.reset(settings);
-  f.rowsPerGrain = static_cast<double>(f.solver.rowCount()) / n;
+  f.rowsPerGrain = static_cast<double>(f.solver.rowCount()) / static_cast<double>(n);
   if (f.solver.rowCount() == 0) throw std::runtime_error("solver fixture: the settled pile has no contact rows");
   return f;
 }
@@ -468,28 +500,38 @@ void mprgpBenchmark(benchmark::State& state, int n, std::uint64_t seed) {
 // preconditioner, rows prepared afresh outside the timing: what the "cholesky" preconditioner's
 // fewer iterations cost against the sweeps' many (docs/performance.md, "The preconditioner and the creep's solve").
 // Items are solves; the counters say how many iterations and factorisations a solve took.
-void mprgpSolveBenchmark(benchmark::State& state, const std::string& preconditioner, int n, std::uint64_t seed) {
-  SolverFixture* f = cachedFixture<SolverFixture, int>(state, n, [&] { return makeSolverFixture(n, seed); });
-  if (!f) return;
+void timeMprgpSolves(benchmark::State& state, SolverFixture& f, const std::string& preconditioner) {
   nscd::NscdSettings settings = nscd::defaultsFor(nscd::SolverKind::Mprgp);
   settings.preconditioner = preconditioner == "cholesky" ? nscd::PreconditionerKind::Cholesky
                                                          : nscd::PreconditionerKind::SymmetricGaussSeidel;
   std::int64_t iterations = 0, factorisations = 0;
   for (auto _ : state) {
     state.PauseTiming();
-    f->reset(settings);
+    f.reset(settings);
     state.ResumeTiming();
-    iterations += f->solver.solve(f->velocities, settings);
-    factorisations += f->solver.mprgpSteps().factorisations + f->solver.mprgpSteps().factorUpdates;
+    iterations += f.solver.solve(f.velocities, settings);
+    factorisations += f.solver.mprgpSteps().factorisations + f.solver.mprgpSteps().factorUpdates;
     benchmark::ClobberMemory();
   }
   const double solves = std::max<double>(1.0, static_cast<double>(state.iterations()));
   state.SetItemsProcessed(state.iterations());
   state.counters["iterations_per_solve"] = static_cast<double>(iterations) / solves;
+  state.counters["rows"] = f.solver.rowCount();
   // Only where it can be non-zero: a counter that is 0 in every repetition has an undefined
   // coefficient of variation, which Google Benchmark writes as a NaN its JSON reader refuses.
   if (settings.preconditioner == nscd::PreconditionerKind::Cholesky)
     state.counters["factor_changes_per_solve"] = static_cast<double>(factorisations) / solves;
+}
+
+void mprgpSolveBenchmark(benchmark::State& state, const std::string& preconditioner, int n, std::uint64_t seed) {
+  SolverFixture* f = cachedFixture<SolverFixture, int>(state, n, [&] { return makeSolverFixture(n, seed); });
+  if (f) timeMprgpSolves(state, *f, preconditioner);
+}
+
+void pileSolveBenchmark(benchmark::State& state, const std::string& preconditioner, const std::filesystem::path& file) {
+  SolverFixture* f =
+      cachedFixture<SolverFixture, std::string>(state, file.string(), [&] { return makePileFixture(file); });
+  if (f) timeMprgpSolves(state, *f, preconditioner);
 }
 
 struct Entry {
@@ -537,6 +579,18 @@ bool filterSelects(const std::string& filter, const std::string& name) {
 
 }  // namespace
 
+// Every benchmark, with the two of `--micro-pile` when it names a packing.
+std::vector<Entry> entriesFor(const MicroBenchDef& def) {
+  std::vector<Entry> e = entries();
+  if (!def.pile.empty())
+    for (const char* preconditioner : {"sgs", "cholesky"})
+      e.push_back({fmt::format("MprgpSolve/{}/pile", preconditioner),
+                   [file = def.pile, p = std::string(preconditioner)](benchmark::State& s, std::uint64_t) {
+                     pileSolveBenchmark(s, p, file);
+                   }});
+  return e;
+}
+
 const std::vector<std::string>& microBenchNames() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> out;
@@ -547,15 +601,18 @@ const std::vector<std::string>& microBenchNames() {
 }
 
 void validateMicroBench(const MicroBenchDef& def) {
+  if (!def.pile.empty() && !std::filesystem::is_regular_file(def.pile))
+    throw std::invalid_argument(fmt::format("--micro-pile: {}: not a readable packing file", def.pile.string()));
   if (def.repetitions < 1)
     throw std::invalid_argument(fmt::format("--micro-repetitions: must be at least 1 (got {})", def.repetitions));
   if (!(def.minTime > 0.0) || !std::isfinite(def.minTime))
     throw std::invalid_argument(fmt::format("--micro-min-time: must be a positive number (got {})", def.minTime));
   try {
-    if (std::none_of(microBenchNames().begin(), microBenchNames().end(),
-                     [&](const std::string& n) { return filterSelects(def.filter, n); }))
-      throw std::invalid_argument(fmt::format("--micro-filter '{}' selects no benchmark (names: {})", def.filter,
-                                              fmt::join(microBenchNames(), ", ")));
+    std::vector<std::string> names;
+    for (const Entry& e : entriesFor(def)) names.push_back(e.name);
+    if (std::none_of(names.begin(), names.end(), [&](const std::string& n) { return filterSelects(def.filter, n); }))
+      throw std::invalid_argument(
+          fmt::format("--micro-filter '{}' selects no benchmark (names: {})", def.filter, fmt::join(names, ", ")));
   } catch (const std::regex_error& e) {
     throw std::invalid_argument(fmt::format("--micro-filter '{}' is not a valid regex ({})", def.filter, e.what()));
   }
@@ -563,7 +620,7 @@ void validateMicroBench(const MicroBenchDef& def) {
 
 void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
   validateMicroBench(def);
-  for (const Entry& e : entries())
+  for (const Entry& e : entriesFor(def))
     benchmark::RegisterBenchmark(e.name.c_str(), [run = e.run, seed = def.seed](benchmark::State& s) {
       run(s, seed);
     })->Unit(benchmark::kMicrosecond);

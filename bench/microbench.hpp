@@ -16,6 +16,7 @@
 //   MprgpSolve/<p>/spheres/N    a whole cold MPRGP solve to 1e-10 on the same rows, preconditioned
 //                               by "sgs" or "cholesky" (N = 2,000 and 8,000), with its iterations
 //                               and, for "cholesky", its factorisations and factor updates.
+//   MprgpSolve/<p>/pile         the same on the pile of --micro-pile PACKING (rows: counter)
 // The fixtures (deposits, poses, contact networks) are built once per process, outside the
 // timed loops, and only for the benchmarks that the filter selects.
 #include <cstdint>
@@ -33,9 +34,12 @@ struct MicroBenchDef {
   double minTime = 0.3;      ///< minimum timed duration of one repetition [s], > 0 (Google Benchmark's
                              ///< default is 0.5; 0.3 keeps the default run near a minute)
   std::uint64_t seed = 1;    ///< seed of the deposits and of the random poses
+  /// A packing file (--micro-pile, e.g. of a run stopped in its creep): MprgpSolve/<p>/pile then
+  /// times a solve of its step after kPileSteps from rest; empty: none.
+  std::filesystem::path pile;
 };
 
-/// Names of every micro-benchmark, in run order.
+/// Names of every micro-benchmark, in run order (without the --micro-pile ones).
 const std::vector<std::string>& microBenchNames();
 
 /// Throws std::invalid_argument if a field is out of range, the filter is not a valid (POSIX

@@ -126,3 +126,33 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
   CHECK(exactSolve["iterations_per_solve"].get<double>() < sgsSolve["iterations_per_solve"].get<double>());
   CHECK(exactSolve["factor_changes_per_solve"].get<double>() >= 1.0);
 }
+
+TEST_CASE("bench --micro --micro-pile times MPRGP's solve of a given packing's step, and refuses a missing file") {
+  // A small deposit, the user's pile: both preconditioners solve its step, on the same rows, the
+  // exact one in no more iterations (a loose deposit's step is solved in one or two).
+  ConfpackSession s("micro_pile", CONFPACK_BENCH_BINARY);
+  const ConfpackSession maker("micro_pile_deposit");
+  REQUIRE(maker.run("deposit --length-x 4 --width 4 --periodic-y --height 4 --out d -q").code == 0);
+  const fs::path packing = maker.dir / "d" / "packing.json";
+  const CommandResult r =
+      s.run("--micro --micro-pile '" + packing.string() +
+            "' --micro-filter 'Solve/.*/pile' --micro-repetitions 1 --micro-min-time 0.01 --out m.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const json report = json::parse(confpack::testing::slurp(s.dir / "m.json"));
+  std::map<std::string, json> byName;
+  for (const json& b : report["benchmarks"]) byName[b["run_name"].get<std::string>()] = b;
+  REQUIRE(byName.size() == 2);
+  const json& sgs = byName["MprgpSolve/sgs/pile"];
+  const json& exact = byName["MprgpSolve/cholesky/pile"];
+  CHECK(sgs["rows"].get<double>() > 0.0);
+  CHECK(exact["rows"].get<double>() == sgs["rows"].get<double>());
+  CHECK(sgs["iterations_per_solve"].get<double>() >= 1.0);
+  CHECK(exact["iterations_per_solve"].get<double>() <= sgs["iterations_per_solve"].get<double>());
+
+  const CommandResult missing = s.run("--micro --micro-pile nowhere.json --out m2.json");
+  CHECK(missing.code == 2);
+  CHECK(lineCount(missing.err) == 1);
+  CHECK(missing.err.find("--micro-pile: nowhere.json") != std::string::npos);
+  CHECK_FALSE(fs::exists(s.dir / "m2.json"));
+}
