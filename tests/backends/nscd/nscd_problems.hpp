@@ -2,7 +2,9 @@
 // Systems and problems shared by the nscd tests: piles that touch from the first step, one cold
 // step's contact problem, and the broad phase's candidate pairs.
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "backends/nscd/broad_phase.hpp"
@@ -111,6 +113,30 @@ inline VelocityComparison compareVelocities(const ColdStep& a, const ColdStep& b
     c.difference = std::max(c.difference, (a.velocities[i].v - b.velocities[i].v).norm());
   }
   return c;
+}
+
+/// A column of `beads` touching unit spheres on the floor of a 5 x 5 box, one cold step with
+/// `settings`, checked: stopped dead (to `relative` of a step's fall), and the contact under bead j
+/// (0 the lowest; the floor under bead 0) carrying the beads j.., (beads - j) m g dt, to `relative`.
+/// Returns the step for further checks.
+inline std::unique_ptr<ColdStep> checkBeadColumn(const nscd::NscdSettings& settings, int beads, double relative) {
+  core::SystemDef s = boxSystem(5.0, 5.0, false, 0.0);
+  for (int k = 0; k < beads; ++k) s.grains.push_back(sphere(1.0, Vec3(2.5, 2.5, 0.5 + k)));
+  auto step = std::make_unique<ColdStep>(s, settings);
+  REQUIRE(step->contacts.size() == static_cast<std::size_t>(beads));  // floor + beads - 1 pairs
+  CHECK(step->solver.residual() < settings.tolerance);
+  double largest = 0.0;
+  for (std::size_t i = 0; i + 1 < step->velocities.size(); ++i)
+    largest = std::max({largest, step->velocities[i].v.norm(), step->velocities[i].w.norm()});
+  CHECK(largest < relative * ColdStep::kDt);
+  const double weight = s.grains[0].volume() * ColdStep::kDt;
+  for (std::size_t c = 0; c < step->contacts.size(); ++c) {
+    const nscd::ContactGeometry& g = step->contacts[c];
+    const int carried = g.b < 0 ? beads : beads - 1 - std::min(g.a, g.b);
+    INFO("contact " << c << " between " << g.a << " and " << g.b);
+    CHECK(step->solver.normalImpulse(static_cast<int>(c), 0) == Approx(carried * weight).epsilon(relative));
+  }
+  return step;
 }
 
 }  // namespace confpack::testing

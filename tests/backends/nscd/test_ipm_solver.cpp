@@ -46,25 +46,7 @@ void checkFaceContactSolve(const core::SystemDef& s, const nscd::NscdSettings& s
 
 TEST_CASE("nscd ipm: a column of touching beads is stopped dead, its k-th contact from the top carrying k m g dt",
           "[nscd]") {
-  core::SystemDef s = testing::boxSystem(5.0, 5.0, false, 0.0);
-  constexpr int kBeads = 6;
-  for (int k = 0; k < kBeads; ++k) s.grains.push_back(testing::sphere(1.0, Vec3(2.5, 2.5, 0.5 + k)));
-  const ColdStep step(s, ipm());
-  REQUIRE(step.contacts.size() == kBeads);  // floor + 5 pairs
-  CHECK(step.solver.residual() < 1e-12);
-  double largest = 0.0;
-  for (std::size_t i = 0; i + 1 < step.velocities.size(); ++i)
-    largest = std::max({largest, step.velocities[i].v.norm(), step.velocities[i].w.norm()});
-  CHECK(largest < 1e-12 * ColdStep::kDt);
-  // The contact under bead j (0 the lowest) carries the beads j..top: (kBeads - j) m g dt.
-  const double weight = s.grains[0].volume() * ColdStep::kDt;
-  for (std::size_t c = 0; c < step.contacts.size(); ++c) {
-    const nscd::ContactGeometry& g = step.contacts[c];
-    // The floor (a wall: b < 0) carries every bead; the pair (j, j + 1) the beads above j.
-    const int carried = g.b < 0 ? kBeads : kBeads - 1 - std::min(g.a, g.b);
-    INFO("contact " << c << " between " << g.a << " and " << g.b);
-    CHECK(step.solver.normalImpulse(static_cast<int>(c), 0) == Approx(carried * weight).epsilon(1e-12));
-  }
+  testing::checkBeadColumn(ipm(), 6, 1e-12);
 }
 
 TEST_CASE("nscd ipm: on a touching sphere pile it reaches the velocities MPRGP reaches, in a few dozen iterations",
