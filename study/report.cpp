@@ -21,26 +21,12 @@
 #include "study/report_figures.hpp"
 #include "study/report_lambda.hpp"
 #include "study/report_relaxation.hpp"
+#include "study/report_study.hpp"
 
 namespace confpack::study {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-namespace {
-
-/// Standard error of a replica mean, std / sqrt(n); none below two replicas.
-std::optional<double> knownStandardError(const ReplicaStat& st) {
-  if (st.n < 2) return std::nullopt;
-  return st.std / std::sqrt(static_cast<double>(st.n));
-}
-
-/// The same as a fit's weight or a figure's error bar: 0 below two replicas (no weight, no bar).
-double standardError(const ReplicaStat& st) {
-  return knownStandardError(st).value_or(0.0);
-}
-
-}  // namespace
 
 ReplicaStat replicaStat(const std::vector<double>& values) {
   ReplicaStat s;
@@ -64,133 +50,6 @@ BackendDifference backendDifference(const ReplicaStat& a, const ReplicaStat& b) 
 }
 
 namespace {
-
-// ---------------------------------------------------------------------------------------------
-// Configurations and grouping
-
-// A value of a setting the study varies beyond the named axes (a sweep's setting axis, study/
-// sweep.hpp), as it names and orders configurations: numbers in numeric order (45 before 100),
-// other values by their text. The name is the setting's short name, for the labels only.
-struct SettingValue {
-  std::string name;
-  std::string text;
-  std::optional<double> number;
-
-  std::weak_ordering operator<=>(const SettingValue& o) const {
-    if (number && o.number)
-      return *number < *o.number   ? std::weak_ordering::less
-             : *number > *o.number ? std::weak_ordering::greater
-                                   : std::weak_ordering::equivalent;
-    if (number.has_value() != o.number.has_value())
-      return number ? std::weak_ordering::less : std::weak_ordering::greater;
-    return text <=> o.text;
-  }
-  bool operator==(const SettingValue& o) const { return (*this <=> o) == 0; }
-};
-
-struct ConfKey {
-  int shape = 0;
-  double xs = 0.0;
-  double mu = 0.0;
-  std::vector<SettingValue> settings;  // of the study's varied settings, in their order
-  bool periodic = false;
-  double width = 0.0;
-  auto operator<=>(const ConfKey&) const = default;
-};
-
-ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
-                const std::vector<std::string>& names) {
-  ConfKey k{static_cast<int>(c.population.shape),
-            c.population.smallFraction,
-            c.walls.friction,
-            {},
-            c.box.periodicY,
-            c.box.width};
-  for (std::size_t i = 0; i < paths.size(); ++i) {
-    SettingValue v{names[i], settingText(c, paths[i]), std::nullopt};
-    char* end = nullptr;
-    const double x = std::strtod(v.text.c_str(), &end);
-    if (!v.text.empty() && end == v.text.c_str() + v.text.size() && std::isfinite(x)) v.number = x;
-    k.settings.push_back(std::move(v));
-  }
-  return k;
-}
-
-// Series of a geometrical-model fit: everything but the width.
-struct SeriesKey {
-  int shape = 0;
-  double xs = 0.0;
-  double mu = 0.0;
-  std::vector<SettingValue> settings;
-  auto operator<=>(const SeriesKey&) const = default;
-};
-
-SeriesKey seriesOf(const ConfKey& k) {
-  return {k.shape, k.xs, k.mu, k.settings};
-}
-
-// "Backend" of "backend": a name at the start of a sentence.
-std::string capitalized(std::string name) {
-  if (!name.empty()) name[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(name[0])));
-  return name;
-}
-
-std::string familyOf(int shape, double xs) {
-  return fmt::format("{}{}", xs > 0.0 ? "B" : "M", shape == static_cast<int>(core::ShapeKind::Sphere) ? "SP" : "PP");
-}
-
-// " alpha_deg=45 E=0.5" (sep "=") or ", alpha_deg = 45, E = 0.5" (sep " = ", lead ", ").
-std::string settingsText(const std::vector<SettingValue>& settings, const char* lead = " ", const char* sep = "=") {
-  std::string out;
-  for (const SettingValue& v : settings) out += fmt::format("{}{}{}{}", lead, v.name, sep, v.text);
-  return out;
-}
-
-std::string widthText(const ConfKey& k) {
-  return k.periodic ? fmt::format("biperiodic ({})", core::numberText(k.width)) : core::numberText(k.width);
-}
-
-std::string seriesText(const SeriesKey& s) {
-  return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), core::numberText(s.xs), core::numberText(s.mu),
-                     settingsText(s.settings));
-}
-
-// The published values of --reference as the sections show them: found per series, each citation
-// numbered [1], [2], ... in the order the page first uses it, so the summary's footnotes and the
-// figures' legends agree.
-class References {
- public:
-  explicit References(const std::optional<ReferenceValues>& values) : values_(values ? &*values : nullptr) {}
-
-  bool given() const { return values_ != nullptr; }
-  const ReferenceValues& values() const { return *values_; }
-
-  const ReferenceValue* find(const SeriesKey& s, const std::string& key) const {
-    return values_ ? values_->find(familyOf(s.shape, s.xs), s.xs, s.mu, key) : nullptr;
-  }
-  int number(const std::string& citation) {
-    const auto it = std::find(citations_.begin(), citations_.end(), citation);
-    if (it != citations_.end()) return static_cast<int>(it - citations_.begin()) + 1;
-    citations_.push_back(citation);
-    return static_cast<int>(citations_.size());
-  }
-  // "0.64 ± 0.01 [1]"
-  std::string cell(const ReferenceValue& v) {
-    return fmt::format("{:.4g} ± {:.2g} [{}]", v.value, v.uncertainty, number(v.citation));
-  }
-  const std::vector<std::string>& citations() const { return citations_; }
-
- private:
-  const ReferenceValues* values_;
-  std::vector<std::string> citations_;
-};
-
-// Mean +- std (n): 4 significant digits for the mean, 2 for the spread.
-std::string statText(const ReplicaStat& s) {
-  if (s.n == 0) return "missing";
-  if (s.n == 1) return fmt::format("{:.4g} (n=1)", s.mean);
-  return fmt::format("{:.4g} ± {:.2g} (n={})", s.mean, s.std, s.n);
-}
 
 // ---------------------------------------------------------------------------------------------
 // Profiles written by the runs (study/csv_table.hpp), averaged over replicas
@@ -250,102 +109,6 @@ std::size_t tableGroupOf(const std::string& key) {
   return tableGroups().size() - 1;
 }
 
-// ---------------------------------------------------------------------------------------------
-// The study as the sections see it: its runs grouped by configuration and side, the compared
-// setting's value (the backend unless --compare names another, study/report_compare.hpp).
-
-class StudyView {
- public:
-  StudyView(const fs::path& sweepDir, const std::string& compareKey)
-      : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
-    std::vector<SweepRun> runs;
-    for (const RunRecord& r : records)
-      if (!r.settle) runs.push_back(r.run);
-    if (!compareKey.empty()) compared = compareSetting(compareKey, runs);
-    if (!compared.keepsSettles()) std::erase_if(records, [](const RunRecord& r) { return r.settle; });
-    runSettings = variedSettings(runs);
-    settings = compared.familySettings(runs);
-    settingNames = study::settingNames(settings);
-    for (const RunRecord& r : records) {
-      const std::string& side = recordSides.emplace_back(compared.sideOf(r.run));
-      if (std::find(sides.begin(), sides.end(), side) == sides.end()) sides.push_back(side);
-      groups[confKey(r.run.config, settings, settingNames)][side].push_back(&r);
-      if (r.status != RunStatus::Done) continue;
-      for (const auto& [k, v] : r.values) keys.insert(k);
-      for (const auto& e : fs::directory_iterator(runDir(r)))
-        if (e.path().extension() == ".csv") csvNames.insert(e.path().filename().string());
-    }
-  }
-  StudyView(const StudyView&) = delete;  // groups point into records
-  StudyView& operator=(const StudyView&) = delete;
-
-  fs::path runDir(const RunRecord& r) const { return sweepDir / "runs" / r.run.name; }
-  bool pair() const { return sides.size() >= 2; }
-  const std::string& sideOf(const RunRecord& r) const {
-    return recordSides[static_cast<std::size_t>(&r - records.data())];
-  }
-
-  // Replica statistics of one quantity over the finished runs of (configuration, side).
-  ReplicaStat statOf(const ConfKey& k, const std::string& side, const std::string& key) const {
-    const auto g = groups.find(k);
-    if (g == groups.end() || !g->second.count(side)) return ReplicaStat{};
-    std::vector<double> v;
-    for (const RunRecord* r : g->second.at(side)) {
-      if (r->status != RunStatus::Done) continue;
-      const auto it = r->values.find(key);
-      if (it != r->values.end() && it->second) v.push_back(*it->second);
-    }
-    return replicaStat(v);
-  }
-
-  // The sample of series `sk` that a per-family quantity is read from: among the configurations
-  // with a value of `key` for `side`, the widest confined one, or with `biperiodicFirst` the
-  // biperiodic one when there is one; null when none has a value.
-  const ConfKey* sampleOf(const SeriesKey& sk, const std::string& side, const std::string& key,
-                          bool biperiodicFirst) const {
-    const ConfKey* sample = nullptr;
-    for (const auto& [k, _] : groups) {
-      if (seriesOf(k) != sk || (k.periodic && !biperiodicFirst) || statOf(k, side, key).n == 0) continue;
-      if (!sample || (k.periodic && !sample->periodic) || (k.periodic == sample->periodic && k.width > sample->width))
-        sample = &k;
-    }
-    return sample;
-  }
-
-  // A key that is null in every run (nematic order of spheres) does not apply to this study.
-  bool applies(const std::string& key) const {
-    for (const RunRecord& r : records) {
-      const auto it = r.values.find(key);
-      if (it != r.values.end() && it->second) return true;
-    }
-    return false;
-  }
-
-  std::set<SeriesKey> seriesKeys() const {
-    std::set<SeriesKey> out;
-    for (const auto& [k, _] : groups) out.insert(seriesOf(k));
-    return out;
-  }
-
-  fs::path sweepDir;
-  SweepSpec spec;
-  std::vector<RunRecord> records;
-  ComparedSetting compared;               // the backends unless --compare names another setting
-  std::vector<std::string> recordSides;   // each record's side, as compared.sideOf
-  std::vector<std::string> sides;         // the compared values in table order (then a settled series)
-  std::vector<std::string> runSettings;   // varied beyond the named axes, as the runs' labels show them
-  std::vector<std::string> settings;      // of those, the families': configuration paths (familySettings)
-  std::vector<std::string> settingNames;  // their short names
-  std::map<ConfKey, std::map<std::string, std::vector<const RunRecord*>>> groups;
-  std::set<std::string> keys;      // every quantity of a finished run
-  std::set<std::string> csvNames;  // every profile file of a finished run
-};
-
-bool unequilibrated(const RunRecord& r) {
-  const auto it = r.values.find("equilibrium/reached");
-  return r.status == RunStatus::Done && it != r.values.end() && it->second && *it->second == 0.0;
-}
-
 ReportSummary countRuns(const StudyView& study) {
   ReportSummary s;
   for (const RunRecord& r : study.records) {
@@ -360,11 +123,6 @@ ReportSummary countRuns(const StudyView& study) {
     if (unequilibrated(r)) ++s.unequilibrated;
   }
   return s;
-}
-
-// The sweep folder's own name (its last path component, "." and ".." resolved).
-std::string sweepName(const StudyView& study) {
-  return fs::weakly_canonical(fs::absolute(study.sweepDir)).filename().string();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -602,12 +360,6 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
 
 // ---------------------------------------------------------------------------------------------
 // The answers first: one row per family and backend, then nscd against Bullet
-
-std::string familyName(const SeriesKey& s) {
-  return fmt::format("{}: {} x_S = {}, mu_w = {}{}", familyOf(s.shape, s.xs),
-                     s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids",
-                     core::numberText(s.xs), core::numberText(s.mu), settingsText(s.settings, ", ", " = "));
-}
 
 // The families' samples for lambda_L (study/report_lambda.hpp): per series and backend, the
 // replicas' phi(y) at the confined width nearest `target`, and C of the series' phi(W) fit.

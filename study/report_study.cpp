@@ -1,0 +1,153 @@
+// The study as the report's sections see it (study/report_study.hpp): configurations, series and
+// their names, and the view of a sweep folder's runs grouped by them.
+#include "study/report_study.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+
+#include "core/settings_table.hpp"
+
+namespace confpack::study {
+
+namespace fs = std::filesystem;
+
+std::optional<double> knownStandardError(const ReplicaStat& st) {
+  if (st.n < 2) return std::nullopt;
+  return st.std / std::sqrt(static_cast<double>(st.n));
+}
+
+double standardError(const ReplicaStat& st) {
+  return knownStandardError(st).value_or(0.0);
+}
+
+namespace {
+
+ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
+                const std::vector<std::string>& names) {
+  ConfKey k{static_cast<int>(c.population.shape),
+            c.population.smallFraction,
+            c.walls.friction,
+            {},
+            c.box.periodicY,
+            c.box.width};
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    SettingValue v{names[i], settingText(c, paths[i]), std::nullopt};
+    char* end = nullptr;
+    const double x = std::strtod(v.text.c_str(), &end);
+    if (!v.text.empty() && end == v.text.c_str() + v.text.size() && std::isfinite(x)) v.number = x;
+    k.settings.push_back(std::move(v));
+  }
+  return k;
+}
+
+}  // namespace
+
+SeriesKey seriesOf(const ConfKey& k) {
+  return {k.shape, k.xs, k.mu, k.settings};
+}
+
+std::string capitalized(std::string name) {
+  if (!name.empty()) name[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(name[0])));
+  return name;
+}
+
+std::string familyOf(int shape, double xs) {
+  return fmt::format("{}{}", xs > 0.0 ? "B" : "M", shape == static_cast<int>(core::ShapeKind::Sphere) ? "SP" : "PP");
+}
+
+std::string settingsText(const std::vector<SettingValue>& settings, const char* lead, const char* sep) {
+  std::string out;
+  for (const SettingValue& v : settings) out += fmt::format("{}{}{}{}", lead, v.name, sep, v.text);
+  return out;
+}
+
+std::string widthText(const ConfKey& k) {
+  return k.periodic ? fmt::format("biperiodic ({})", core::numberText(k.width)) : core::numberText(k.width);
+}
+
+std::string seriesText(const SeriesKey& s) {
+  return fmt::format("{} x_S={} mu_w={}{}", familyOf(s.shape, s.xs), core::numberText(s.xs), core::numberText(s.mu),
+                     settingsText(s.settings));
+}
+
+std::string familyName(const SeriesKey& s) {
+  return fmt::format("{}: {} x_S = {}, mu_w = {}{}", familyOf(s.shape, s.xs),
+                     s.shape == static_cast<int>(core::ShapeKind::Sphere) ? "spheres" : "pinacoids",
+                     core::numberText(s.xs), core::numberText(s.mu), settingsText(s.settings, ", ", " = "));
+}
+
+std::string statText(const ReplicaStat& s) {
+  if (s.n == 0) return "missing";
+  if (s.n == 1) return fmt::format("{:.4g} (n=1)", s.mean);
+  return fmt::format("{:.4g} ± {:.2g} (n={})", s.mean, s.std, s.n);
+}
+
+StudyView::StudyView(const fs::path& sweepDir, const std::string& compareKey)
+    : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
+  std::vector<SweepRun> runs;
+  for (const RunRecord& r : records)
+    if (!r.settle) runs.push_back(r.run);
+  if (!compareKey.empty()) compared = compareSetting(compareKey, runs);
+  if (!compared.keepsSettles()) std::erase_if(records, [](const RunRecord& r) { return r.settle; });
+  runSettings = variedSettings(runs);
+  settings = compared.familySettings(runs);
+  settingNames = study::settingNames(settings);
+  for (const RunRecord& r : records) {
+    const std::string& side = recordSides.emplace_back(compared.sideOf(r.run));
+    if (std::find(sides.begin(), sides.end(), side) == sides.end()) sides.push_back(side);
+    groups[confKey(r.run.config, settings, settingNames)][side].push_back(&r);
+    if (r.status != RunStatus::Done) continue;
+    for (const auto& [k, v] : r.values) keys.insert(k);
+    for (const auto& e : fs::directory_iterator(runDir(r)))
+      if (e.path().extension() == ".csv") csvNames.insert(e.path().filename().string());
+  }
+}
+
+ReplicaStat StudyView::statOf(const ConfKey& k, const std::string& side, const std::string& key) const {
+  const auto g = groups.find(k);
+  if (g == groups.end() || !g->second.count(side)) return ReplicaStat{};
+  std::vector<double> v;
+  for (const RunRecord* r : g->second.at(side)) {
+    if (r->status != RunStatus::Done) continue;
+    const auto it = r->values.find(key);
+    if (it != r->values.end() && it->second) v.push_back(*it->second);
+  }
+  return replicaStat(v);
+}
+
+const ConfKey* StudyView::sampleOf(const SeriesKey& sk, const std::string& side, const std::string& key,
+                                   bool biperiodicFirst) const {
+  const ConfKey* sample = nullptr;
+  for (const auto& [k, _] : groups) {
+    if (seriesOf(k) != sk || (k.periodic && !biperiodicFirst) || statOf(k, side, key).n == 0) continue;
+    if (!sample || (k.periodic && !sample->periodic) || (k.periodic == sample->periodic && k.width > sample->width))
+      sample = &k;
+  }
+  return sample;
+}
+
+bool StudyView::applies(const std::string& key) const {
+  for (const RunRecord& r : records) {
+    const auto it = r.values.find(key);
+    if (it != r.values.end() && it->second) return true;
+  }
+  return false;
+}
+
+std::set<SeriesKey> StudyView::seriesKeys() const {
+  std::set<SeriesKey> out;
+  for (const auto& [k, _] : groups) out.insert(seriesOf(k));
+  return out;
+}
+
+bool unequilibrated(const RunRecord& r) {
+  const auto it = r.values.find("equilibrium/reached");
+  return r.status == RunStatus::Done && it != r.values.end() && it->second && *it->second == 0.0;
+}
+
+std::string sweepName(const StudyView& study) {
+  return fs::weakly_canonical(fs::absolute(study.sweepDir)).filename().string();
+}
+
+}  // namespace confpack::study
