@@ -98,6 +98,20 @@ CsvTable averageProfiles(const std::vector<CsvTable>& tables) {
   return out;
 }
 
+// visit(k, color, side index, runs) for each configuration k of series sk and each side with runs
+// there: one line of a figure each, the configuration's colour (1, 2, ... in the series) shared
+// by its sides.
+template <class Visit>
+void forEachLine(const StudyView& study, const SeriesKey& sk, const Visit& visit) {
+  int color = 0;
+  for (const auto& [k, bySide] : study.groups) {
+    if (seriesOf(k) != sk) continue;
+    ++color;
+    for (std::size_t bi = 0; bi < study.sides.size(); ++bi)
+      if (bySide.count(study.sides[bi])) visit(k, color, bi, bySide.at(study.sides[bi]));
+  }
+}
+
 // The figures of one profile file the runs wrote (CSV), averaged over replicas: one figure per
 // series and column, the configurations of the series as lines. figureIndex numbers the figures.
 void addProfileFigures(Document& doc, const StudyView& study, FigureWriter& figures, const std::string& name,
@@ -107,31 +121,24 @@ void addProfileFigures(Document& doc, const StudyView& study, FigureWriter& figu
     std::map<std::string, std::vector<Series>> byColumn;
     std::vector<std::string> columnOrder;
     std::string xLabel;
-    int color = 0;
-    for (const auto& [k, bySide] : study.groups) {
-      if (seriesOf(k) != sk) continue;
-      ++color;
-      for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
-        if (!bySide.count(study.sides[bi])) continue;
-        std::vector<CsvTable> tables;
-        for (const RunRecord* r : bySide.at(study.sides[bi]))
-          if (r->status == RunStatus::Done)
-            if (auto t = readCsv(study.runDir(*r) / name)) tables.push_back(std::move(*t));
-        if (tables.empty()) continue;
-        const CsvTable avg = averageProfiles(tables);
-        xLabel = avg.columns[0];
-        // At most four value columns per profile keep the figures readable.
-        for (std::size_t c = 1; c < avg.columns.size() && c <= 4; ++c) {
-          if (!byColumn.count(avg.columns[c])) columnOrder.push_back(avg.columns[c]);
-          Series s{
-              fmt::format("W={} {} (n={})", widthText(k), study.sides[bi], tables.size()), color, bi > 0, true, {}};
-          s.markers = false;
-          for (const auto& row : avg.rows)
-            if (std::isfinite(row[c])) s.points.push_back({row[0], row[c], 0.0});
-          byColumn[avg.columns[c]].push_back(std::move(s));
-        }
+    forEachLine(study, sk, [&](const ConfKey& k, int color, std::size_t bi, const std::vector<const RunRecord*>& runs) {
+      std::vector<CsvTable> tables;
+      for (const RunRecord* r : runs)
+        if (r->status == RunStatus::Done)
+          if (auto t = readCsv(study.runDir(*r) / name)) tables.push_back(std::move(*t));
+      if (tables.empty()) return;
+      const CsvTable avg = averageProfiles(tables);
+      xLabel = avg.columns[0];
+      // At most four value columns per profile keep the figures readable.
+      for (std::size_t c = 1; c < avg.columns.size() && c <= 4; ++c) {
+        if (!byColumn.count(avg.columns[c])) columnOrder.push_back(avg.columns[c]);
+        Series s{fmt::format("W={} {} (n={})", widthText(k), study.sides[bi], tables.size()), color, bi > 0, true, {}};
+        s.markers = false;
+        for (const auto& row : avg.rows)
+          if (std::isfinite(row[c])) s.points.push_back({row[0], row[c], 0.0});
+        byColumn[avg.columns[c]].push_back(std::move(s));
       }
-    }
+    });
     for (const std::string& col : columnOrder) {
       Plot p{fmt::format("profile_{:03d}_{}", ++figureIndex, base),
              fmt::format("{}: {} for {}", base, col, seriesText(sk)),
@@ -199,21 +206,15 @@ void addRelaxationSections(Document& doc, const StudyView& study, FigureWriter& 
   std::vector<RelaxationFamily> families;
   for (const SeriesKey& sk : study.seriesKeys()) {
     RelaxationFamily family{familyName(sk), fmt::format("relaxation_{:02d}", families.size() + 1), {}};
-    int color = 0;
-    for (const auto& [k, bySide] : study.groups) {
-      if (seriesOf(k) != sk) continue;
-      ++color;
-      for (std::size_t bi = 0; bi < study.sides.size(); ++bi) {
-        if (!bySide.count(study.sides[bi])) continue;
-        RelaxationLine line{{}, color, bi > 0, {}};
-        for (const RunRecord* r : bySide.at(study.sides[bi]))
-          if (r->status == RunStatus::Done && r->result.contains("timing") && r->result["timing"].contains("history"))
-            line.histories.push_back(r->result["timing"]["history"]);
-        if (line.histories.empty()) continue;
-        line.label = fmt::format("W={} {} (n={})", widthText(k), study.sides[bi], line.histories.size());
-        family.lines.push_back(std::move(line));
-      }
-    }
+    forEachLine(study, sk, [&](const ConfKey& k, int color, std::size_t bi, const std::vector<const RunRecord*>& runs) {
+      RelaxationLine line{{}, color, bi > 0, {}};
+      for (const RunRecord* r : runs)
+        if (r->status == RunStatus::Done && r->result.contains("timing") && r->result["timing"].contains("history"))
+          line.histories.push_back(r->result["timing"]["history"]);
+      if (line.histories.empty()) return;
+      line.label = fmt::format("W={} {} (n={})", widthText(k), study.sides[bi], line.histories.size());
+      family.lines.push_back(std::move(line));
+    });
     families.push_back(std::move(family));
   }
   addRelaxationSection(doc, figures, families, study.compared.noun);
