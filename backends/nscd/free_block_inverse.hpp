@@ -11,7 +11,7 @@
 // in badly (docs/performance.md, "What we tried").
 // Why an exact inverse and not a multigrid: near jamming the soft modes of A_FF form a continuum
 // with no gap (a 1,648-sphere creep block: lambda_1 = 1.2e-4, lambda_100 = 4.3e-3, ||A|| = 3.1,
-// each mode spread over 5 to 10 % of the rows), which neither Gauss-Seidel sweeps (545 conjugate
+// each mode spread over 2 to 13 % of the rows), which neither Gauss-Seidel sweeps (545 conjugate
 // gradient iterations to 1e-10) nor a smoothed-aggregation multigrid on A (439) resolve. Under
 // (A_FF + eps I)^-1 every eigenvalue lambda of A_FF becomes lambda / (lambda + eps): those above
 // eps are all but 1, and conjugate gradients need 6 (eps = 1e-5) to 12 (1e-4) iterations.
