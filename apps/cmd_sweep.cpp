@@ -291,7 +291,7 @@ void registerSweep(CLI::App& app) {
   // Slurm (docs/cluster.md).
   auto* slurm = sub->add_flag("--slurm", st->slurm,
                               "Write OUT/slurm/study.sbatch, a Slurm job array over the runs not done, running or "
-                              "queued (one deposit's runs per task), and exit")
+                              "queued (one run per task, or --array-tasks tasks dealt the runs), and exit")
                     ->excludes(list)
                     ->excludes(status)
                     ->excludes(reanalyse)

@@ -30,13 +30,6 @@ int neighbours(int c, int m, bool periodic, int* out) {
   return k;
 }
 
-void neighbourTable(int m, bool periodic, std::vector<int>& table, std::vector<int>& count) {
-  table.resize(3 * static_cast<std::size_t>(m));
-  count.resize(static_cast<std::size_t>(m));
-  for (int c = 0; c < m; ++c)
-    count[static_cast<std::size_t>(c)] = neighbours(c, m, periodic, &table[3 * static_cast<std::size_t>(c)]);
-}
-
 // Cells of side >= cutoff along a length: as many as fit, at least one (counted in double: a
 // length of 1e16 cutoffs must not overflow an int; setColumnsAndRows caps the count).
 double cellsAlong(double length, double cutoff) {
@@ -44,6 +37,13 @@ double cellsAlong(double length, double cutoff) {
 }
 
 }  // namespace
+
+void CellList::AxisNeighbours::build(int m, bool periodic) {
+  cells.resize(3 * static_cast<std::size_t>(m));
+  count.resize(static_cast<std::size_t>(m));
+  for (int c = 0; c < m; ++c)
+    count[static_cast<std::size_t>(c)] = neighbours(c, m, periodic, &cells[3 * static_cast<std::size_t>(c)]);
+}
 
 CellList::CellList(const BoxDef& box, double cutoff, double zMin) : box_(box), cutoff_(cutoff), zMin_(zMin) {
   requirePositive(cutoff, "cutoff");
@@ -129,9 +129,9 @@ void CellList::build(std::span<const Vec3> positions) {
     ids_[static_cast<std::size_t>(s)] = i;
     positions_[static_cast<std::size_t>(s)] = positions[static_cast<std::size_t>(i)];
   }
-  neighbourTable(nx_, true, nbX_, countX_);
-  neighbourTable(ny_, box_.periodicY, nbY_, countY_);
-  neighbourTable(nz_, false, nbZ_, countZ_);
+  alongX_.build(nx_, true);
+  alongY_.build(ny_, box_.periodicY);
+  alongZ_.build(nz_, false);
 }
 
 void CellList::addLayers(int layers) {

@@ -176,12 +176,16 @@ class CellList {
   std::vector<int> ids_;         // by slot
   std::vector<Vec3> positions_;  // by slot
   std::size_t count_ = 0;
-  // build() only: the points by id, each point's cell, and the neighbour cells along each axis,
-  // each once (fewer than 3 cells make a cell its own neighbour twice): neighbours of column c are
-  // nbX_[3 c .. 3 c + countX_[c]).
+  // The neighbour cells of each cell index along one axis, each once (fewer than 3 cells make a
+  // cell its own neighbour twice): neighbours of index c are cells[3 c .. 3 c + count[c]).
+  struct AxisNeighbours {
+    std::vector<int> cells, count;
+    void build(int m, bool periodic);
+  };
+  // build() only: the points by id, each point's cell, and the neighbours along each axis.
   std::span<const Vec3> points_;
   std::vector<int> cellOf_;
-  std::vector<int> nbX_, nbY_, nbZ_, countX_, countY_, countZ_;
+  AxisNeighbours alongX_, alongY_, alongZ_;
 };
 
 template <class T>
@@ -243,11 +247,11 @@ void CellList::pairsOfRange(int begin, int end, Emit& emit, std::vector<Pair>& o
     const Vec3& p = points_[static_cast<std::size_t>(i)];
     const int c = cellOf_[static_cast<std::size_t>(i)];  // (iz ny + iy) nx + ix
     const int ix = c % nx, iy = (c / nx) % ny, iz = c / (nx * ny);
-    const int kx = countX_[static_cast<std::size_t>(ix)], ky = countY_[static_cast<std::size_t>(iy)],
-              kz = countZ_[static_cast<std::size_t>(iz)];
-    const int* nbx = &nbX_[3 * static_cast<std::size_t>(ix)];
-    const int* nby = &nbY_[3 * static_cast<std::size_t>(iy)];
-    const int* nbz = &nbZ_[3 * static_cast<std::size_t>(iz)];
+    const int kx = alongX_.count[static_cast<std::size_t>(ix)], ky = alongY_.count[static_cast<std::size_t>(iy)],
+              kz = alongZ_.count[static_cast<std::size_t>(iz)];
+    const int* nbx = &alongX_.cells[3 * static_cast<std::size_t>(ix)];
+    const int* nby = &alongY_.cells[3 * static_cast<std::size_t>(iy)];
+    const int* nbz = &alongZ_.cells[3 * static_cast<std::size_t>(iz)];
     const std::size_t first = out.size();
     for (int a = 0; a < kz; ++a)
       for (int b = 0; b < ky; ++b)

@@ -90,12 +90,6 @@ struct LoadedCheckpoint {
 std::optional<LoadedCheckpoint> readCheckpoint(const std::filesystem::path& file, const nlohmann::json& identity,
                                                std::string& why);
 
-/// A sweep run's checkpoint: SWEEPDIR/checkpoints/rNNNN.json, outside the run's folder, which a
-/// new attempt clears.
-inline std::filesystem::path sweepCheckpointFile(const std::filesystem::path& sweepDir, const std::string& run) {
-  return sweepDir / "checkpoints" / (run + ".json");
-}
-
 /// Where the checkpoint in `file` stands, for a sweep's status: "checkpoint: fall at t = 83.5,
 /// 12 min" or "checkpoint: finisher step 140 (t = 83.5), 15 min", then how far from rest its last
 /// measured check was: "; last check: force ratio 0.42 (rest below 0.0001), kinetic ratio 3e-05

@@ -145,6 +145,12 @@ inline constexpr const char* kDoneMarker = "done.json";
 inline constexpr const char* kFailedMarker = "failed.json";
 inline constexpr const char* kSweepTable = "sweep.json";
 
+/// A sweep run's checkpoint: SWEEPDIR/checkpoints/rNNNN.json, outside the run's folder, which a
+/// new attempt clears.
+inline std::filesystem::path sweepCheckpointFile(const std::filesystem::path& sweepDir, const std::string& run) {
+  return sweepDir / "checkpoints" / (run + ".json");
+}
+
 /// The time now in UTC, ISO 8601 ("2024-05-01T12:00:00Z"), as the markers record it.
 std::string utcTimestamp();
 

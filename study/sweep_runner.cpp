@@ -15,10 +15,10 @@ SweepRunFn pipelineRunner(int threads, double checkpointEvery, const std::string
     const std::string name = runDir.filename().string();
     compaction::Checkpointing checkpointing;
     checkpointing.everySeconds = checkpointEvery;
-    checkpointing.file = compaction::sweepCheckpointFile(sweepDir, name);
+    checkpointing.file = sweepCheckpointFile(sweepDir, name);
     nlohmann::json result = runAndWrite(c, runDir, progress, &deposit, checkpointing);
     if (!settleWith.empty() && c.backend != settleWith) {
-      checkpointing.file = compaction::sweepCheckpointFile(sweepDir, name + "-settled");
+      checkpointing.file = sweepCheckpointFile(sweepDir, name + "-settled");
       settleAndWrite(c, runDir, settleWith, progress, checkpointing);
     }
     return result;

@@ -100,7 +100,7 @@ std::vector<RunReport> sweepStatus(const fs::path& dir, const std::vector<SweepR
     }
     const std::string logOf = f.claim && !f.claim->job.empty() ? f.claim->job : f.task;
     if (!logOf.empty()) f.taskLogLine = lastOutputLine(taskLog(dir, logOf));
-    f.checkpoint = compaction::describeCheckpoint(compaction::sweepCheckpointFile(dir, r.name));
+    f.checkpoint = compaction::describeCheckpoint(sweepCheckpointFile(dir, r.name));
     out.push_back(classifyRun(f));
   }
   return out;
