@@ -339,10 +339,12 @@ CLI::Option* addAllowImplausibleFlag(CLI::App& sub, bool& allow) {
 }
 
 namespace {
-// A new --out is refused before any work when its nearest existing parent is not a folder a
-// folder can be made in (a read-only mount, /proc, a file): a probe folder made there and
-// removed at once, since permissions alone do not tell (root may write everywhere but /proc).
-void checkCanCreateIn(const fs::path& target) {
+// A new --out, or one to be replaced (its output is staged beside it, in its parent), is refused
+// before any work when its nearest existing parent is not a folder a folder can be made in (a
+// read-only mount, /proc, a file): a probe folder made there and removed at once, since
+// permissions alone do not tell (root may write everywhere but /proc). `verb`: "create" or
+// "replace", for the message.
+void checkCanCreateIn(const fs::path& target, std::string_view verb) {
   std::error_code ec;
   fs::path parent = target.parent_path();
   while (!parent.empty() && !fs::exists(parent, ec) && parent != parent.parent_path()) parent = parent.parent_path();
@@ -351,7 +353,7 @@ void checkCanCreateIn(const fs::path& target) {
         fmt::format("--out: '{}' is not a folder, so '{}' cannot be made in it", parent.string(), target.string()));
   const fs::path probe = parent / fmt::format(".confpack-probe-{}", ::getpid());
   if (!fs::create_directory(probe, ec) && ec)
-    throw std::invalid_argument(fmt::format("--out: cannot create '{}': {}", target.string(), ec.message()));
+    throw std::invalid_argument(fmt::format("--out: cannot {} '{}': {}", verb, target.string(), ec.message()));
   fs::remove(probe, ec);
 }
 }  // namespace
@@ -365,19 +367,21 @@ void checkOutputTarget(const fs::path& out) {
         fmt::format("--out: '{}' is the file system's root; give a new or empty folder", out.string()));
   const fs::file_status status = fs::status(out, ec);
   if (!fs::exists(status)) {
-    checkCanCreateIn(absolute);
+    checkCanCreateIn(absolute, "create");
     return;
   }
   if (!fs::is_directory(status))
     throw std::invalid_argument(fmt::format("--out: '{}' exists and is not a directory", out.string()));
-  if (fs::exists(out / kOutputMarker, ec)) return;
-  fs::directory_iterator entries(out, ec);
-  if (ec) throw std::invalid_argument(fmt::format("--out: cannot read folder '{}': {}", out.string(), ec.message()));
-  if (entries != fs::directory_iterator())
-    throw std::invalid_argument(
-        fmt::format("--out: '{}' is a folder with files confpack did not write (it has no {}); give a new or "
-                    "empty folder, or the output folder of an earlier confpack command",
-                    out.string(), kOutputMarker));
+  if (!fs::exists(out / kOutputMarker, ec)) {
+    fs::directory_iterator entries(out, ec);
+    if (ec) throw std::invalid_argument(fmt::format("--out: cannot read folder '{}': {}", out.string(), ec.message()));
+    if (entries != fs::directory_iterator())
+      throw std::invalid_argument(
+          fmt::format("--out: '{}' is a folder with files confpack did not write (it has no {}); give a new or "
+                      "empty folder, or the output folder of an earlier confpack command",
+                      out.string(), kOutputMarker));
+  }
+  checkCanCreateIn(absolute, "replace");
 }
 
 namespace {

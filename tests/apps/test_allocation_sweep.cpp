@@ -1,7 +1,7 @@
 // Allocation failures across whole commands, as SQLite tests them: the test build
 // confpack-allocation-fault (tests/support/allocation_fault.hpp) fails its k-th allocation, for k
-// spread evenly over every allocation a command makes (counted first, so the points are the same
-// every time). Each command must then either succeed with its whole output, or exit 1 with one
+// spread evenly over every allocation a command makes (counted first, twice, so the points are
+// the same every time). Each command must then either succeed with its whole output, or exit 1 with one
 // line naming what ran out and leave nothing in --out or beside it; never crash.
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -38,6 +38,9 @@ struct AllocationSession : confpack::testing::FaultSession {
     const long n = allocations(command + " --out " + out + "-count");
     INFO(command << ": " << n << " allocations");
     REQUIRE(n > points);
+    fs::remove_all(dir / (out + "-count"));
+    // The points are the same every time only if the command's allocations are: count again.
+    REQUIRE(allocations(command + " --out " + out + "-count") == n);
     fs::remove_all(dir / (out + "-count"));
     int failed = 0;
     for (int i = 0; i < points; ++i) {

@@ -302,6 +302,38 @@ TEST_CASE("the output rule from the command line: the root and a folder of other
   CHECK(s.run("deposit " + box + " --out empty").code == 0);
 }
 
+TEST_CASE("the output rule on a read-only mount: a new or a confpack --out is refused before any work") {
+  // A real read-only file system, a tmpfs mounted in a mount namespace of its own (unshare -rm:
+  // user namespaces, or root; util-linux), holding an earlier confpack output. The failure this
+  // guards against: replacing that output did the whole run and then failed (exit 1) on the
+  // staging folder beside it. Fails, never skips, where no namespace can be made.
+  ConfpackSession s("cli_out_read_only", "/usr/bin/unshare");
+  const std::string confpack = std::string("'") + CONFPACK_BINARY + "'";
+  const std::string run = confpack + " run --length-x 3 --width 3 --height 3 --time-limit 1 -q --out ";
+  std::ofstream(s.dir / "mount.sh") << "set -e\nmkdir ro\nmount -t tmpfs -o size=8m tmpfs ro\n"
+                                    << run << "ro/pile\nmount -o remount,ro ro\nset +e\n"
+                                    << run << "ro/new 2> new.err; echo $? > new.code\n"
+                                    << run << "ro/pile 2> again.err; echo $? > again.code\n"
+                                    << confpack << " analyze ro/pile/packing.json -q --out ro/pile 2> an.err; "
+                                    << "echo $? > an.code\nls -A ro/pile > left.txt\n";
+  const CommandResult r = s.run("-rm sh mount.sh");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto text = [&](const char* name) { return slurp(s.dir / name); };
+  CHECK(text("new.code") == "2\n");
+  CHECK_THAT(text("new.err"), Catch::StartsWith("confpack run: error: --out: cannot create '") &&
+                                  Catch::EndsWith("ro/new': Read-only file system\n"));
+  CHECK(text("again.code") == "2\n");
+  CHECK_THAT(text("again.err"), Catch::StartsWith("confpack run: error: --out: cannot replace '") &&
+                                    Catch::EndsWith("ro/pile': Read-only file system\n"));
+  CHECK(text("an.code") == "2\n");
+  CHECK(lineCount(text("an.err")) == 1);
+  // The earlier output is whole: its marker, its packing and its result.
+  const std::string left = text("left.txt");
+  for (const char* name : {".confpack-output", "packing.json", "result.json", "config.json"})
+    CHECK_THAT(left, Catch::Contains(std::string(name) + "\n"));
+}
+
 namespace {
 
 /// Runs confpack with `args` in `dir` under an address-space limit of `limitMiB` (RLIMIT_AS):
