@@ -9,10 +9,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <initializer_list>
 #include <stdexcept>
 #include <system_error>
 
+#include "core/input_document.hpp"
 #include "core/json_input.hpp"
 #include "core/settings_table.hpp"
 
@@ -31,89 +31,16 @@ constexpr double kMinNorm = 1e-6;
 // edited by hand (or a foreign writer with its own rounding) can differ by more than this.
 constexpr double kForceSumTolerance = 1e-9;
 
-[[noreturn]] void fail(std::string_view source, std::string_view where, std::string_view what) {
-  throw std::invalid_argument(fmt::format("{}: {}: {}", source, where, what));
+// A vector of three finite numbers, named `where` in full ("grains[4].position").
+Vec3 toVec3(const ObjectReader& r, const json& v, const std::string& where) {
+  if (!v.is_array() || v.size() != 3)
+    refuseInput(r.source(), where, fmt::format("must be an array of 3 numbers (got {})", jsonExcerpt(v)));
+  return Vec3(r.toNumber(v[0], where + "[0]"), r.toNumber(v[1], where + "[1]"), r.toNumber(v[2], where + "[2]"));
 }
 
-std::string typeName(const json& j) {
-  return j.type_name();
+Vec3 vec3(const ObjectReader& r, std::string_view key) {
+  return toVec3(r, r.at(key), r.field(key));
 }
-
-/// A field reader for one JSON object, carrying the "grains[3]" path for messages.
-class ObjectReader {
- public:
-  ObjectReader(const json& j, std::string_view source, std::string where)
-      : j_(j), source_(source), where_(std::move(where)) {
-    if (!j_.is_object())
-      fail(source_, where_.empty() ? "document" : where_, fmt::format("must be an object (got {})", typeName(j_)));
-  }
-
-  /// Refuses keys outside `allowed`: a typo ("orientaion") must not silently drop data.
-  void onlyKeys(std::initializer_list<std::string_view> allowed) const {
-    for (const auto& [key, value] : j_.items()) {
-      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        std::string list;
-        for (auto a : allowed) list += fmt::format("{}{}", list.empty() ? "" : ", ", a);
-        fail(source_, field(textExcerpt(key)), fmt::format("unknown key (allowed: {})", list));
-      }
-    }
-  }
-
-  bool has(std::string_view key) const { return j_.contains(key); }
-  std::string field(std::string_view key) const {
-    return where_.empty() ? std::string(key) : fmt::format("{}.{}", where_, key);
-  }
-  const json& at(std::string_view key) const {
-    if (!j_.contains(key)) fail(source_, field(key), "missing");
-    return j_.at(std::string(key));
-  }
-
-  double number(std::string_view key) const { return toNumber(at(key), field(key)); }
-  bool boolean(std::string_view key) const {
-    const json& v = at(key);
-    if (!v.is_boolean()) fail(source_, field(key), fmt::format("must be true or false (got {})", jsonExcerpt(v)));
-    return v.get<bool>();
-  }
-  int integer(std::string_view key) const {
-    const json& v = at(key);
-    if (!v.is_number_integer()) fail(source_, field(key), fmt::format("must be an integer (got {})", jsonExcerpt(v)));
-    const auto i = v.get<std::int64_t>();
-    if (i < -1000000000 || i > 1000000000) fail(source_, field(key), fmt::format("out of range (got {})", i));
-    return static_cast<int>(i);
-  }
-  std::string string(std::string_view key) const {
-    const json& v = at(key);
-    if (!v.is_string()) fail(source_, field(key), fmt::format("must be a string (got {})", jsonExcerpt(v)));
-    return v.get<std::string>();
-  }
-  Vec3 vec3(std::string_view key) const { return toVec3(at(key), field(key)); }
-  const json& array(std::string_view key) const {
-    const json& v = at(key);
-    if (!v.is_array()) fail(source_, field(key), fmt::format("must be an array (got {})", typeName(v)));
-    return v;
-  }
-
-  double toNumber(const json& v, const std::string& where) const {
-    // NaN and infinities have no JSON spelling; nlohmann writes them as null, so a null here
-    // usually means a non-finite value was written.
-    if (!v.is_number()) fail(source_, where, fmt::format("must be a finite number (got {})", jsonExcerpt(v)));
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) fail(source_, where, fmt::format("must be a finite number (got {})", jsonExcerpt(v)));
-    return x;
-  }
-  Vec3 toVec3(const json& v, const std::string& where) const {
-    if (!v.is_array() || v.size() != 3)
-      fail(source_, where, fmt::format("must be an array of 3 numbers (got {})", jsonExcerpt(v)));
-    return Vec3(toNumber(v[0], where + "[0]"), toNumber(v[1], where + "[1]"), toNumber(v[2], where + "[2]"));
-  }
-
-  std::string_view source() const { return source_; }
-
- private:
-  const json& j_;
-  std::string_view source_;
-  std::string where_;
-};
 
 json toJsonVec(const Vec3& v) {
   return json::array({v.x(), v.y(), v.z()});
@@ -127,7 +54,7 @@ template <class Vector>
 Vector unitOrFail(Vector v, std::string_view source, const std::string& where) {
   double n = v.norm();
   if (std::isinf(n)) n = v.stableNorm();
-  if (!(n > kMinNorm)) fail(source, where, fmt::format("cannot be normalised (norm {})", n));
+  if (!(n > kMinNorm)) refuseInput(source, where, fmt::format("cannot be normalised (norm {})", n));
   if (std::abs(n - 1.0) > kUnitTolerance) v /= n;
   return v;
 }
@@ -139,7 +66,7 @@ Grain readGrain(const json& j, std::string_view source, std::size_t index) {
   const std::string shape = r.string("shape");
   if (shape == "sphere") {
     g.shape = ShapeKind::Sphere;
-    if (r.has("params")) fail(source, r.field("params"), "only pinacoids have params");
+    if (r.has("params")) r.refuse("params", "only pinacoids have params");
   } else if (shape == "pinacoid") {
     g.shape = ShapeKind::Pinacoid;
     ObjectReader p(r.at("params"), source, r.field("params"));
@@ -148,13 +75,13 @@ Grain readGrain(const json& j, std::string_view source, std::size_t index) {
     g.params.heightRatio = p.number("E");
     g.params.alphaDeg = p.number("alpha_deg");
   } else {
-    fail(source, r.field("shape"), fmt::format("unknown shape '{}' (expected sphere or pinacoid)", shape));
+    r.refuse("shape", fmt::format("unknown shape '{}' (expected sphere or pinacoid)", shape));
   }
   g.size = r.number("size");
-  g.position = r.vec3("position");
+  g.position = vec3(r, "position");
   const json& q = r.at("orientation");
   if (!q.is_array() || q.size() != 4)
-    fail(source, r.field("orientation"), fmt::format("must be [w, x, y, z] (got {})", jsonExcerpt(q)));
+    r.refuse("orientation", fmt::format("must be [w, x, y, z] (got {})", jsonExcerpt(q)));
   const std::string qw = r.field("orientation");
   const Eigen::Vector4d c = unitOrFail(Eigen::Vector4d(r.toNumber(q[0], qw + "[0]"), r.toNumber(q[1], qw + "[1]"),
                                                        r.toNumber(q[2], qw + "[2]"), r.toNumber(q[3], qw + "[3]")),
@@ -165,11 +92,62 @@ Grain readGrain(const json& j, std::string_view source, std::size_t index) {
 
 std::vector<double> readNumbers(const ObjectReader& r, std::string_view key, std::size_t count) {
   const json& a = r.array(key);
-  if (a.size() != count)
-    fail(r.source(), r.field(key), fmt::format("must have one entry per point ({}; got {})", count, a.size()));
+  if (a.size() != count) r.refuse(key, fmt::format("must have one entry per point ({}; got {})", count, a.size()));
   std::vector<double> out;
   for (std::size_t i = 0; i < a.size(); ++i) out.push_back(r.toNumber(a[i], fmt::format("{}[{}]", r.field(key), i)));
   return out;
+}
+
+// Normal forces: per point when given (they must add up to normal_force), else the total is
+// shared equally between the points (the best guess when a writer only knows the sum); gaps.
+void readNormalForces(const ObjectReader& r, Contact& c) {
+  const std::size_t n = c.points.size();
+  if (r.has("point_forces")) {
+    const auto f = readNumbers(r, "point_forces", n);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      c.points[i].normalForce = f[i];
+      sum += f[i];
+    }
+    if (r.has("normal_force")) {
+      const double total = r.number("normal_force");
+      if (std::abs(total - sum) > kForceSumTolerance * std::max(1.0, std::abs(total)))
+        r.refuse("normal_force", fmt::format("must equal the sum of point_forces ({}; got {})", sum, total));
+    }
+  } else {
+    const double total = r.number("normal_force");
+    for (auto& p : c.points) p.normalForce = total / static_cast<double>(n);
+  }
+  if (r.has("point_gaps")) {
+    const auto g = readNumbers(r, "point_gaps", n);
+    for (std::size_t i = 0; i < n; ++i) c.points[i].gap = g[i];
+  }
+}
+
+// Friction: per point when given, else the total is shared in proportion to the normal forces
+// (equally if they are all zero), which keeps the resultant exact.
+void readTangentForces(const ObjectReader& r, Contact& c) {
+  const std::size_t n = c.points.size();
+  if (r.has("point_tangent_forces")) {
+    const json& a = r.array("point_tangent_forces");
+    if (a.size() != n)
+      r.refuse("point_tangent_forces", fmt::format("must have one entry per point ({}; got {})", n, a.size()));
+    Vec3 sum = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+      c.points[i].tangentForce = toVec3(r, a[i], fmt::format("{}[{}]", r.field("point_tangent_forces"), i));
+      sum += c.points[i].tangentForce;
+    }
+    if (r.has("tangent_force")) {
+      const Vec3 total = vec3(r, "tangent_force");
+      if ((total - sum).norm() > kForceSumTolerance * std::max(1.0, total.norm()))
+        r.refuse("tangent_force", "must equal the sum of point_tangent_forces");
+    }
+  } else if (r.has("tangent_force")) {
+    const Vec3 total = vec3(r, "tangent_force");
+    const double fn = c.normalForce();
+    for (auto& p : c.points)
+      p.tangentForce = fn > 0.0 ? Vec3(total * (p.normalForce / fn)) : Vec3(total / static_cast<double>(n));
+  }
 }
 
 Contact readContact(const json& j, std::string_view source, std::size_t index) {
@@ -187,65 +165,35 @@ Contact readContact(const json& j, std::string_view source, std::size_t index) {
   else if (type == "triple")
     c.type = ContactType::Triple;
   else
-    fail(source, r.field("type"), fmt::format("unknown contact type '{}' (expected simple, double or triple)", type));
-  c.normal = unitOrFail(r.vec3("normal"), source, r.field("normal"));
+    r.refuse("type", fmt::format("unknown contact type '{}' (expected simple, double or triple)", type));
+  c.normal = unitOrFail(vec3(r, "normal"), source, r.field("normal"));
 
   const json& pts = r.array("points");
-  if (pts.empty()) fail(source, r.field("points"), "must hold at least one point");
+  if (pts.empty()) r.refuse("points", "must hold at least one point");
   for (std::size_t i = 0; i < pts.size(); ++i) {
     ContactPoint p;
-    p.position = r.toVec3(pts[i], fmt::format("{}[{}]", r.field("points"), i));
+    p.position = toVec3(r, pts[i], fmt::format("{}[{}]", r.field("points"), i));
     c.points.push_back(p);
   }
-  const std::size_t n = c.points.size();
-
-  // Normal forces: per point when given (they must add up to normal_force), else the total is
-  // shared equally between the points (the best guess when a writer only knows the sum).
-  if (r.has("point_forces")) {
-    const auto f = readNumbers(r, "point_forces", n);
-    double sum = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      c.points[i].normalForce = f[i];
-      sum += f[i];
-    }
-    if (r.has("normal_force")) {
-      const double total = r.number("normal_force");
-      if (std::abs(total - sum) > kForceSumTolerance * std::max(1.0, std::abs(total)))
-        fail(source, r.field("normal_force"),
-             fmt::format("must equal the sum of point_forces ({}; got {})", sum, total));
-    }
-  } else {
-    const double total = r.number("normal_force");
-    for (auto& p : c.points) p.normalForce = total / static_cast<double>(n);
-  }
-  if (r.has("point_gaps")) {
-    const auto g = readNumbers(r, "point_gaps", n);
-    for (std::size_t i = 0; i < n; ++i) c.points[i].gap = g[i];
-  }
-  // Friction: per point when given, else the total is shared in proportion to the normal forces
-  // (equally if they are all zero), which keeps the resultant exact.
-  if (r.has("point_tangent_forces")) {
-    const json& a = r.array("point_tangent_forces");
-    if (a.size() != n)
-      fail(source, r.field("point_tangent_forces"),
-           fmt::format("must have one entry per point ({}; got {})", n, a.size()));
-    Vec3 sum = Vec3::Zero();
-    for (std::size_t i = 0; i < n; ++i) {
-      c.points[i].tangentForce = r.toVec3(a[i], fmt::format("{}[{}]", r.field("point_tangent_forces"), i));
-      sum += c.points[i].tangentForce;
-    }
-    if (r.has("tangent_force")) {
-      const Vec3 total = r.vec3("tangent_force");
-      if ((total - sum).norm() > kForceSumTolerance * std::max(1.0, total.norm()))
-        fail(source, r.field("tangent_force"), "must equal the sum of point_tangent_forces");
-    }
-  } else if (r.has("tangent_force")) {
-    const Vec3 total = r.vec3("tangent_force");
-    const double fn = c.normalForce();
-    for (auto& p : c.points)
-      p.tangentForce = fn > 0.0 ? Vec3(total * (p.normalForce / fn)) : Vec3(total / static_cast<double>(n));
-  }
+  readNormalForces(r, c);
+  readTangentForces(r, c);
   return c;
+}
+
+// The box's own keys and ranges (boxTable), and the walls' friction the file keeps in its box
+// object; a packing must state its size.
+void readBox(const json& box, std::string_view source, Packing& p) {
+  try {
+    boxTable().require(box, {"length_x", "width"});
+    for (const auto& [key, value] : box.items())
+      if (key == "wall_friction")
+        readLegacyWallFriction(value, p.walls);
+      else
+        boxTable().readKey(key, value, p.box);
+    boxTable().validate(p.box);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
+  }
 }
 
 /// Top-level layout: the header keys on their own lines, one grain or contact per line. Written by
@@ -273,6 +221,70 @@ std::string layout(const json& j) {
   return out;
 }
 
+// The invariants of grain `i` (named grains[i]) in `box`.
+void validateGrain(const Grain& g, std::size_t i, const BoxDef& box, std::string_view source) {
+  const std::string where = fmt::format("grains[{}]", i);
+  if (!std::isfinite(g.size) || !(g.size > 0.0))
+    refuseInput(source, where + ".size", fmt::format("must be > 0 (got {})", g.size));
+  if (g.shape == ShapeKind::Pinacoid) {
+    try {
+      g.params.validate();
+    } catch (const std::invalid_argument& e) {
+      refuseInput(source, where + ".params", e.what());
+    }
+  }
+  const Vec3& x = g.position;
+  if (!x.allFinite()) refuseInput(source, where + ".position", "must be finite");
+  if (!(x.x() >= 0.0 && x.x() < box.lengthX))
+    refuseInput(source, where + ".position[0]",
+                fmt::format("x must be in [0, length_x = {}) (got {})", box.lengthX, x.x()));
+  if (box.periodicY) {
+    if (!(x.y() >= 0.0 && x.y() < box.width))
+      refuseInput(source, where + ".position[1]",
+                  fmt::format("y must be in [0, width = {}) with periodic_y (got {})", box.width, x.y()));
+  } else if (!(x.y() >= 0.0 && x.y() <= box.width)) {
+    refuseInput(source, where + ".position[1]",
+                fmt::format("y must lie between the side walls, in [0, width = {}] (got {})", box.width, x.y()));
+  }
+  // A centre below the floor would mean a grain more than half sunk into it.
+  if (!(x.z() >= 0.0))
+    refuseInput(source, where + ".position[2]", fmt::format("z must be >= 0, above the floor (got {})", x.z()));
+  const double qn = g.orientation.coeffs().norm();
+  if (!std::isfinite(qn) || std::abs(qn - 1.0) > 1e-9)
+    refuseInput(source, where + ".orientation", fmt::format("must be a unit quaternion (norm {})", qn));
+}
+
+// The invariants of contact `k` (named contacts[k]) between `n` grains and the walls of `box`.
+void validateContact(const Contact& c, std::size_t k, int n, const BoxDef& box, std::string_view source) {
+  const std::string where = fmt::format("contacts[{}]", k);
+  if (!(c.a >= 0 && c.a < n))
+    refuseInput(source, where + ".a", fmt::format("must be a grain index in [0, {}) (got {})", n, c.a));
+  const bool wall = isWall(c.b);
+  if (wall) {
+    if (c.b < -3)
+      refuseInput(source, where + ".b", fmt::format("wall ids are -1 (floor), -2 (y = 0), -3 (y = W) (got {})", c.b));
+    if (box.periodicY && c.b != static_cast<int>(WallId::Floor))
+      refuseInput(source, where + ".b", fmt::format("no side wall {} in a box with periodic_y", c.b));
+  } else {
+    if (c.b >= n)
+      refuseInput(source, where + ".b", fmt::format("must be a grain index in [0, {}) or a wall id (got {})", n, c.b));
+    if (c.b == c.a) refuseInput(source, where + ".b", fmt::format("a grain cannot touch itself (a = b = {})", c.a));
+  }
+  if (!c.normal.allFinite() || std::abs(c.normal.norm() - 1.0) > 1e-9)
+    refuseInput(source, where + ".normal", fmt::format("must be a unit vector (norm {})", c.normal.norm()));
+  if (c.points.empty()) refuseInput(source, where + ".points", "must hold at least one point");
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    const ContactPoint& pt = c.points[i];
+    if (!pt.position.allFinite()) refuseInput(source, fmt::format("{}.points[{}]", where, i), "must be finite");
+    if (!std::isfinite(pt.normalForce) || pt.normalForce < 0.0)
+      refuseInput(source, fmt::format("{}.point_forces[{}]", where, i),
+                  fmt::format("must be a finite force >= 0 (got {})", pt.normalForce));
+    if (!std::isfinite(pt.gap)) refuseInput(source, fmt::format("{}.point_gaps[{}]", where, i), "must be finite");
+    if (!pt.tangentForce.allFinite())
+      refuseInput(source, fmt::format("{}.point_tangent_forces[{}]", where, i), "must be finite");
+  }
+}
+
 }  // namespace
 
 void validatePacking(const Packing& p, std::string_view source) {
@@ -282,71 +294,11 @@ void validatePacking(const Packing& p, std::string_view source) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
   }
-  if (p.grains.empty()) fail(source, "grains", "must hold at least one grain");
-  const BoxDef& box = p.box;
-  for (std::size_t i = 0; i < p.grains.size(); ++i) {
-    const Grain& g = p.grains[i];
-    const std::string where = fmt::format("grains[{}]", i);
-    if (!std::isfinite(g.size) || !(g.size > 0.0))
-      fail(source, where + ".size", fmt::format("must be > 0 (got {})", g.size));
-    if (g.shape == ShapeKind::Pinacoid) {
-      try {
-        g.params.validate();
-      } catch (const std::invalid_argument& e) {
-        fail(source, where + ".params", e.what());
-      }
-    }
-    const Vec3& x = g.position;
-    if (!x.allFinite()) fail(source, where + ".position", "must be finite");
-    if (!(x.x() >= 0.0 && x.x() < box.lengthX))
-      fail(source, where + ".position[0]", fmt::format("x must be in [0, length_x = {}) (got {})", box.lengthX, x.x()));
-    if (box.periodicY) {
-      if (!(x.y() >= 0.0 && x.y() < box.width))
-        fail(source, where + ".position[1]",
-             fmt::format("y must be in [0, width = {}) with periodic_y (got {})", box.width, x.y()));
-    } else if (!(x.y() >= 0.0 && x.y() <= box.width)) {
-      fail(source, where + ".position[1]",
-           fmt::format("y must lie between the side walls, in [0, width = {}] (got {})", box.width, x.y()));
-    }
-    // A centre below the floor would mean a grain more than half sunk into it.
-    if (!(x.z() >= 0.0))
-      fail(source, where + ".position[2]", fmt::format("z must be >= 0, above the floor (got {})", x.z()));
-    const double qn = g.orientation.coeffs().norm();
-    if (!std::isfinite(qn) || std::abs(qn - 1.0) > 1e-9)
-      fail(source, where + ".orientation", fmt::format("must be a unit quaternion (norm {})", qn));
-  }
+  if (p.grains.empty()) refuseInput(source, "grains", "must hold at least one grain");
+  for (std::size_t i = 0; i < p.grains.size(); ++i) validateGrain(p.grains[i], i, p.box, source);
   if (!p.contacts) return;
   const int n = static_cast<int>(p.grains.size());
-  for (std::size_t k = 0; k < p.contacts->size(); ++k) {
-    const Contact& c = (*p.contacts)[k];
-    const std::string where = fmt::format("contacts[{}]", k);
-    if (!(c.a >= 0 && c.a < n))
-      fail(source, where + ".a", fmt::format("must be a grain index in [0, {}) (got {})", n, c.a));
-    const bool wall = isWall(c.b);
-    if (wall) {
-      if (c.b < -3)
-        fail(source, where + ".b", fmt::format("wall ids are -1 (floor), -2 (y = 0), -3 (y = W) (got {})", c.b));
-      if (box.periodicY && c.b != static_cast<int>(WallId::Floor))
-        fail(source, where + ".b", fmt::format("no side wall {} in a box with periodic_y", c.b));
-    } else {
-      if (c.b >= n)
-        fail(source, where + ".b", fmt::format("must be a grain index in [0, {}) or a wall id (got {})", n, c.b));
-      if (c.b == c.a) fail(source, where + ".b", fmt::format("a grain cannot touch itself (a = b = {})", c.a));
-    }
-    if (!c.normal.allFinite() || std::abs(c.normal.norm() - 1.0) > 1e-9)
-      fail(source, where + ".normal", fmt::format("must be a unit vector (norm {})", c.normal.norm()));
-    if (c.points.empty()) fail(source, where + ".points", "must hold at least one point");
-    for (std::size_t i = 0; i < c.points.size(); ++i) {
-      const ContactPoint& pt = c.points[i];
-      if (!pt.position.allFinite()) fail(source, fmt::format("{}.points[{}]", where, i), "must be finite");
-      if (!std::isfinite(pt.normalForce) || pt.normalForce < 0.0)
-        fail(source, fmt::format("{}.point_forces[{}]", where, i),
-             fmt::format("must be a finite force >= 0 (got {})", pt.normalForce));
-      if (!std::isfinite(pt.gap)) fail(source, fmt::format("{}.point_gaps[{}]", where, i), "must be finite");
-      if (!pt.tangentForce.allFinite())
-        fail(source, fmt::format("{}.point_tangent_forces[{}]", where, i), "must be finite");
-    }
-  }
+  for (std::size_t k = 0; k < p.contacts->size(); ++k) validateContact((*p.contacts)[k], k, n, p.box, source);
 }
 
 json toJson(const Packing& p) {
@@ -402,33 +354,11 @@ json toJson(const Packing& p) {
 }
 
 Packing packingFromJson(const json& j, std::string_view source) {
-  ObjectReader top(j, source, "");
-  // Format and version first: a file of another kind gets that message, not a field complaint.
-  if (!j.is_object() || !j.contains("format"))
-    fail(source, "format", fmt::format("missing (expected \"{}\")", kPackingFormat));
-  if (!j["format"].is_string() || j["format"].get<std::string>() != kPackingFormat)
-    fail(source, "format", fmt::format("must be \"{}\" (got {})", kPackingFormat, jsonExcerpt(j["format"])));
-  if (!j.contains("version")) fail(source, "version", "missing");
-  if (!j["version"].is_number_integer() || j["version"].get<std::int64_t>() != kPackingVersion)
-    fail(source, "version",
-         fmt::format("unsupported version {} (this build reads version {})", jsonExcerpt(j["version"]),
-                     kPackingVersion));
-  top.onlyKeys({"format", "version", "box", "grains", "contacts", "metadata"});
-
+  const ObjectReader top = readDocument(j, source, {kPackingFormat, kPackingVersion},
+                                        {"format", "version", "box", "grains", "contacts", "metadata"});
   Packing p;
   const json& box = top.at("box");
-  try {  // the box's own keys and ranges (boxTable); a packing must state its size
-    boxTable().require(box, {"length_x", "width"});
-    for (const auto& [key, value] : box.items())
-      if (key == "wall_friction")  // the walls' material, kept in the file's box object
-        readLegacyWallFriction(value, p.walls);
-      else
-        boxTable().readKey(key, value, p.box);
-    boxTable().validate(p.box);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(fmt::format("{}: {}", source, e.what()));
-  }
-
+  readBox(box, source, p);
   const json& grains = top.array("grains");
   for (std::size_t i = 0; i < grains.size(); ++i) p.grains.push_back(readGrain(grains[i], source, i));
 

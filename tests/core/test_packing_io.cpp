@@ -229,11 +229,13 @@ TEST_CASE("bad packing files are refused with the element and field named") {
     edit(j);
     return j;
   };
-  requireRefused(with([](json& j) { j.erase("format"); }), "format: missing");
-  requireRefused(with([](json& j) { j["format"] = "xyz-packing"; }), "format: must be \"confpack-packing\"");
-  requireRefused(with([](json& j) { j["version"] = 2; }), "version: unsupported version 2");
-  requireRefused(with([](json& j) { j.erase("version"); }), "version: missing");
-  requireRefused(with([](json& j) { j["grain"] = json::array(); }), "grain: unknown key");
+  requireRefused(with([](json& j) { j.erase("format"); }), "format: missing (expected \"confpack-packing\")");
+  requireRefused(with([](json& j) { j["format"] = "xyz-packing"; }),
+                 "format: must be \"confpack-packing\" (got \"xyz-packing\")");
+  requireRefused(with([](json& j) { j["version"] = 2; }), "version: must be 1, the version this build reads (got 2)");
+  requireRefused(with([](json& j) { j.erase("version"); }), "version: missing (expected 1)");
+  requireRefused(with([](json& j) { j["grain"] = json::array(); }),
+                 "grain: unknown key (known: format, version, box, grains, contacts, metadata)");
   requireRefused(with([](json& j) { j.erase("grains"); }), "grains: missing");
   requireRefused(with([](json& j) { j["grains"] = json::array(); }), "grains: must hold at least one grain");
   requireRefused(with([](json& j) { j["box"]["width"] = 0; }), "box.width: must be > 0 (got 0)");
@@ -275,7 +277,7 @@ TEST_CASE("bad packing files are refused with the element and field named") {
   requireRefused(with([](json& j) {
                    j["grains"][5]["orientaion"] = {1, 0, 0, 0};
                  }),
-                 "grains[5].orientaion: unknown key");
+                 "grains[5].orientaion: unknown key (known: shape, size, params, position, orientation)");
   requireRefused(with([](json& j) { j["contacts"][0]["a"] = 12; }),
                  "contacts[0].a: must be a grain index in [0, 12) (got 12)");
   requireRefused(with([](json& j) { j["contacts"][0]["a"] = 1.5; }), "contacts[0].a: must be an integer");
@@ -303,7 +305,7 @@ TEST_CASE("bad packing files are refused with the element and field named") {
                    j["contacts"][0].erase("normal_force");
                  }),
                  "contacts[0].point_forces[0]: must be a finite force >= 0");
-  requireRefused(json::array(), "document: must be an object");
+  requireRefused(json::array(), "document: must be a JSON object (got array)");
 }
 
 TEST_CASE("reading a broken or missing file gives one clear message") {
