@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <set>
 #include <stdexcept>
 
 #include "backends/backend_factory.hpp"
 #include "core/backend.hpp"
+#include "core/input_document.hpp"
 #include "core/json_input.hpp"
 #include "study/sweep.hpp"
 #include "study/sweep_internal.hpp"
@@ -18,11 +18,8 @@
 namespace confpack::study {
 
 namespace fs = std::filesystem;
+using core::refuseInput;
 using nlohmann::json;
-
-[[noreturn]] void bad(std::string_view source, std::string_view field, std::string_view what) {
-  throw std::invalid_argument(fmt::format("{}: {}: {}", source, field, what));
-}
 
 namespace {
 
@@ -36,10 +33,10 @@ json asList(const json& v) {
 // default (backend_options) is free-form and left to its owner to check.
 void checkKnownKeys(const json& given, const json& known, const std::string& path, std::string_view source) {
   for (const auto& [key, value] : given.items()) {
-    const std::string here = path.empty() ? core::textExcerpt(key) : path + "." + core::textExcerpt(key);
-    if (!known.contains(key)) bad(source, here, "unknown key");
+    if (!known.contains(key)) core::refuseUnknownKey(source, path, key, core::keyList(known));
     const json& k = known.at(key);
-    if (value.is_object() && k.is_object() && !k.empty()) checkKnownKeys(value, k, here, source);
+    if (value.is_object() && k.is_object() && !k.empty())
+      checkKnownKeys(value, k, path.empty() ? key : path + "." + key, source);
   }
 }
 
@@ -59,7 +56,7 @@ core::RunConfig resolveBase(const json& given, std::string_view source) {
   try {
     base = core::withWallsMoved(given);
   } catch (const std::exception& e) {
-    bad(source, "base", e.what());
+    refuseInput(source, "base", e.what());
   }
   core::to_json(merged, core::RunConfig{});
   checkKnownKeys(base, merged, "base", source);
@@ -68,7 +65,7 @@ core::RunConfig resolveBase(const json& given, std::string_view source) {
   try {
     core::from_json(merged, cfg);
   } catch (const std::exception& e) {
-    bad(source, "base", e.what());
+    refuseInput(source, "base", e.what());
   }
   return cfg;
 }
@@ -88,10 +85,10 @@ double listedRuns(const SweepGroup& g, double seeds) {
 
 void checkRunCount(double runs, std::size_t maxRuns, std::string_view source, std::string_view where) {
   if (runs > static_cast<double>(maxRuns))
-    bad(source, where,
-        fmt::format("lists {:.6g} runs, more than the limit of {} (check the lists and replicas, or raise the "
-                    "limit with --max-runs)",
-                    runs, maxRuns));
+    refuseInput(source, where,
+                fmt::format("lists {:.6g} runs, more than the limit of {} (check the lists and replicas, or raise the "
+                            "limit with --max-runs)",
+                            runs, maxRuns));
 }
 
 // The named axes and the configuration paths they set: a group may not give both names of one.
@@ -104,20 +101,8 @@ const std::vector<std::pair<std::string, std::string>>& namedAxisPaths() {
   return m;
 }
 
-std::string keysOf(const json& section) {
-  std::string keys;
-  for (const auto& [k, _] : section.items()) keys += (keys.empty() ? "" : ", ") + k;
-  return keys;
-}
-
-// A key of a group that is not a named axis: a path of the run configuration. It must name a
-// setting the configuration's readers know (walked in `defaults`, the resolved base as JSON), or a
-// backend option one of the backends knows; and each value must be read by them, so that a typo
-// in a path or a value is refused before any run, by its name. Ranges that depend on other
-// settings (a pinacoid's alpha against its E) are the expansion's to check, run by run.
-SettingAxis parseSettingAxis(const std::string& path, const json& list, const std::string& field,
-                             std::string_view source, const json& defaults) {
-  SettingAxis axis{path, {}};
+// The keys of a configuration path ("population.pinacoid.alpha_deg"), none of them empty.
+std::vector<std::string> configPathKeys(const std::string& path, const std::string& field, std::string_view source) {
   std::vector<std::string> keys;
   for (std::size_t at = 0;;) {
     const std::size_t dot = path.find('.', at);
@@ -127,62 +112,88 @@ SettingAxis parseSettingAxis(const std::string& path, const json& list, const st
   }
   for (const std::string& k : keys)
     if (k.empty())
-      bad(source, field,
-          "not a configuration path (keys of config.json joined by '.', e.g. population.pinacoid.alpha_deg)");
+      refuseInput(source, field,
+                  "not a configuration path (keys of config.json joined by '.', e.g. population.pinacoid.alpha_deg)");
+  return keys;
+}
 
-  if (keys.front() == "backend_options" && keys.size() > 2)
-    bad(source, field, "a backend option is one key deep: backend_options.KEY (confpack options nscd, or bullet)");
-  if (keys.front() == "backend_options" && keys.size() == 2) {
-    // Backend options are the backends' own settings tables: a value is valid when one of the
-    // backends reads it (the expansion checks each run against its own backend).
-    for (const json& v : list) {
-      std::string why;
-      for (std::string_view backend : core::kBackendNames) {
-        try {
-          backends::checkBackendOptions(backend, json{{keys[1], v}});
-          why.clear();
-          break;
-        } catch (const std::invalid_argument& e) {
-          // An unknown key is the least telling reason: keep a backend's objection to the value.
-          if (why.empty() || why.find(": unknown key") != std::string::npos) why = e.what();
-        }
+// backend_options.KEY: the backends' own settings tables, a value valid when one of the backends
+// reads it (the expansion checks each run against its own backend).
+SettingAxis parseBackendOptionAxis(const std::string& path, const std::string& key, const json& list,
+                                   const std::string& field, std::string_view source) {
+  SettingAxis axis{path, {}};
+  for (const json& v : list) {
+    std::string why;
+    for (std::string_view backend : core::kBackendNames) {
+      try {
+        backends::checkBackendOptions(backend, json{{key, v}});
+        why.clear();
+        break;
+      } catch (const std::invalid_argument& e) {
+        // An unknown key is the least telling reason: keep a backend's objection to the value.
+        if (why.empty() || why.find(": unknown key") != std::string::npos) why = e.what();
       }
-      if (!why.empty()) bad(source, field, why);
-      axis.values.push_back(v);
     }
-    return axis;
+    if (!why.empty()) refuseInput(source, field, why);
+    axis.values.push_back(v);
   }
+  return axis;
+}
 
+// The setting that `keys` name in `defaults` (the resolved base as JSON): a known path that ends at
+// a setting, not a section.
+const json& settingNode(const std::vector<std::string>& keys, const std::string& field, std::string_view source,
+                        const json& defaults) {
   const json* node = &defaults;
   std::string here;
   for (const std::string& k : keys) {
     if (!node->is_object() || !node->contains(k)) {
       if (here.empty())
-        bad(source, field,
+        refuseInput(
+            source, field,
             fmt::format("unknown key (known: width, shape, small_fraction, wall_friction, seed, replicas, backend, "
                         "or a path of the run configuration under {})",
-                        keysOf(*node)));
+                        core::keyList(*node)));
       if (!node->is_object())
-        bad(source, field, fmt::format("unknown configuration path: {} is a setting, not a section", here));
-      bad(source, field,
-          fmt::format("unknown configuration path: {} has no key {} (its keys: {})", here, core::textExcerpt(k),
-                      keysOf(*node)));
+        refuseInput(source, field, fmt::format("unknown configuration path: {} is a setting, not a section", here));
+      refuseInput(source, field,
+                  fmt::format("unknown configuration path: {} has no key {} (its keys: {})", here, core::textExcerpt(k),
+                              core::keyList(*node)));
     }
     here += (here.empty() ? "" : ".") + k;
     node = &node->at(k);
   }
   if (node->is_object())
-    bad(source, field,
-        node->empty() ? fmt::format("{} is a section: give one of its keys, {}.KEY", here, here)
-                      : fmt::format("{} is a section, not a setting: give one of its keys ({})", here, keysOf(*node)));
+    refuseInput(source, field,
+                node->empty() ? fmt::format("{} is a section: give one of its keys, {}.KEY", here, here)
+                              : fmt::format("{} is a section, not a setting: give one of its keys ({})", here,
+                                            core::keyList(*node)));
+  return *node;
+}
+
+// A key of a group that is not a named axis: a path of the run configuration. It must name a
+// setting the configuration's readers know (walked in `defaults`, the resolved base as JSON), or a
+// backend option one of the backends knows; and each value must be read by them, so that a typo
+// in a path or a value is refused before any run, by its name. Ranges that depend on other
+// settings (a pinacoid's alpha against its E) are the expansion's to check, run by run.
+SettingAxis parseSettingAxis(const std::string& path, const json& list, const std::string& field,
+                             std::string_view source, const json& defaults) {
+  const std::vector<std::string> keys = configPathKeys(path, field, source);
+  if (keys.front() == "backend_options" && keys.size() > 2)
+    refuseInput(source, field,
+                "a backend option is one key deep: backend_options.KEY (confpack options nscd, or bullet)");
+  if (keys.front() == "backend_options" && keys.size() == 2)
+    return parseBackendOptionAxis(path, keys[1], list, field, source);
+  const json& node = settingNode(keys, field, source, defaults);
+  SettingAxis axis{path, {}};
   for (const json& v : list) {
     // The readers of some sections take any JSON type and fail with the library's words: say it
     // plainly first.
-    const char* expected = node->is_number()    ? (v.is_number() || v.is_null() ? nullptr : "a number")
-                           : node->is_string()  ? (v.is_string() ? nullptr : "a string")
-                           : node->is_boolean() ? (v.is_boolean() ? nullptr : "true or false")
-                                                : nullptr;
-    if (expected) bad(source, field, fmt::format("expected {} (got {})", expected, core::jsonExcerpt(v)));
+    const char* expected = node.is_number()    ? (v.is_number() || v.is_null() ? nullptr : "a number")
+                           : node.is_string()  ? (v.is_string() ? nullptr : "a string")
+                           : node.is_boolean() ? (v.is_boolean() ? nullptr : "true or false")
+                                               : nullptr;
+    if (expected) refuseInput(source, field, fmt::format("expected {} (got {})", expected, core::jsonExcerpt(v)));
     json cfg = defaults;
     json* at = &cfg;
     for (const std::string& k : keys) at = &(*at)[k];
@@ -191,147 +202,152 @@ SettingAxis parseSettingAxis(const std::string& path, const json& list, const st
       core::RunConfig c;
       core::from_json(cfg, c);
     } catch (const std::exception& e) {
-      bad(source, field, e.what());
+      refuseInput(source, field, e.what());
     }
     axis.values.push_back(v);
   }
   return axis;
 }
 
+// The values of a named axis into `out`; false when `key` names none (a setting's path).
+bool parseNamedAxis(const std::string& key, const json& list, const std::string& field, std::string_view source,
+                    SweepGroup& out) {
+  if (key == "width") {
+    for (const json& v : list) {
+      if (v.is_string() && v.get<std::string>() == "biperiodic") {
+        out.widths.push_back({0.0, true});  // period filled in by parseSweepSpec
+      } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
+        out.widths.push_back({v.get<double>(), false});
+      } else {
+        refuseInput(source, field,
+                    fmt::format("expected a positive number or \"biperiodic\" (got {})", core::jsonExcerpt(v)));
+      }
+    }
+  } else if (key == "shape") {
+    for (const json& v : list) {
+      const std::string why = fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v));
+      if (!v.is_string()) refuseInput(source, field, why);
+      try {
+        out.shapes.push_back(core::shapeFromString(v.get<std::string>()));
+      } catch (const std::invalid_argument&) {
+        refuseInput(source, field, why);
+      }
+    }
+  } else if (key == "small_fraction") {
+    for (const json& v : list) {
+      if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 100.0))
+        refuseInput(source, field, fmt::format("x_S must be a number in [0, 100] (got {})", core::jsonExcerpt(v)));
+      out.smallFractions.push_back(v.get<double>());
+    }
+  } else if (key == "wall_friction") {
+    for (const json& v : list) {
+      if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
+        refuseInput(source, field, fmt::format("mu_w must be a number >= 0 (got {})", core::jsonExcerpt(v)));
+      out.wallFrictions.push_back(v.get<double>());
+    }
+  } else if (key == "seed") {
+    for (const json& v : list) {
+      if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
+        refuseInput(source, field, fmt::format("seeds must be non-negative integers (got {})", core::jsonExcerpt(v)));
+      out.seeds.push_back(v.get<std::uint64_t>());
+    }
+  } else if (key == "backend") {
+    const auto& names = core::kBackendNames;
+    for (const json& v : list) {
+      if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
+        refuseInput(source, field, fmt::format("unknown backend {} (known: nscd, bullet)", core::jsonExcerpt(v)));
+      out.backends.push_back(v.get<std::string>());
+    }
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// A group's "replicas": n, as seeds 1..n, so that "replicas": 3 and "seed": [1, 2, 3] name the
+// same runs; counted against `maxRuns` before they are listed.
+void addReplicas(const core::ObjectReader& group, std::size_t maxRuns, SweepGroup& out) {
+  if (group.has("seed")) group.refuse("replicas", "give either seed or replicas, not both");
+  const json& r = group.at("replicas");
+  if (!r.is_number_integer() || r.get<std::int64_t>() < 1)
+    group.refuse("replicas", fmt::format("expected an integer >= 1 (got {})", core::jsonExcerpt(r)));
+  checkRunCount(listedRuns(out, static_cast<double>(r.get<std::int64_t>())), maxRuns, group.source(), group.path());
+  for (std::int64_t s = 1; s <= r.get<std::int64_t>(); ++s) out.seeds.push_back(static_cast<std::uint64_t>(s));
+}
+
 SweepGroup parseGroup(const json& g, const std::string& where, std::string_view source, std::size_t maxRuns,
                       const json& defaults) {
-  if (!g.is_object()) bad(source, where, "expected an object of value lists");
+  const core::ObjectReader group(g, source, where);
   SweepGroup out;
   for (const auto& [key, raw] : g.items()) {
     const std::string field = where + "." + core::textExcerpt(key);
     if (key == "replicas") continue;
     const json list = asList(raw);
-    if (list.empty()) bad(source, field, "empty list");
-    if (key == "width") {
-      for (const json& v : list) {
-        if (v.is_string() && v.get<std::string>() == "biperiodic") {
-          out.widths.push_back({0.0, true});  // period filled in by parseSweepSpec
-        } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
-          out.widths.push_back({v.get<double>(), false});
-        } else {
-          bad(source, field,
-              fmt::format("expected a positive number or \"biperiodic\" (got {})", core::jsonExcerpt(v)));
-        }
-      }
-    } else if (key == "shape") {
-      for (const json& v : list) {
-        if (!v.is_string())
-          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v)));
-        try {
-          out.shapes.push_back(core::shapeFromString(v.get<std::string>()));
-        } catch (const std::invalid_argument&) {
-          bad(source, field, fmt::format("expected \"sphere\" or \"pinacoid\" (got {})", core::jsonExcerpt(v)));
-        }
-      }
-    } else if (key == "small_fraction") {
-      for (const json& v : list) {
-        if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 100.0))
-          bad(source, field, fmt::format("x_S must be a number in [0, 100] (got {})", core::jsonExcerpt(v)));
-        out.smallFractions.push_back(v.get<double>());
-      }
-    } else if (key == "wall_friction") {
-      for (const json& v : list) {
-        if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
-          bad(source, field, fmt::format("mu_w must be a number >= 0 (got {})", core::jsonExcerpt(v)));
-        out.wallFrictions.push_back(v.get<double>());
-      }
-    } else if (key == "seed") {
-      for (const json& v : list) {
-        if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
-          bad(source, field, fmt::format("seeds must be non-negative integers (got {})", core::jsonExcerpt(v)));
-        out.seeds.push_back(v.get<std::uint64_t>());
-      }
-    } else if (key == "backend") {
-      const auto& names = core::kBackendNames;
-      for (const json& v : list) {
-        if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
-          bad(source, field, fmt::format("unknown backend {} (known: nscd, bullet)", core::jsonExcerpt(v)));
-        out.backends.push_back(v.get<std::string>());
-      }
-    } else {
+    if (list.empty()) refuseInput(source, field, "empty list");
+    if (!parseNamedAxis(key, list, field, source, out))
       out.settings.push_back(parseSettingAxis(key, list, field, source, defaults));
-    }
   }
   for (const auto& [name, path] : namedAxisPaths())
-    if (g.contains(name) && g.contains(path))
-      bad(source, where + "." + path, fmt::format("{} and {} vary the same setting: give one of them", name, path));
-  if (g.contains("replicas")) {
-    if (g.contains("seed")) bad(source, where + ".replicas", "give either seed or replicas, not both");
-    const json& r = g.at("replicas");
-    if (!r.is_number_integer() || r.get<std::int64_t>() < 1)
-      bad(source, where + ".replicas", fmt::format("expected an integer >= 1 (got {})", core::jsonExcerpt(r)));
-    checkRunCount(listedRuns(out, static_cast<double>(r.get<std::int64_t>())), maxRuns, source, where);
-    // Replicas are seeds 1..n, so that "replicas": 3 and "seed": [1, 2, 3] name the same runs.
-    for (std::int64_t s = 1; s <= r.get<std::int64_t>(); ++s) out.seeds.push_back(static_cast<std::uint64_t>(s));
-  }
+    if (group.has(name) && group.has(path))
+      group.refuse(path, fmt::format("{} and {} vary the same setting: give one of them", name, path));
+  if (group.has("replicas")) addReplicas(group, maxRuns, out);
   return out;
+}
+
+// The sweep's name, base, biperiodic width and settle_with, each optional.
+void readSweepSettings(const core::ObjectReader& doc, SweepSpec& spec) {
+  if (doc.has("name")) {
+    spec.name = doc.string("name");
+    if (spec.name.empty()) doc.refuse("name", "must be a non-empty string (got \"\")");
+  }
+  if (doc.has("base")) {
+    const json& base = doc.object("base");
+    try {  // a base written before the walls had their own object: mu_w moved to walls.friction
+      spec.base = core::withWallsMoved(base);
+    } catch (const std::exception& e) {
+      doc.refuse("base", e.what());
+    }
+  }
+  resolveBase(spec.base, doc.source());  // refuse a bad base before anything else
+  if (doc.has("biperiodic_width")) spec.biperiodicWidth = doc.number("biperiodic_width", core::Range::positive());
+  if (doc.has("settle_with")) {
+    // Only nscd has the quasi-static finisher that brings a pile to rest whatever its state.
+    const json& w = doc.at("settle_with");
+    if (w != "nscd")
+      doc.refuse("settle_with",
+                 fmt::format("expected \"nscd\", the backend with a finisher (got {})", core::jsonExcerpt(w)));
+    spec.settleWith = w.get<std::string>();
+  }
+}
+
+// The groups of runs: "vary" (one product) or "groups" (a list of products).
+void readSweepGroups(const core::ObjectReader& doc, std::size_t maxRuns, SweepSpec& spec) {
+  if (doc.has("vary") == doc.has("groups"))
+    doc.refuse("vary", "give exactly one of \"vary\" (one product) or \"groups\" (a list of products)");
+  const json defaults = mergedBase(spec.base);
+  if (doc.has("vary")) {
+    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", doc.source(), maxRuns, defaults));
+  } else {
+    const json& groups = doc.array("groups");
+    if (groups.empty()) doc.refuse("groups", "must hold at least one group (an object of value lists)");
+    for (std::size_t i = 0; i < groups.size(); ++i)
+      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), doc.source(), maxRuns, defaults));
+  }
+  double runs = 0.0;
+  for (const SweepGroup& g : spec.groups) runs += listedRuns(g, static_cast<double>(g.seeds.size()));
+  checkRunCount(runs, maxRuns, doc.source(), doc.has("vary") ? "vary" : "groups");
 }
 
 }  // namespace
 
 SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t maxRuns) {
-  if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
-  static const std::set<std::string> known = {"format", "version", "name",        "base",       "biperiodic_width",
-                                              "vary",   "groups",  "description", "settle_with"};
-  for (const auto& [key, v] : doc.items())
-    if (!known.count(key))
-      bad(source, core::textExcerpt(key),
-          "unknown key (known: format, version, name, description, base, biperiodic_width, vary, groups, "
-          "settle_with)");
-  if (doc.contains("format") && doc.at("format") != kSweepFormat)
-    bad(source, "format", fmt::format("expected \"{}\"", kSweepFormat));
-  if (doc.contains("version") && doc.at("version") != kSweepVersion)
-    bad(source, "version", fmt::format("expected {}", kSweepVersion));
-
+  const core::ObjectReader top = core::readDocument(
+      doc, source, {kSweepFormat, kSweepVersion, core::HeaderKey::Optional, core::HeaderKey::Optional},
+      {"format", "version", "name", "description", "base", "biperiodic_width", "vary", "groups", "settle_with"});
   SweepSpec spec;
   spec.source = doc;
-  if (doc.contains("name")) {
-    if (!doc.at("name").is_string() || doc.at("name").get<std::string>().empty())
-      bad(source, "name", "expected a non-empty string");
-    spec.name = doc.at("name").get<std::string>();
-  }
-  if (doc.contains("base")) {
-    if (!doc.at("base").is_object()) bad(source, "base", "expected an object (a run configuration)");
-    try {  // a base written before the walls had their own object: mu_w moved to walls.friction
-      spec.base = core::withWallsMoved(doc.at("base"));
-    } catch (const std::exception& e) {
-      bad(source, "base", e.what());
-    }
-  }
-  resolveBase(spec.base, source);  // refuse a bad base before anything else
-  if (doc.contains("biperiodic_width")) {
-    const json& w = doc.at("biperiodic_width");
-    if (!w.is_number() || !(w.get<double>() > 0.0))
-      bad(source, "biperiodic_width", fmt::format("expected a positive number (got {})", core::jsonExcerpt(w)));
-    spec.biperiodicWidth = w.get<double>();
-  }
-  if (doc.contains("settle_with")) {
-    // Only nscd has the quasi-static finisher that brings a pile to rest whatever its state.
-    const json& w = doc.at("settle_with");
-    if (w != "nscd")
-      bad(source, "settle_with",
-          fmt::format("expected \"nscd\", the backend with a finisher (got {})", core::jsonExcerpt(w)));
-    spec.settleWith = w.get<std::string>();
-  }
-  if (doc.contains("vary") == doc.contains("groups"))
-    bad(source, "vary", "give exactly one of \"vary\" (one product) or \"groups\" (a list of products)");
-  const json defaults = mergedBase(spec.base);
-  if (doc.contains("vary")) {
-    spec.groups.push_back(parseGroup(doc.at("vary"), "vary", source, maxRuns, defaults));
-  } else {
-    const json& groups = doc.at("groups");
-    if (!groups.is_array() || groups.empty()) bad(source, "groups", "expected a non-empty list of objects");
-    for (std::size_t i = 0; i < groups.size(); ++i)
-      spec.groups.push_back(parseGroup(groups[i], fmt::format("groups[{}]", i), source, maxRuns, defaults));
-  }
-  double runs = 0.0;
-  for (const SweepGroup& g : spec.groups) runs += listedRuns(g, static_cast<double>(g.seeds.size()));
-  checkRunCount(runs, maxRuns, source, doc.contains("vary") ? "vary" : "groups");
+  readSweepSettings(top, spec);
+  readSweepGroups(top, maxRuns, spec);
   for (SweepGroup& g : spec.groups)
     for (WidthChoice& w : g.widths)
       if (w.periodicY) w.width = spec.biperiodicWidth;

@@ -9,11 +9,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/input_document.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "core/settings_table.hpp"
 #include "study/sweep.hpp"
-#include "study/sweep_internal.hpp"
 
 namespace confpack::study {
 
@@ -107,60 +107,67 @@ json runTableDocument(const SweepSpec& spec, const std::vector<SweepRun>& runs) 
           {"runs", runTableJson(runs)}};
 }
 
+namespace {
+
+// A run folder's name: letters, digits, '_' or '-', at most 64 of them (it must stay one folder of
+// runs/), and no other run's.
+std::string readRunName(const core::ObjectReader& row, std::set<std::string>& names) {
+  const json& name = row.at("name");
+  if (!name.is_string() || name.get<std::string>().empty() || name.get<std::string>().size() > 64 ||
+      name.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+          std::string::npos)
+    row.refuse("name", fmt::format("expected a run folder's name: letters, digits, '_' or '-' (got {})",
+                                   core::jsonExcerpt(name)));
+  if (!names.insert(name.get<std::string>()).second)
+    row.refuse("name", fmt::format("\"{}\" names two runs", name.get<std::string>()));
+  return name.get<std::string>();
+}
+
+// "d" and the index of a deposit below `runCount`.
+std::size_t readDepositIndex(const core::ObjectReader& row, std::size_t runCount) {
+  const json& deposit = row.at("deposit");
+  const std::string dep = deposit.is_string() ? deposit.get<std::string>() : std::string();
+  if (dep.size() < 2 || dep.size() > 10 || dep[0] != 'd' ||
+      dep.find_first_not_of("0123456789", 1) != std::string::npos || std::stoul(dep.substr(1)) >= runCount)
+    row.refuse("deposit", fmt::format("expected \"d\" and the index of a deposit below the number of runs (got {})",
+                                      core::jsonExcerpt(deposit)));
+  return static_cast<std::size_t>(std::stoul(dep.substr(1)));
+}
+
+// Row `index` of the table: a user may edit it, so every field is checked.
+SweepRun readRun(const json& r, std::size_t index, std::size_t runCount, std::set<std::string>& names,
+                 std::string_view source) {
+  const core::ObjectReader row(r, source, fmt::format("runs[{}]", index));
+  row.onlyKeys({"name", "deposit", "label", "config"});
+  for (const char* key : {"name", "deposit", "config"}) (void)row.at(key);
+  SweepRun run;
+  run.index = index;
+  run.name = readRunName(row, names);
+  run.depositIndex = readDepositIndex(row, runCount);
+  try {
+    core::from_json(row.at("config"), run.config);
+    run.config.validate();
+  } catch (const std::invalid_argument& e) {
+    row.refuse("config", e.what());
+  } catch (const json::exception& e) {
+    row.refuse("config", e.what());
+  }
+  return run;
+}
+
+}  // namespace
+
 std::vector<SweepRun> parseRunTable(const json& doc, std::string_view source, SweepSpec* spec) {
-  if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
-  for (const auto& [key, v] : doc.items())
-    if (key != "format" && key != "version" && key != "name" && key != "sweep" && key != "runs")
-      bad(source, core::textExcerpt(key), "unknown key (known: format, version, name, sweep, runs)");
-  if (!doc.contains("format") || doc.at("format") != kSweepTableFormat)
-    bad(source, "format", fmt::format("not a confpack sweep table (expected \"{}\")", kSweepTableFormat));
-  if (doc.contains("version") && doc.at("version") != 1) bad(source, "version", "expected 1");
-  if (!doc.contains("runs") || !doc.at("runs").is_array()) bad(source, "runs", "expected an array (the run table)");
-  if (!doc.contains("sweep")) bad(source, "sweep", "missing (the sweep file that made the table)");
-  const json& table = doc.at("runs");
+  const core::ObjectReader top =
+      core::readDocument(doc, source, {kSweepTableFormat, 1, core::HeaderKey::Required, core::HeaderKey::Optional},
+                         {"format", "version", "name", "sweep", "runs"});
+  const json& table = top.array("runs");
+  const json& sweep = top.at("sweep", "the sweep file that made the table");
   // The table on disk was listed already, under whatever --max-runs its sweep was given.
-  SweepSpec parsed =
-      parseSweepSpec(doc.at("sweep"), fmt::format("{}: sweep", source), std::max(kDefaultMaxRuns, table.size()));
-  // A user may edit the table: every field is checked, and a name must stay one folder of runs/.
+  SweepSpec parsed = parseSweepSpec(sweep, fmt::format("{}: sweep", source), std::max(kDefaultMaxRuns, table.size()));
   std::vector<SweepRun> runs;
   std::set<std::string> names;
-  for (const json& r : table) {
-    const std::string where = fmt::format("runs[{}]", runs.size());
-    if (!r.is_object()) bad(source, where, "expected an object (name, deposit, label, config)");
-    for (const auto& [key, v] : r.items())
-      if (key != "name" && key != "deposit" && key != "label" && key != "config")
-        bad(source, fmt::format("{}.{}", where, core::textExcerpt(key)),
-            "unknown key (known: name, deposit, label, config)");
-    for (const char* key : {"name", "deposit", "config"})
-      if (!r.contains(key)) bad(source, fmt::format("{}.{}", where, key), "missing");
-    SweepRun run;
-    run.index = runs.size();
-    const json& name = r.at("name");
-    if (!name.is_string() || name.get<std::string>().empty() || name.get<std::string>().size() > 64 ||
-        name.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
-            std::string::npos)
-      bad(source, where + ".name",
-          fmt::format("expected a run folder's name: letters, digits, '_' or '-' (got {})", core::jsonExcerpt(name)));
-    run.name = name.get<std::string>();
-    if (!names.insert(run.name).second) bad(source, where + ".name", fmt::format("\"{}\" names two runs", run.name));
-    const json& deposit = r.at("deposit");
-    const std::string dep = deposit.is_string() ? deposit.get<std::string>() : std::string();
-    if (dep.size() < 2 || dep.size() > 10 || dep[0] != 'd' ||
-        dep.find_first_not_of("0123456789", 1) != std::string::npos || std::stoul(dep.substr(1)) >= table.size())
-      bad(source, where + ".deposit",
-          fmt::format("expected \"d\" and the index of a deposit below the number of runs (got {})",
-                      core::jsonExcerpt(deposit)));
-    run.depositIndex = static_cast<std::size_t>(std::stoul(dep.substr(1)));
-    try {
-      core::from_json(r.at("config"), run.config);
-      run.config.validate();
-    } catch (const std::invalid_argument& e) {
-      bad(source, where + ".config", e.what());
-    } catch (const json::exception& e) {
-      bad(source, where + ".config", e.what());
-    }
-    runs.push_back(std::move(run));
-  }
+  for (const json& r : table) runs.push_back(readRun(r, runs.size(), table.size(), names, source));
   if (spec) *spec = std::move(parsed);
   return runs;
 }

@@ -178,6 +178,26 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
   CHECK_THAT(message(json::parse(R"({"vary": {}, "groups": [{}]})")), Contains("vary"));
   CHECK_THAT(message(json::parse(R"({"vary": {}, "colour": 1})")), Contains("colour"));
   CHECK(message(json::parse(R"({"vary": {"width": [5, "biperiodic"]}})")) == "accepted");
+  // The header is optional, and checked when given; every refusal is the full "file: field: what".
+  CHECK(message(json::parse(R"({"format": "confpack-sweep", "version": 1, "vary": {}})")) == "accepted");
+  CHECK(message(json::parse(R"({"format": "confpack-packing", "vary": {}})")) ==
+        "s.json: format: must be \"confpack-sweep\" (got \"confpack-packing\")");
+  CHECK(message(json::parse(R"({"version": 2, "vary": {}})")) ==
+        "s.json: version: must be 1, the version this build reads (got 2)");
+  CHECK(message(json::parse(R"({"vary": {}, "colour": 1})")) ==
+        "s.json: colour: unknown key (known: format, version, name, description, base, biperiodic_width, vary, "
+        "groups, settle_with)");
+  CHECK(message(json::parse("[]")) == "s.json: document: must be a JSON object (got array)");
+  CHECK(message(json::parse(R"({"name": 3, "vary": {}})")) == "s.json: name: must be a string (got 3)");
+  CHECK(message(json::parse(R"({"name": "", "vary": {}})")) == "s.json: name: must be a non-empty string (got \"\")");
+  CHECK(message(json::parse(R"({"base": [], "vary": {}})")) == "s.json: base: must be a JSON object (got array)");
+  CHECK(message(json::parse(R"({"base": {"box": {"widht": 5}}, "vary": {}})")) ==
+        "s.json: base.box.widht: unknown key (known: height, length_x, periodic_y, width)");
+  CHECK(message(json::parse(R"({"biperiodic_width": 0, "vary": {}})")) ==
+        "s.json: biperiodic_width: must be > 0 (got 0)");
+  CHECK(message(json::parse(R"({"vary": []})")) == "s.json: vary: must be a JSON object (got array)");
+  CHECK(message(json::parse(R"({"groups": []})")) ==
+        "s.json: groups: must hold at least one group (an object of value lists)");
   // Only nscd has the finisher that brings any pile to rest.
   CHECK_THAT(message(json::parse(R"({"vary": {}, "settle_with": "bullet"})")),
              Contains("s.json: settle_with: expected \"nscd\""));
@@ -540,15 +560,21 @@ TEST_CASE("sweep table: what prepareSweepDir writes reads back, and a hand-edite
       {[](json& d) { d["runs"][1]["name"] = 3; }, "t/sweep.json: runs[1].name: expected a run folder's name"},
       {[](json& d) { d["runs"][1]["name"] = "../../x"; }, "t/sweep.json: runs[1].name: expected a run folder's name"},
       {[](json& d) { d["runs"][1]["name"] = "r0000"; }, "t/sweep.json: runs[1].name: \"r0000\" names two runs"},
-      {[](json& d) { d["runs"][2] = "hello"; }, "t/sweep.json: runs[2]: expected an object"},
-      {[](json& d) { d["runs"][2]["colour"] = 1; }, "t/sweep.json: runs[2].colour: unknown key"},
+      {[](json& d) { d["runs"][2] = "hello"; }, "t/sweep.json: runs[2]: must be a JSON object (got string)"},
+      {[](json& d) { d["runs"][2]["colour"] = 1; },
+       "t/sweep.json: runs[2].colour: unknown key (known: name, deposit, label, config)"},
       {[](json& d) { d["runs"][2]["config"]["box"]["widht"] = 3; },
        "t/sweep.json: runs[2].config: box.widht: unknown key"},
       {[](json& d) { d["runs"][2]["config"]["box"]["width"] = -3; }, "t/sweep.json: runs[2].config: "},
-      {[](json& d) { d.erase("sweep"); }, "t/sweep.json: sweep: missing"},
-      {[](json& d) { d["sweep"] = 5; }, "t/sweep.json: sweep: (document): expected a JSON object"},
-      {[](json& d) { d["runs"] = json::object(); }, "t/sweep.json: runs: expected an array"},
-      {[](json& d) { d["format"] = "confpack-sweep"; }, "t/sweep.json: format: not a confpack sweep table"},
+      {[](json& d) { d.erase("sweep"); }, "t/sweep.json: sweep: missing (the sweep file that made the table)"},
+      {[](json& d) { d["sweep"] = 5; }, "t/sweep.json: sweep: document: must be a JSON object (got number)"},
+      {[](json& d) { d["runs"] = json::object(); }, "t/sweep.json: runs: must be an array (got object)"},
+      {[](json& d) { d.erase("format"); }, "t/sweep.json: format: missing (expected \"confpack-sweep-table\")"},
+      {[](json& d) { d["version"] = 2; }, "t/sweep.json: version: must be 1, the version this build reads (got 2)"},
+      {[](json& d) { d["colour"] = 1; },
+       "t/sweep.json: colour: unknown key (known: format, version, name, sweep, runs)"},
+      {[](json& d) { d["format"] = "confpack-sweep"; },
+       "t/sweep.json: format: must be \"confpack-sweep-table\" (got \"confpack-sweep\")"},
   };
   for (const auto& [edit, message] : edits) {
     json edited = doc;
@@ -556,6 +582,10 @@ TEST_CASE("sweep table: what prepareSweepDir writes reads back, and a hand-edite
     INFO(message);
     CHECK_THROWS_WITH(study::parseRunTable(edited, "t/sweep.json"), Catch::StartsWith(message));
   }
+  // The version may be left out (the format may not).
+  json noVersion = doc;
+  noVersion.erase("version");
+  CHECK_NOTHROW(study::parseRunTable(noVersion, "t/sweep.json"));
 }
 
 TEST_CASE("the sweep.json seeds of the fuzz corpus are accepted tables") {
