@@ -6,11 +6,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/input_document.hpp"
 #include "core/json_input.hpp"
 #include "core/settings_table.hpp"
 
 namespace confpack::study {
 
+using core::refuseInput;
 using nlohmann::json;
 
 const std::vector<ReferenceQuantity>& referenceQuantities() {
@@ -28,10 +30,6 @@ const std::vector<std::string>& referenceFamilies() {
 }
 
 namespace {
-
-[[noreturn]] void bad(std::string_view source, std::string_view field, std::string_view what) {
-  throw std::invalid_argument(fmt::format("{}: {}: {}", source, field, what));
-}
 
 // One published number, read through a settings table named after its place in the file, so that
 // its messages say "families.MSP.phi_bulk.uncertainty: must be >= 0 (got -1)".
@@ -56,7 +54,7 @@ ReferenceValue readValue(const json& j, const std::string& where, std::string_vi
   // A number without its uncertainty or its source cannot be weighed against a study's.
   for (const auto& f : table.fields())
     if (!j.contains(f.key))
-      bad(source, where + "." + f.key, "missing (a reference value needs value, uncertainty and citation)");
+      refuseInput(source, where + "." + f.key, "missing (a reference value needs value, uncertainty and citation)");
   return v;
 }
 
@@ -66,35 +64,44 @@ std::string quantityKeys() {
   return s;
 }
 
+// x_S (in [0, 100], and 0 exactly when the family is monodisperse) or mu_w (>= 0), given `field`.
+void readSelector(const std::string& key, const json& v, const std::string& field, std::string_view source,
+                  ReferenceEntry& out) {
+  if (key == "x_S") {
+    if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 100.0))
+      refuseInput(source, field, fmt::format("must be a number in [0, 100] (got {})", core::jsonExcerpt(v, 40)));
+    // The family's letter and x_S say the same thing: they must not contradict each other.
+    const bool bidisperse = out.family[0] == 'B';
+    if (bidisperse && v.get<double>() == 0.0)
+      refuseInput(source, field, fmt::format("{} is bidisperse: x_S must be > 0 (got 0)", out.family));
+    if (!bidisperse && v.get<double>() != 0.0)
+      refuseInput(source, field,
+                  fmt::format("{} is monodisperse: x_S must be 0 (got {})", out.family, core::jsonExcerpt(v, 40)));
+    out.smallFraction = v.get<double>();
+  } else {
+    if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
+      refuseInput(source, field, fmt::format("must be a number >= 0 (got {})", core::jsonExcerpt(v, 40)));
+    out.wallFriction = v.get<double>();
+  }
+}
+
 ReferenceEntry readEntry(const json& e, const std::string& family, const std::string& where, std::string_view source) {
-  if (!e.is_object()) bad(source, where, fmt::format("expected an object of reference values (got {})", e.type_name()));
+  const core::ObjectReader entry(e, source, where);
   ReferenceEntry out;
   out.family = family;
   out.where = where;
-  const bool bidisperse = family[0] == 'B';
   for (const auto& [key, v] : e.items()) {
-    const std::string field = where + "." + core::textExcerpt(key);
-    if (key == "x_S") {
-      if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 100.0))
-        bad(source, field, fmt::format("must be a number in [0, 100] (got {})", core::jsonExcerpt(v, 40)));
-      // The family's letter and x_S say the same thing: they must not contradict each other.
-      if (bidisperse && v.get<double>() == 0.0)
-        bad(source, field, fmt::format("{} is bidisperse: x_S must be > 0 (got 0)", family));
-      if (!bidisperse && v.get<double>() != 0.0)
-        bad(source, field, fmt::format("{} is monodisperse: x_S must be 0 (got {})", family, core::jsonExcerpt(v, 40)));
-      out.smallFraction = v.get<double>();
-    } else if (key == "mu_w") {
-      if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
-        bad(source, field, fmt::format("must be a number >= 0 (got {})", core::jsonExcerpt(v, 40)));
-      out.wallFriction = v.get<double>();
-    } else if (std::any_of(referenceQuantities().begin(), referenceQuantities().end(),
-                           [&](const ReferenceQuantity& q) { return q.key == key; })) {
+    const std::string field = entry.field(core::textExcerpt(key));
+    if (key == "x_S" || key == "mu_w")
+      readSelector(key, v, field, source, out);
+    else if (std::any_of(referenceQuantities().begin(), referenceQuantities().end(),
+                         [&](const ReferenceQuantity& q) { return q.key == key; }))
       out.values[key] = readValue(v, field, source);
-    } else {
-      bad(source, field, fmt::format("unknown key (known: x_S, mu_w, {})", quantityKeys()));
-    }
+    else
+      core::refuseUnknownKey(source, where, key, "x_S, mu_w, " + quantityKeys());
   }
-  if (out.values.empty()) bad(source, where, fmt::format("gives no value (known quantities: {})", quantityKeys()));
+  if (out.values.empty())
+    refuseInput(source, where, fmt::format("gives no value (known quantities: {})", quantityKeys()));
   return out;
 }
 
@@ -121,50 +128,52 @@ const ReferenceValue* ReferenceValues::find(std::string_view family, double smal
   return best;
 }
 
-ReferenceValues parseReferenceValues(const json& doc, std::string_view source) {
-  if (!doc.is_object()) bad(source, "(document)", "expected a JSON object");
-  for (const auto& [key, v] : doc.items())
-    if (key != "format" && key != "version" && key != "description" && key != "families")
-      bad(source, core::textExcerpt(key), "unknown key (known: format, version, description, families)");
-  if (doc.contains("format") && doc.at("format") != kReferenceFormat)
-    bad(source, "format", fmt::format("expected \"{}\"", kReferenceFormat));
-  if (doc.contains("version") && doc.at("version") != kReferenceVersion)
-    bad(source, "version", fmt::format("expected {}", kReferenceVersion));
-  ReferenceValues out;
-  out.source = std::string(source);
-  if (doc.contains("description")) {
-    if (!doc.at("description").is_string()) bad(source, "description", "expected a string");
-    out.description = doc.at("description").get<std::string>();
+namespace {
+
+// The entries of one family: an object, or a non-empty list of them.
+void readFamily(const std::string& family, const json& v, std::string_view source, ReferenceValues& out) {
+  const std::string where = "families." + core::textExcerpt(family);
+  const auto& known = referenceFamilies();
+  if (std::find(known.begin(), known.end(), family) == known.end())
+    refuseInput(source, where, "unknown family (known: MSP, BSP, MPP, BPP)");
+  if (!v.is_array()) {
+    out.entries.push_back(readEntry(v, family, where, source));
+    return;
   }
-  if (!doc.contains("families")) bad(source, "families", "missing (an object keyed by MSP, BSP, MPP, BPP)");
-  const json& families = doc.at("families");
-  if (!families.is_object() || families.empty())
-    bad(source, "families", "expected a non-empty object keyed by MSP, BSP, MPP, BPP");
-  for (const auto& [family, v] : families.items()) {
-    const std::string where = "families." + core::textExcerpt(family);
-    const auto& known = referenceFamilies();
-    if (std::find(known.begin(), known.end(), family) == known.end())
-      bad(source, where, "unknown family (known: MSP, BSP, MPP, BPP)");
-    if (v.is_array()) {
-      if (v.empty()) bad(source, where, "expected a non-empty list of entries");
-      for (std::size_t i = 0; i < v.size(); ++i)
-        out.entries.push_back(readEntry(v[i], family, fmt::format("{}[{}]", where, i), source));
-    } else {
-      out.entries.push_back(readEntry(v, family, where, source));
-    }
-  }
-  // Two entries that match the same series and give the same quantity would leave the report to
-  // pick one of two published numbers silently.
-  for (std::size_t i = 0; i < out.entries.size(); ++i)
+  if (v.empty()) refuseInput(source, where, "expected a non-empty list of entries");
+  for (std::size_t i = 0; i < v.size(); ++i)
+    out.entries.push_back(readEntry(v[i], family, fmt::format("{}[{}]", where, i), source));
+}
+
+// Two entries that match the same series and give the same quantity would leave the report to
+// pick one of two published numbers silently.
+void refuseDuplicates(const ReferenceValues& values, std::string_view source) {
+  for (std::size_t i = 0; i < values.entries.size(); ++i)
     for (std::size_t j = 0; j < i; ++j) {
-      const ReferenceEntry& a = out.entries[i];
-      const ReferenceEntry& b = out.entries[j];
+      const ReferenceEntry& a = values.entries[i];
+      const ReferenceEntry& b = values.entries[j];
       if (a.family != b.family || a.smallFraction != b.smallFraction || a.wallFriction != b.wallFriction) continue;
       for (const auto& [key, _] : a.values)
         if (b.values.count(key))
-          bad(source, a.where + "." + key,
-              fmt::format("given twice for the same family, x_S and mu_w (also in {})", b.where));
+          refuseInput(source, a.where + "." + key,
+                      fmt::format("given twice for the same family, x_S and mu_w (also in {})", b.where));
     }
+}
+
+}  // namespace
+
+ReferenceValues parseReferenceValues(const json& doc, std::string_view source) {
+  const core::ObjectReader top = core::readDocument(
+      doc, source, {kReferenceFormat, kReferenceVersion, core::HeaderKey::Optional, core::HeaderKey::Optional},
+      {"format", "version", "description", "families"});
+  ReferenceValues out;
+  out.source = std::string(source);
+  if (top.has("description")) out.description = top.string("description");
+  const json& families = top.at("families", "an object keyed by MSP, BSP, MPP, BPP");
+  if (!families.is_object() || families.empty())
+    top.refuse("families", "expected a non-empty object keyed by MSP, BSP, MPP, BPP");
+  for (const auto& [family, v] : families.items()) readFamily(family, v, source, out);
+  refuseDuplicates(out, source);
   return out;
 }
 

@@ -63,13 +63,18 @@ TEST_CASE("reference values: every refusal names the file and the field") {
     CHECK_THROWS_WITH(study::parseReferenceValues(doc, "ref.json"), message);
   };
   const json ok = value(0.64);
-  refused(json::array(), "ref.json: (document): expected a JSON object");
+  // The header may be left out, and is checked when given.
+  CHECK_NOTHROW(study::parseReferenceValues({{"families", {{"MSP", {{"phi_bulk", ok}}}}}}, "ref.json"));
+  refused(json::array(), "ref.json: document: must be a JSON object (got array)");
   refused({{"families", {{"MSP", {{"phi_bulk", ok}}}}}, {"reference", 1}},
           "ref.json: reference: unknown key (known: format, version, description, families)");
   refused({{"format", "confpack-sweep"}, {"families", {{"MSP", {{"phi_bulk", ok}}}}}},
-          "ref.json: format: expected \"confpack-reference\"");
-  refused({{"version", 2}, {"families", {{"MSP", {{"phi_bulk", ok}}}}}}, "ref.json: version: expected 1");
+          "ref.json: format: must be \"confpack-reference\" (got \"confpack-sweep\")");
+  refused({{"version", 2}, {"families", {{"MSP", {{"phi_bulk", ok}}}}}},
+          "ref.json: version: must be 1, the version this build reads (got 2)");
   refused({{"format", "confpack-reference"}}, "ref.json: families: missing (an object keyed by MSP, BSP, MPP, BPP)");
+  refused({{"description", 3}, {"families", {{"MSP", {{"phi_bulk", ok}}}}}},
+          "ref.json: description: must be a string (got 3)");
   refused(document(json::object()), "ref.json: families: expected a non-empty object keyed by MSP, BSP, MPP, BPP");
   refused(document({{"RCP", {{"phi_bulk", ok}}}}),
           "ref.json: families.RCP: unknown family (known: MSP, BSP, MPP, BPP)");
@@ -80,7 +85,7 @@ TEST_CASE("reference values: every refusal names the file and the field") {
           "ref.json: families.MSP: gives no value (known quantities: phi_bulk, C, Z_bulk, C_Z, lambda_L_over_d_avg)");
   refused(document({{"MSP", json::array()}}), "ref.json: families.MSP: expected a non-empty list of entries");
   refused(document({{"MSP", json::array({{{"phi_bulk", ok}}, 3})}}),
-          "ref.json: families.MSP[1]: expected an object of reference values (got number)");
+          "ref.json: families.MSP[1]: must be a JSON object (got number)");
   // Each value needs its uncertainty and its source, of the right kind.
   refused(document({{"MSP", {{"phi_bulk", {{"value", 0.64}, {"citation", "x"}}}}}}),
           "ref.json: families.MSP.phi_bulk.uncertainty: missing (a reference value needs value, uncertainty and "
