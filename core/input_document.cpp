@@ -81,6 +81,9 @@ double ObjectReader::number(std::string_view key, const Range& range) const {
 int ObjectReader::integer(std::string_view key) const {
   const json& v = at(key);
   if (!v.is_number_integer()) refuse(key, fmt::format("must be an integer (got {})", jsonExcerpt(v)));
+  // An unsigned value above 2^63 - 1 would wrap to a negative int64 (2^64 - 1 to -1, the floor's id).
+  if (v.is_number_unsigned() && v.get<std::uint64_t>() > 1000000000u)
+    refuse(key, fmt::format("out of range (got {})", v.get<std::uint64_t>()));
   const auto i = v.get<std::int64_t>();
   if (i < -1000000000 || i > 1000000000) refuse(key, fmt::format("out of range (got {})", i));
   return static_cast<int>(i);

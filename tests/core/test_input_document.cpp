@@ -113,6 +113,10 @@ TEST_CASE("input document: a value of the wrong type is refused with what it mus
   CHECK(refusal([&] { (void)r.boolean("flag"); }) == "in.json: grains[2].flag: must be true or false (got 1)");
   CHECK(refusal([&] { (void)r.integer("count"); }) == "in.json: grains[2].count: must be an integer (got 2.5)");
   CHECK(refusal([&] { (void)r.integer("big"); }) == "in.json: grains[2].big: out of range (got 2000000000)");
+  // 2^64 - 1 is an unsigned JSON integer: read as an int64 it would wrap to -1, the floor's id.
+  const json huge = json::parse(R"({"b": 18446744073709551615})");
+  CHECK(refusal([&] { (void)ObjectReader(huge, "in.json", "contacts[0]").integer("b"); }) ==
+        "in.json: contacts[0].b: out of range (got 18446744073709551615)");
   CHECK(refusal([&] { (void)r.number("size"); }) == "in.json: grains[2].size: must be a finite number (got \"1\")");
   // JSON has no spelling for infinity: written, it comes back as null.
   CHECK(refusal([&] { (void)r.number("none"); }) == "in.json: grains[2].none: must be a finite number (got null)");
