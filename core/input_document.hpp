@@ -36,7 +36,7 @@ struct DocumentHeader {
 };
 
 /// One JSON object of a document at a path ("grains[3]"; "" for the document itself), whose
-/// fields are read by type. The object and `source` must outlive the reader.
+/// fields are read by type. The object must outlive the reader; `source` is copied.
 class ObjectReader {
  public:
   /// Refuses a value that is not an object: "SOURCE: PATH: must be a JSON object (got TYPE)",
@@ -75,7 +75,7 @@ class ObjectReader {
 
  private:
   const nlohmann::json& j_;
-  std::string_view source_;
+  std::string source_;  // owned: a reader may outlive the string it was given (file.string())
   std::string path_;
 };
 

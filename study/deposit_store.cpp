@@ -2,9 +2,8 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
-#include <stdexcept>
-
+#include "core/input_document.hpp"
+#include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 
 namespace confpack::study {
@@ -13,12 +12,6 @@ namespace {
 
 constexpr std::string_view kDepositFormat = "confpack-deposit";
 constexpr int kDepositVersion = 1;
-
-double number(const nlohmann::json& j, const char* key, std::string_view source) {
-  if (!j.contains(key) || !j.at(key).is_number())
-    throw std::invalid_argument(fmt::format("{}: {}: missing or not a number", source, key));
-  return j.at(key).get<double>();
-}
 
 }  // namespace
 
@@ -40,29 +33,27 @@ nlohmann::json depositToJson(const compaction::Deposit& deposit, const core::Box
 }
 
 compaction::Deposit depositFromJson(const nlohmann::json& j, std::string_view source) {
-  if (!j.is_object() || j.value("format", std::string()) != kDepositFormat)
-    throw std::invalid_argument(fmt::format("{}: format: not a {} document", source, kDepositFormat));
-  if (j.value("version", 0) != kDepositVersion)
-    throw std::invalid_argument(fmt::format("{}: version: expected {}", source, kDepositVersion));
-  if (!j.contains("packing")) throw std::invalid_argument(fmt::format("{}: packing: missing", source));
+  const core::ObjectReader r =
+      core::readDocument(j, source, {kDepositFormat, kDepositVersion},
+                         {"format", "version", "packing", "placeholders", "placeholder_diameter", "pile_height",
+                          "placeholder_solid_fraction", "solid_fraction", "seconds"});
   compaction::Deposit d;
-  d.grains = core::packingFromJson(j.at("packing"), fmt::format("{}: packing", source)).grains;
-  const nlohmann::json& ph = j.value("placeholders", nlohmann::json::array());
-  if (!ph.is_array() || ph.size() != d.grains.size())
-    throw std::invalid_argument(
-        fmt::format("{}: placeholders: expected {} points, one per grain", source, d.grains.size()));
+  d.grains = core::packingFromJson(r.at("packing"), fmt::format("{}: packing", source)).grains;
+  const nlohmann::json& ph = r.array("placeholders");
+  if (ph.size() != d.grains.size())
+    r.refuse("placeholders", fmt::format("expected {} points, one per grain (got {})", d.grains.size(), ph.size()));
   d.placeholders.reserve(ph.size());
   for (std::size_t i = 0; i < ph.size(); ++i) {
     const nlohmann::json& p = ph[i];
-    if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
-      throw std::invalid_argument(fmt::format("{}: placeholders[{}]: expected [x, y, z]", source, i));
-    d.placeholders.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+    const std::string field = fmt::format("placeholders[{}]", i);
+    if (!p.is_array() || p.size() != 3) r.refuse(field, "expected [x, y, z]");
+    d.placeholders.emplace_back(r.toNumber(p[0], field), r.toNumber(p[1], field), r.toNumber(p[2], field));
   }
-  d.placeholderDiameter = number(j, "placeholder_diameter", source);
-  d.pileHeight = number(j, "pile_height", source);
-  d.placeholderSolidFraction = number(j, "placeholder_solid_fraction", source);
-  d.solidFraction = number(j, "solid_fraction", source);
-  d.seconds = number(j, "seconds", source);
+  d.placeholderDiameter = r.number("placeholder_diameter");
+  d.pileHeight = r.number("pile_height");
+  d.placeholderSolidFraction = r.number("placeholder_solid_fraction");
+  d.solidFraction = r.number("solid_fraction");
+  d.seconds = r.number("seconds");
   return d;
 }
 
@@ -71,15 +62,7 @@ void writeDeposit(const compaction::Deposit& deposit, const core::BoxDef& box, c
 }
 
 compaction::Deposit readDeposit(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open", path.string()));
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(fmt::format("{}: not valid JSON ({})", path.string(), e.what()));
-  }
-  return depositFromJson(j, path.string());
+  return depositFromJson(core::readJsonFile(path, "deposit"), path.string());
 }
 
 }  // namespace confpack::study

@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "core/input_document.hpp"
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
 #include "study/process.hpp"
@@ -233,25 +234,21 @@ std::vector<Submission> readSubmissions(const fs::path& sweepDir) {
   const fs::path file = sweepDir / "slurm" / "submitted.json";
   if (!fs::exists(file)) return {};
   const json doc = core::readJsonFile(file, "Slurm submissions");
-  const auto bad = [&](std::string_view field) {
-    throw std::invalid_argument(fmt::format("{}: {}: not as confpack writes it", file.string(), field));
-  };
-  if (!doc.is_object() || doc.value("format", std::string()) != kSubmissionsFormat) bad("format");
-  if (!doc.contains("submissions") || !doc.at("submissions").is_array()) bad("submissions");
+  const core::ObjectReader top =
+      core::readDocument(doc, file.string(), {kSubmissionsFormat, 1}, {"format", "version", "submissions"});
   std::vector<Submission> out;
-  for (const json& j : doc.at("submissions")) {
-    if (!j.is_object() || !j.contains("job") || !j.at("job").is_string() || !j.contains("tasks") ||
-        !j.at("tasks").is_array())
-      bad(fmt::format("submissions[{}]", out.size()));
+  for (const json& j : top.array("submissions")) {
+    const core::ObjectReader r(j, file.string(), fmt::format("submissions[{}]", out.size()));
+    r.onlyKeys({"job", "submitted", "tasks"});
     Submission s;
-    s.job = j.at("job").get<std::string>();
-    s.submitted = j.value("submitted", std::string());
-    for (const json& t : j.at("tasks")) {
-      if (!t.is_array()) bad(fmt::format("submissions[{}].tasks", out.size()));
+    s.job = r.string("job");
+    if (r.has("submitted")) s.submitted = r.string("submitted");
+    for (const json& t : r.array("tasks")) {
       ArrayTask task;
-      for (const json& r : t) {
-        if (!r.is_string()) bad(fmt::format("submissions[{}].tasks", out.size()));
-        task.runs.push_back(r.get<std::string>());
+      if (!t.is_array()) r.refuse("tasks", "must be an array of arrays of run names");
+      for (const json& run : t) {
+        if (!run.is_string()) r.refuse("tasks", "must be an array of arrays of run names");
+        task.runs.push_back(run.get<std::string>());
       }
       s.tasks.push_back(std::move(task));
     }

@@ -69,6 +69,10 @@ TEST_CASE("a document that is not a whole deposit is refused naming the field") 
   j.erase("pile_height");
   CHECK_THROWS_WITH(study::depositFromJson(j, "d.json"), Catch::Contains("pile_height"));
   j = good;
+  j["pile_hieght"] = 3.0;
+  CHECK_THROWS_WITH(study::depositFromJson(j, "d.json"),
+                    Catch::StartsWith("d.json: pile_hieght: unknown key (known: "));
+  j = good;
   j["packing"]["grains"][0]["size"] = -1.0;
   CHECK_THROWS_WITH(study::depositFromJson(j, "d.json"), Catch::Contains("d.json: packing") && Catch::Contains("size"));
 }

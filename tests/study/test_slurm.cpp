@@ -197,6 +197,11 @@ TEST_CASE("slurm: submitting runs sbatch without a shell and records the job, a 
   CHECK(subs[1].submitted.size() == 20);  // stamped now: 2024-05-01T12:00:00Z
   CHECK(study::taskLog(dir, "41_0") == dir / "slurm" / "logs" / "41_0.out");
   std::ofstream(dir / "slurm" / "submitted.json") << R"({"format": "other"})";
-  CHECK_THROWS_WITH(study::readSubmissions(dir), Catch::Contains("submitted.json: format: not as confpack writes it"));
+  CHECK_THROWS_WITH(study::readSubmissions(dir),
+                    Catch::EndsWith("submitted.json: format: must be \"confpack-slurm-submissions\" (got \"other\")"));
+  std::ofstream(dir / "slurm" / "submitted.json")
+      << R"({"format": "confpack-slurm-submissions", "version": 1, "submissions": [{"job": "40", "tasks": [["r0000", 3]]}]})";
+  CHECK_THROWS_WITH(study::readSubmissions(dir),
+                    Catch::EndsWith("submitted.json: submissions[0].tasks: must be an array of arrays of run names"));
   fs::remove_all(dir);
 }
