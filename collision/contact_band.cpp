@@ -101,13 +101,8 @@ ContactType bandType(const WorldPolyhedron& A, const WorldPolyhedron& B, const V
 
 ContactType classifyContactBand(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double width) {
   checkWidth(width, "classifyContactBand");
-  if (a.shape == nullptr || b.shape == nullptr)
-    throw std::invalid_argument("classifyContactBand: PlacedPolyhedron.shape is null");
-  const WorldPolyhedron A(a), B(b);
-  Vec3 normal = Vec3::UnitZ();
-  double gap = 0.0;
-  pairNormal(A, B, kInf, normal, gap);
-  return bandType(A, B, normal, width);
+  const PlacedPair pair(a, b, "classifyContactBand");
+  return bandType(pair.A, pair.B, pair.normal, width);
 }
 
 ContactType classifyContactBand(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal,

@@ -174,13 +174,8 @@ Feature supportFeature(const PlacedPolyhedron& p, const Vec3& dir, double angleT
 }
 
 ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, double angleTol) {
-  if (a.shape == nullptr || b.shape == nullptr)
-    throw std::invalid_argument("classifyContact: PlacedPolyhedron.shape is null");
-  const WorldPolyhedron A(a), B(b);
-  Vec3 normal = Vec3::UnitZ();
-  double gap = 0.0;
-  pairNormal(A, B, kInf, normal, gap);
-  return buildContact(A, B, normal, gap, angleTol).type;
+  const PlacedPair pair(a, b, "classifyContact");
+  return buildContact(pair.A, pair.B, pair.normal, pair.gap, angleTol).type;
 }
 
 ContactType classifyContact(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const Vec3& normal, double angleTol) {

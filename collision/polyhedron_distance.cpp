@@ -1,5 +1,7 @@
 #include "collision/polyhedron_distance.hpp"
 
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace confpack::collision {
@@ -132,6 +134,20 @@ bool pairNormal(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert
   const double sepClosest = B.minAlong(normal) - A.maxAlong(normal);
   if (sat.sep > sepClosest + 1e-13 * (A.radius + B.radius)) normal = sat.axis;
   return true;
+}
+
+namespace {
+// `a`, once both shapes are known to be set (a WorldPolyhedron reads its shape).
+const PlacedPolyhedron& bothShaped(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const char* caller) {
+  if (a.shape == nullptr || b.shape == nullptr)
+    throw std::invalid_argument(std::string(caller) + ": PlacedPolyhedron.shape is null");
+  return a;
+}
+}  // namespace
+
+PlacedPair::PlacedPair(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const char* caller)
+    : A(bothShaped(a, b, caller)), B(b) {
+  pairNormal(A, B, kInf, normal, gap);
 }
 
 }  // namespace confpack::collision

@@ -36,4 +36,14 @@ DistanceResult exactDistance(const WorldPolyhedron& A, const WorldPolyhedron& B,
 /// distance certainly exceeds alert [d_L].
 bool pairNormal(const WorldPolyhedron& A, const WorldPolyhedron& B, double alert, Vec3& normal, double& gap);
 
+/// Two placed polyhedra in world coordinates with their normal and gap at any distance
+/// (pairNormal without an alert bound): what a contact classifier starts from. Refuses a missing
+/// shape, naming `caller`.
+struct PlacedPair {
+  WorldPolyhedron A, B;
+  Vec3 normal = Vec3::UnitZ();
+  double gap = 0.0;
+  PlacedPair(const PlacedPolyhedron& a, const PlacedPolyhedron& b, const char* caller);
+};
+
 }  // namespace confpack::collision
