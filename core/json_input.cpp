@@ -14,6 +14,8 @@
 #include <system_error>
 #include <vector>
 
+#include "core/interrupt.hpp"
+
 namespace confpack::core {
 
 using nlohmann::json;
@@ -79,12 +81,40 @@ std::string failurePath(std::string_view text) {
 }
 }  // namespace
 
+namespace {
+// nlohmann's own document builder, polling for SIGINT and SIGTERM every 65,536 containers (a
+// packing file of 2 GiB takes about a minute to parse). Not json::parse's callback form: it takes
+// 2.7 times as long (a 70 MB document: 6.4 s against 2.3 s).
+class PollingDomParser : public nlohmann::detail::json_sax_dom_parser<json> {
+ public:
+  PollingDomParser(json& result, std::string_view source) : json_sax_dom_parser(result), source_(source) {}
+  bool start_object(std::size_t n) {
+    poll();
+    return json_sax_dom_parser::start_object(n);
+  }
+  bool start_array(std::size_t n) {
+    poll();
+    return json_sax_dom_parser::start_array(n);
+  }
+
+ private:
+  void poll() {
+    if ((++containers_ & 0xFFFF) == 0) stopIfRequested([&] { return fmt::format("while reading {}", source_); });
+  }
+  std::string_view source_;
+  std::size_t containers_ = 0;
+};
+}  // namespace
+
 json parseJsonText(std::string_view text, std::string_view source) {
   // nlohmann's message quotes the token it last read, which can be the rest of the file (an
   // unterminated string, a run of bad bytes): cut.
   constexpr std::size_t kMessageLimit = 240;
   try {
-    return json::parse(text.begin(), text.end());
+    json result;
+    PollingDomParser parser(result, source);
+    json::sax_parse(text.begin(), text.end(), &parser);
+    return result;
   } catch (const json::parse_error& e) {
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", source, textExcerpt(e.what(), kMessageLimit)));
   } catch (const json::out_of_range& e) {  // a number beyond a double, e.g. 1e400
@@ -128,6 +158,7 @@ json readJsonFile(const std::filesystem::path& path, std::string_view what) {
   std::size_t got = 0;
   for (;;) {
     if (text.size() < got + kChunk) text.resize(got + kChunk);
+    stopIfRequested([&] { return fmt::format("while reading {}", source); });
     const ssize_t n = ::read(fd, text.data() + got, kChunk);
     if (n == 0) break;
     if (n < 0) {

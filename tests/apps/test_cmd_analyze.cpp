@@ -284,3 +284,28 @@ TEST_CASE("SIGTERM stops a long analysis: one line saying where, exit 143, nothi
   CHECK(message.find("confpack analyze: error: interrupted by SIGTERM while ") != std::string::npos);
   CHECK(s.entries() == std::vector<std::string>{"dep"});  // neither out/ nor its staging folder
 }
+
+TEST_CASE("SIGTERM stops the reading of a large input file: one line naming the file, exit 143", "[apps][cli]") {
+  // The failure this guards against: a signal was only seen once the whole document was parsed
+  // (about a minute for a file of 2 GiB). 150 MB of JSON takes several seconds to parse; the
+  // document is no packing, so had the signal waited for the parse, the exit would be 2.
+  const ConfpackSession s("cmd_analyze_sigterm_reading");
+  {
+    std::ofstream big(s.dir / "big.json");
+    const std::string row = "[0.125, 0.25, 0.5],";
+    big << "[";
+    for (std::size_t written = 0; written < (std::size_t{150} << 20); written += row.size()) big << row;
+    big << "[0]]";
+  }
+  const fs::path err = s.dir.string() + ".err";
+  const pid_t pid = confpack::testing::startConfpack(s.dir, {"analyze", "big.json", "--out", "out", "-q"}, err);
+  REQUIRE(pid >= 0);
+  const confpack::testing::Stopped stopped =
+      confpack::testing::stopAfter(pid, std::chrono::milliseconds(500), SIGTERM, err);
+  INFO(stopped.message);
+  REQUIRE(WIFEXITED(stopped.status));
+  CHECK(WEXITSTATUS(stopped.status) == 143);
+  CHECK(lineCount(stopped.message) == 1);
+  CHECK(stopped.message.find("interrupted by SIGTERM while reading big.json") != std::string::npos);
+  CHECK_FALSE(fs::exists(s.dir / "out"));
+}
