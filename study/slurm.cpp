@@ -116,13 +116,11 @@ std::vector<ArrayTask> planArrayTasks(const std::vector<SweepRun>& runs, const s
   // (up to 8 runs in series). A run reads its deposit or makes it, the same bytes either way (a
   // function of its configuration and seed); two tasks that make one at once both write it whole.
   const std::size_t count = maxTasks > 0 ? std::min(maxTasks, todo.size()) : todo.size();
+  // Dealt in table order, each task's runs stay in table order.
+  std::vector<std::size_t> ordered = todo;
+  std::sort(ordered.begin(), ordered.end());
   std::vector<ArrayTask> tasks(count);
-  for (std::size_t j = 0; j < todo.size(); ++j) tasks[j % count].runs.push_back(runs.at(todo[j]).name);
-  // Dealing interleaves the table: keep each task's runs in table order.
-  std::map<std::string, std::size_t> order;
-  for (const SweepRun& r : runs) order[r.name] = r.index;
-  for (ArrayTask& t : tasks)
-    std::sort(t.runs.begin(), t.runs.end(), [&](const auto& a, const auto& b) { return order[a] < order[b]; });
+  for (std::size_t j = 0; j < ordered.size(); ++j) tasks[j % count].runs.push_back(runs.at(ordered[j]).name);
   return tasks;
 }
 

@@ -44,8 +44,8 @@ struct ArrayTask {
 };
 
 /// Deals `todo` (indices into `runs`) into array tasks: one run per task, or with maxTasks > 0
-/// and fewer tasks than runs, the j-th run of `todo` to task j mod maxTasks; each task's runs in
-/// table order.
+/// and fewer tasks than runs, the j-th run of `todo` in table order to task j mod maxTasks; each
+/// task's runs in table order.
 std::vector<ArrayTask> planArrayTasks(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
                                       std::size_t maxTasks = 0);
 

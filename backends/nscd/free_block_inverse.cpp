@@ -150,15 +150,16 @@ FreeBlockInverse::~FreeBlockInverse() = default;
 FreeBlockInverse::FreeBlockInverse(FreeBlockInverse&&) noexcept = default;
 FreeBlockInverse& FreeBlockInverse::operator=(FreeBlockInverse&&) noexcept = default;
 
-void FreeBlockInverse::build(std::span<const JacobianRow> rows, const std::vector<BodyInverseMass>& bodies,
-                             bool angular, double shift) {
+void FreeBlockInverse::build(std::vector<JacobianRow> rows, const std::vector<BodyInverseMass>& bodies, bool angular,
+                             double shift) {
   Impl& p = *impl_;
-  p.rows.assign(rows.begin(), rows.end());
+  p.rows = std::move(rows);
   p.dof = angular ? 6 : 3;
   p.shift = shift;
   // Unknowns for the moving bodies that carry a row, in body order.
   std::vector<char> used(bodies.size(), 0);
-  for (const JacobianRow& row : rows) used[static_cast<std::size_t>(row.a)] = used[static_cast<std::size_t>(row.b)] = 1;
+  for (const JacobianRow& row : p.rows)
+    used[static_cast<std::size_t>(row.a)] = used[static_cast<std::size_t>(row.b)] = 1;
   p.unknown.assign(bodies.size(), -1);
   p.size = 0;
   p.mass.clear();

@@ -46,8 +46,8 @@ class FreeBlockInverse {
 
   /// Takes a solve's rows and the inverse masses of its bodies (a body of zero inverse mass does
   /// not move and gets no unknowns); `angular`: whether some row turns a body (6 unknowns a body
-  /// instead of 3); `shift`: eps > 0. Forgets the last factor.
-  void build(std::span<const JacobianRow> rows, const std::vector<BodyInverseMass>& bodies, bool angular, double shift);
+  /// instead of 3); `shift`: eps > 0. Forgets the last factor. The rows are kept (moved in).
+  void build(std::vector<JacobianRow> rows, const std::vector<BodyInverseMass>& bodies, bool angular, double shift);
   /// Factors K_F for F = {k : y[k] > 0}, unless the factor already holds that set; false if the
   /// factorisation failed (then apply() must not be called).
   bool factor(std::span<const double> y);

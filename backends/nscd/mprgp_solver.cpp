@@ -478,9 +478,9 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   const std::size_t nN = rows.normalRows().size();
   const std::span<FrictionRow> frictionRows = rows.frictionRows();
   const std::size_t m = nN + frictionRows.size();
-  // The team is timed against one thread and kept only while it is faster (ThreadChoice): on this
-  // shared 2-core machine at load ~6, two threads made an 8,000-sphere solve 25-40x slower (every
-  // pass ends at a barrier, and a descheduled thread stalls it); results are the same bits either way.
+  // The team is timed against one thread and kept only while it is faster (ThreadChoice): on a
+  // machine with fewer free cores than threads every pass's barrier waits for a descheduled thread,
+  // which can make a team many times slower than one thread; results are the same bits either way.
   if (threadChoice_.maxThreads() != maxThreads) threadChoice_ = ThreadChoice(maxThreads);
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
@@ -493,7 +493,7 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
       const GatherRow& row = gatherRows_[k];
       jacobians[k] = {row.n, row.axn, row.bxn, row.a, row.b};
     }
-    freeBlock_.build(jacobians, *bodies, !linearOnly_, settings.preconditionerShift);
+    freeBlock_.build(std::move(jacobians), *bodies, !linearOnly_, settings.preconditionerShift);
   }
   int iterations = 0;
   double tangentChange = 0.0;

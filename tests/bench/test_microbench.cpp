@@ -128,12 +128,14 @@ TEST_CASE("bench --micro times the broad phase on a deposit and a pile, and both
 }
 
 TEST_CASE("bench --micro --micro-pile times MPRGP's solve of a given packing's step, and refuses a missing file") {
-  // A small deposit, the user's pile: both preconditioners solve its step, on the same rows, the
-  // exact one in no more iterations (a loose deposit's step is solved in one or two).
+  // A small compacted pile (91 spheres after 6 t0), the user's: both preconditioners solve its
+  // step, on the same rows. With the free block's exact inverse the solve needs a few times fewer
+  // iterations than with SGS (23 against 119 on this pile): a contact network's soft modes are
+  // what SGS leaves to the Krylov iterations, and the exact inverse removes them.
   ConfpackSession s("micro_pile", CONFPACK_BENCH_BINARY);
-  const ConfpackSession maker("micro_pile_deposit");
-  REQUIRE(maker.run("deposit --length-x 4 --width 4 --periodic-y --height 4 --out d -q").code == 0);
-  const fs::path packing = maker.dir / "d" / "packing.json";
+  const ConfpackSession maker("micro_pile_run");
+  REQUIRE(maker.run("run --length-x 4 --width 4 --periodic-y --height 5 --time-limit 6 --out p -q").code == 0);
+  const fs::path packing = maker.dir / "p" / "packing.json";
   const CommandResult r =
       s.run("--micro --micro-pile '" + packing.string() +
             "' --micro-filter 'Solve/.*/pile' --micro-repetitions 1 --micro-min-time 0.01 --out m.json");
@@ -147,8 +149,8 @@ TEST_CASE("bench --micro --micro-pile times MPRGP's solve of a given packing's s
   const json& exact = byName["MprgpSolve/cholesky/pile"];
   CHECK(sgs["rows"].get<double>() > 0.0);
   CHECK(exact["rows"].get<double>() == sgs["rows"].get<double>());
-  CHECK(sgs["iterations_per_solve"].get<double>() >= 1.0);
-  CHECK(exact["iterations_per_solve"].get<double>() <= sgs["iterations_per_solve"].get<double>());
+  CHECK(sgs["iterations_per_solve"].get<double>() >= 30.0);
+  CHECK(exact["iterations_per_solve"].get<double>() < sgs["iterations_per_solve"].get<double>() / 3.0);
 
   const CommandResult missing = s.run("--micro --micro-pile nowhere.json --out m2.json");
   CHECK(missing.code == 2);
