@@ -81,12 +81,13 @@ double ObjectReader::number(std::string_view key, const Range& range) const {
 int ObjectReader::integer(std::string_view key) const {
   const json& v = at(key);
   if (!v.is_number_integer()) refuse(key, fmt::format("must be an integer (got {})", jsonExcerpt(v)));
-  // An unsigned value above 2^63 - 1 would wrap to a negative int64 (2^64 - 1 to -1, the floor's id).
-  if (v.is_number_unsigned() && v.get<std::uint64_t>() > 1000000000u)
-    refuse(key, fmt::format("out of range (got {})", v.get<std::uint64_t>()));
-  const auto i = v.get<std::int64_t>();
-  if (i < -1000000000 || i > 1000000000) refuse(key, fmt::format("out of range (got {})", i));
-  return static_cast<int>(i);
+  // An unsigned value is compared as one: above 2^63 - 1 it would wrap as an int64 (2^64 - 1 to
+  // -1, the floor's id).
+  constexpr std::int64_t kLimit = 1000000000;
+  const bool inRange = v.is_number_unsigned() ? v.get<std::uint64_t>() <= std::uint64_t{kLimit}
+                                              : v.get<std::int64_t>() >= -kLimit && v.get<std::int64_t>() <= kLimit;
+  if (!inRange) refuse(key, fmt::format("out of range (got {})", v.dump()));
+  return static_cast<int>(v.get<std::int64_t>());
 }
 
 bool ObjectReader::boolean(std::string_view key) const {

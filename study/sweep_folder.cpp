@@ -113,14 +113,13 @@ namespace {
 // runs/), and no other run's.
 std::string readRunName(const core::ObjectReader& row, std::set<std::string>& names) {
   const json& name = row.at("name");
-  if (!name.is_string() || name.get<std::string>().empty() || name.get<std::string>().size() > 64 ||
-      name.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
-          std::string::npos)
+  const std::string text = name.is_string() ? name.get<std::string>() : std::string();
+  if (text.empty() || text.size() > 64 ||
+      text.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") != std::string::npos)
     row.refuse("name", fmt::format("expected a run folder's name: letters, digits, '_' or '-' (got {})",
                                    core::jsonExcerpt(name)));
-  if (!names.insert(name.get<std::string>()).second)
-    row.refuse("name", fmt::format("\"{}\" names two runs", name.get<std::string>()));
-  return name.get<std::string>();
+  if (!names.insert(text).second) row.refuse("name", fmt::format("\"{}\" names two runs", text));
+  return text;
 }
 
 // "d" and the index of a deposit below `runCount`.
