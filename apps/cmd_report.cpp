@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "apps/cli_common.hpp"
 #include "apps/commands.hpp"
@@ -25,6 +26,7 @@ struct ReportState {
   bool noFigures = false;
   bool noRunLinks = false;
   double lambdaWidth = study::ReportOptions{}.lambdaWidth;
+  std::vector<std::filesystem::path> lambdaFrom;
 };
 
 void runReportCommand(const ReportState& st) {
@@ -34,6 +36,7 @@ void runReportCommand(const ReportState& st) {
     const auto runs = study::readRunTable(st.sweepDir);  // refuses a folder that is not a sweep
     if (!st.compare.empty()) study::compareSetting(st.compare, runs);
     if (!st.reference.empty()) reference = study::readReferenceValues(st.reference);
+    study::checkLambdaSources(st.sweepDir, st.lambdaFrom);
     checkOutputTarget(out);
   });
   runWork("report", [&] {
@@ -45,6 +48,7 @@ void runReportCommand(const ReportState& st) {
     o.runLinks = !st.noRunLinks;
     o.compare = st.compare;
     o.lambdaWidth = st.lambdaWidth;
+    o.lambdaFrom = st.lambdaFrom;
     const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
     step.next("moving the report into place");
     output.commit();
@@ -89,6 +93,14 @@ void registerReport(CLI::App& app) {
                   "it is read at its nearest confined width")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sub->add_option(
+         "--lambda-from", st->lambdaFrom,
+         "Sweep folder whose runs give a family's lambda_L replicas instead of the study's, e.g. more seeds of "
+         "one family run apart (repeatable; its runs must be the study's configurations apart from the seed)")
+      ->check(CLI::ExistingDirectory)
+      ->allow_extra_args(false)  // one folder an occurrence: the sweep folder may follow
+      ->excludes("--compare")    // its replicas are matched by backend
+      ->type_name("DIR");
   sub->callback([st] { runReportCommand(*st); });
 }
 

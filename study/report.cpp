@@ -8,11 +8,14 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <stdexcept>
 
 #include "core/build_info.hpp"
 #include "core/packing_io.hpp"
+#include "core/run_config.hpp"
 #include "study/report_appendix.hpp"
 #include "study/report_compare.hpp"
 #include "study/report_document.hpp"
@@ -116,7 +119,51 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                                     options.gnuplot.string(), gnuplotProblem));
 }
 
+// A run's configuration as --lambda-from compares it: without its seed and threads.
+nlohmann::json comparedConfig(const core::RunConfig& c) {
+  nlohmann::json j = c;
+  j.erase("seed");
+  j.erase("threads");
+  return j;
+}
+
+// The path of the first leaf where a and b differ ("box/height"), empty when they are equal; a
+// leaf is a value that is not an object.
+std::string firstDifference(const nlohmann::json& a, const nlohmann::json& b, const std::string& path = "") {
+  if (!a.is_object() || !b.is_object()) return a == b ? "" : path;
+  const auto at = [&](const std::string& key) { return path.empty() ? key : path + "/" + key; };
+  for (const auto& [key, value] : a.items()) {
+    const auto other = b.find(key);
+    if (other == b.end()) return at(key);
+    if (std::string d = firstDifference(value, *other, at(key)); !d.empty()) return d;
+  }
+  for (const auto& [key, value] : b.items())
+    if (!a.contains(key)) return at(key);
+  return "";
+}
+
 }  // namespace
+
+void checkLambdaSources(const fs::path& sweepDir, const std::vector<fs::path>& sources) {
+  if (sources.empty()) return;
+  std::vector<nlohmann::json> study;
+  for (const SweepRun& r : readRunTable(sweepDir)) study.push_back(comparedConfig(r.config));
+  for (const fs::path& dir : sources)
+    for (const SweepRun& r : readRunTable(dir)) {
+      const nlohmann::json mine = comparedConfig(r.config);
+      if (std::find(study.begin(), study.end(), mine) != study.end()) continue;
+      // Named against the study's first run of the same backend and box, else its first run.
+      const auto near = std::find_if(study.begin(), study.end(), [&](const nlohmann::json& c) {
+        return c["backend"] == mine["backend"] && c["box"] == mine["box"];
+      });
+      const std::string why =
+          study.empty() ? "the study has no runs"
+                        : "first difference: " + firstDifference(near != study.end() ? *near : study.front(), mine);
+      throw std::invalid_argument(
+          fmt::format("--lambda-from {}: run {} ({}) is none of the study's configurations apart from its seed ({})",
+                      dir.string(), r.name, r.label(), why));
+    }
+}
 
 ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, const ReportOptions& options) {
   const StudyView study(sweepDir, options.compare);
@@ -129,13 +176,19 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   ConfinementFits fits;
   if (study.keys.count("solid_fraction")) fits.phi = confinementFits(study, "solid_fraction");
   if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
-  const std::vector<LambdaSample> lambdas = lambdaSamples(study, fits.phi, options.lambdaWidth);
+  std::vector<LambdaSample> lambdas = lambdaSamples(study, fits.phi, options.lambdaWidth);
+  std::vector<fs::path> unusedSources = readLambdaSources(lambdas, options.lambdaFrom);
+  if (!options.runLinks) {  // a published report names the other sweep folders as it names the study's
+    for (LambdaSample& l : lambdas)
+      if (!l.source.empty()) l.source = fs::weakly_canonical(l.source).filename().string();
+    for (fs::path& dir : unusedSources) dir = fs::weakly_canonical(dir).filename();
+  }
   const StudySummary results = summarize(study, fits, lambdas);
   References references(options.reference);
   addSummarySection(doc, study, results, references);
   addVerdictSection(doc, study, results);
   addFitFigureSections(doc, study, figures, fits, references);
-  if (!lambdas.empty()) addLambdaSection(doc, figures, lambdas, options.lambdaWidth, outDir);
+  if (!lambdas.empty()) addLambdaSection(doc, figures, lambdas, options.lambdaWidth, outDir, unusedSources);
   addSettingSections(doc, study, figures);
   addProfileSections(doc, study, figures);
   addRelaxationSections(doc, study, figures);

@@ -101,7 +101,17 @@ struct ReportOptions {
   /// averaged over the replicas; a family without it is read at its nearest confined width
   /// (study/report_lambda.hpp).
   double lambdaWidth = 10.0;
+  /// Sweep folders a family's lambda_L replicas are read from instead of the study's own runs
+  /// (`--lambda-from`, e.g. more seeds of one family run apart): the first that has finished runs
+  /// of a family and backend at its lambda width gives all of that sample's replicas; C stays the
+  /// study's. Checked first by checkLambdaSources(); the backends only (not with `compare`).
+  std::vector<std::filesystem::path> lambdaFrom;
 };
+
+/// Refuses (std::invalid_argument naming the folder, its run and the first setting that differs) a
+/// --lambda-from folder with a run whose configuration is none of the study's apart from its seed
+/// and its threads (which do not change a run's result).
+void checkLambdaSources(const std::filesystem::path& sweepDir, const std::vector<std::filesystem::path>& sources);
 
 struct ReportSummary {
   std::size_t runs = 0, done = 0, failed = 0, missing = 0, unequilibrated = 0;

@@ -12,6 +12,8 @@
 
 namespace confpack::study {
 
+namespace fs = std::filesystem;
+
 bool fitErrorsKnown(const analysis::ConfinementFit& f) {
   return f.weighted || f.dof > 0;
 }
@@ -178,6 +180,32 @@ void addFitSection(Document& doc, const StudyView& study, FigureWriter& figures,
   }
 }
 
+// The phi(y) profiles and mean grain sizes of the finished runs of series `sk` and `side` at the
+// confined width `width`.
+std::vector<analysis::SeedProfile> seedProfiles(const StudyView& study, const SeriesKey& sk, const std::string& side,
+                                                double width) {
+  std::vector<analysis::SeedProfile> out;
+  for (const auto& [k, bySide] : study.groups) {
+    if (seriesOf(k) != sk || k.periodic || k.width != width) continue;
+    const auto runs = bySide.find(side);
+    if (runs == bySide.end()) continue;
+    for (const RunRecord* r : runs->second) {
+      if (r->status != RunStatus::Done) continue;
+      const auto table = readCsv(study.runDir(*r) / "phi_y.csv");
+      const auto size = r->values.find("mean_size");
+      if (!table || table->columns.size() < 2 || size == r->values.end() || !size->second) continue;
+      analysis::SeedProfile p;
+      for (const auto& row : table->rows) {
+        p.y.push_back(row[0]);
+        p.phi.push_back(row[1]);
+      }
+      p.meanSize = *size->second;
+      out.push_back(std::move(p));
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<LambdaSample> lambdaSamples(const StudyView& study, const std::vector<FitRow>& phiFits, double target) {
@@ -201,22 +229,7 @@ std::vector<LambdaSample> lambdaSamples(const StudyView& study, const std::vecto
       s.backend = b;
       s.backendIndex = static_cast<int>(bi);
       s.width = *width;
-      for (const auto& [k, bySide] : study.groups) {
-        if (seriesOf(k) != sk || k.periodic || k.width != *width) continue;
-        for (const RunRecord* r : bySide.at(b)) {
-          if (r->status != RunStatus::Done) continue;
-          const auto table = readCsv(study.runDir(*r) / "phi_y.csv");
-          const auto size = r->values.find("mean_size");
-          if (!table || table->columns.size() < 2 || size == r->values.end() || !size->second) continue;
-          analysis::SeedProfile p;
-          for (const auto& row : table->rows) {
-            p.y.push_back(row[0]);
-            p.phi.push_back(row[1]);
-          }
-          p.meanSize = *size->second;
-          s.seeds.push_back(std::move(p));
-        }
-      }
+      s.seeds = seedProfiles(study, sk, b, *width);
       if (s.seeds.empty()) continue;
       for (const FitRow& f : phiFits)
         if (f.series == sk && f.side == b && f.fit) {
@@ -243,6 +256,28 @@ void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& f
                  "the same model Z(W) = Z_bulk − C_Z/W gives its value far from the walls, Z_bulk, and its loss "
                  "due to the walls, C_Z, in d_L."},
                 references);
+}
+
+std::vector<fs::path> readLambdaSources(std::vector<LambdaSample>& samples, const std::vector<fs::path>& sources) {
+  std::vector<fs::path> unused;
+  std::vector<char> replaced(samples.size(), 0);
+  for (const fs::path& dir : sources) {
+    const StudyView source(dir, "");
+    bool used = false;
+    for (const SeriesKey& sk : source.seriesKeys())
+      for (std::size_t i = 0; i < samples.size(); ++i) {
+        LambdaSample& s = samples[i];
+        if (replaced[i] || s.series != seriesText(sk)) continue;
+        std::vector<analysis::SeedProfile> seeds = seedProfiles(source, sk, s.backend, s.width);
+        if (seeds.empty()) continue;
+        s.seeds = std::move(seeds);
+        s.source = dir.string();
+        replaced[i] = used = true;
+      }
+    if (!used) unused.push_back(dir);
+  }
+  fitLambdaSamples(samples);
+  return unused;
 }
 
 }  // namespace confpack::study

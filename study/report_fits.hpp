@@ -51,6 +51,13 @@ std::vector<FitRow> confinementFits(const StudyView& study, const std::string& k
 // replicas' phi(y) at the confined width nearest `target`, and C of the series' phi(W) fit.
 std::vector<LambdaSample> lambdaSamples(const StudyView& study, const std::vector<FitRow>& phiFits, double target);
 
+// Each sample's replicas read instead from the first of `sources` (sweep folders, e.g. more seeds of
+// one family run apart) that has finished runs of its series and backend at its width, then every
+// sample fitted again. checkLambdaSources() has checked that those runs are the study's
+// configurations. Returns the sources that gave no sample.
+std::vector<std::filesystem::path> readLambdaSources(std::vector<LambdaSample>& samples,
+                                                     const std::vector<std::filesystem::path>& sources);
+
 // The figures of the phi(W) and Z(W) fits and of lambda_L, in this order.
 void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& figures, const ConfinementFits& fits,
                           References& references);

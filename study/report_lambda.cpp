@@ -259,7 +259,7 @@ std::vector<LambdaFinding> lambdaFindings(const std::vector<LambdaSample>& sampl
 }
 
 void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<LambdaSample>& samples, double target,
-                      const fs::path& reportDir) {
+                      const fs::path& reportDir, const std::vector<fs::path>& unusedSources) {
   doc.heading(2, "Wall ordering length lambda_L against x_S and against C");
   std::vector<double> widths;
   for (const LambdaSample& s : samples)
@@ -276,6 +276,19 @@ void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<La
       core::numberText(target), "the report's --lambda-width", widthsText,
       link("tables/lambda.csv", "tables/lambda.csv")));
   writeTable(reportDir / "tables" / "lambda.csv", samples);
+  std::vector<std::string> read;
+  for (const LambdaSample& s : samples)
+    if (!s.source.empty())
+      read.push_back(fmt::format("{} ({}): its {} replicas from {}", s.family, s.backend, s.fit.seeds, s.source));
+  for (const fs::path& dir : unusedSources)
+    read.push_back(
+        fmt::format("{}: none, it has no finished runs of the study's families at their widths", dir.string()));
+  if (!read.empty()) {
+    doc.paragraph(
+        "Read from other sweep folders (the report's --lambda-from, the study's configurations apart from their "
+        "seeds) instead of the study's runs; C stays the study's:");
+    doc.bullets(read);
+  }
   std::vector<std::vector<std::string>> rows;
   for (const LambdaSample& s : samples) {
     const analysis::AveragedProfileFit& f = s.fit;

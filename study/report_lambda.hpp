@@ -38,6 +38,7 @@ struct LambdaSample {
   int backendIndex = 0;  ///< colour and dashes
   double width = 0.0;    ///< [d_L]
   std::vector<analysis::SeedProfile> seeds;
+  std::string source;                ///< the sweep folder the replicas were read from, if not the study (--lambda-from)
   std::optional<double> c, cError;   ///< C of the family's phi(W) fit for this backend [d_L]
   analysis::AveragedProfileFit fit;  ///< filled by fitLambdaSamples
 };
@@ -57,8 +58,11 @@ struct LambdaFinding {
 std::vector<LambdaFinding> lambdaFindings(const std::vector<LambdaSample>& samples);
 
 /// The section: definitions, the table (also tables/lambda.csv under reportDir), the two figures
-/// with their lines, and the findings. `target` is the width asked for (ReportOptions).
+/// with their lines, and the findings. `target` is the width asked for (ReportOptions); the samples
+/// read from another sweep folder are named, and so are the `unusedSources` (--lambda-from
+/// folders that had none of the study's samples).
 void addLambdaSection(Document& doc, FigureWriter& figures, const std::vector<LambdaSample>& samples, double target,
-                      const std::filesystem::path& reportDir);
+                      const std::filesystem::path& reportDir,
+                      const std::vector<std::filesystem::path>& unusedSources = {});
 
 }  // namespace confpack::study

@@ -31,11 +31,13 @@ using nlohmann::json;
 namespace {
 
 /// A finished sweep folder `dir` of four runs with made-up results (no physics: the report is
-/// what is tested), enough for the phi(W) figures.
-void makeSweep(const fs::path& dir) {
-  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
-    "name": "fake", "base": { "box": { "length_x": 6, "height": 4 } },
-    "vary": { "width": [4, 8], "replicas": 2, "backend": ["nscd"] } })"));
+/// what is tested), enough for the phi(W) figures; boxes `height` high.
+void makeSweep(const fs::path& dir, double height = 4.0) {
+  json doc = json::parse(R"({
+    "name": "fake", "base": { "box": { "length_x": 6 } },
+    "vary": { "width": [4, 8], "replicas": 2, "backend": ["nscd"] } })");
+  doc["base"]["box"]["height"] = height;
+  const study::SweepSpec spec = study::parseSweepSpec(doc);
   auto runner = [](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
                    const study::RunProgressFn&) {
     const double phi = 0.64 - 0.5 / cfg.box.width + 0.001 * static_cast<double>(cfg.seed);
@@ -250,4 +252,21 @@ TEST_CASE(
   const std::string md = slurp(s.dir / "sw" / "report" / "report.md");
   CHECK(md.find("| family | seed | runs at equilibrium / total |") != std::string::npos);
   CHECK(md.find("## Verdict: 1 against 2") != std::string::npos);
+}
+
+TEST_CASE(
+    "report --lambda-from: a sweep of other configurations is refused by run and setting, exit 2, nothing written") {
+  ConfpackSession s("cmd_report_lambda_from");
+  makeSweep(s.dir / "sw");
+  makeSweep(s.dir / "taller", 5.0);
+  const auto r = s.run("report sw --no-figures --lambda-from taller");
+  CHECK(r.code == 2);
+  CHECK(r.err ==
+        "confpack report: error: --lambda-from taller: run r0000 (MSP xS=0 W=4 mu=0 s1 nscd) is none of the study's "
+        "configurations apart from its seed (first difference: box/height)\n");
+  CHECK_FALSE(fs::exists(s.dir / "sw" / "report"));
+  // The same configurations, more seeds: taken, the sweep folder after the option.
+  makeSweep(s.dir / "same");
+  REQUIRE(s.run("report --no-figures --lambda-from same sw").code == 0);
+  CHECK(fs::exists(s.dir / "sw" / "report" / "report.md"));
 }

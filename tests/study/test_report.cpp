@@ -90,6 +90,24 @@ json sizedResult(const core::RunConfig& cfg, bool sameLaw) {
   return r;
 }
 
+// phi_y.csv of a run whose walls' layering decays over `lambda` d_L (d_avg = 1), each seed with
+// its own small ripple: the seed-averaged fit reads lambda_L/d_avg from it (study/report_lambda.hpp).
+void writeLayeredProfile(const fs::path& runDir, const core::RunConfig& cfg, double lambda) {
+  analysis::ProfileLaw law;
+  law.alpha = 0.08;
+  law.phiBulk = 0.6;
+  law.beta[0] = 0.2;
+  law.gamma[0] = 0.95;
+  law.lambda[0] = lambda;
+  std::ofstream csv(runDir / "phi_y.csv");
+  csv << "# seed " << cfg.seed << "\ny,phi\n";
+  const int slices = static_cast<int>(std::min(cfg.box.width, 10.0) / 2.0 / 0.02);
+  for (int i = 0; i < slices; ++i) {
+    const double y = (i + 0.5) * 0.02;
+    csv << y << ',' << law(y) + 1e-4 * std::cos(37.0 * i * cfg.seed) << '\n';
+  }
+}
+
 // With `settled`, every bullet run also has a settle (RUN/settled/, a sweep's settle_with) that
 // follows nscd's law: Bullet's piles, brought to rest, are nscd's.
 fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = false, std::size_t grainCap = 0,
@@ -121,21 +139,8 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
       fs::create_directories(runDir / study::kSettledFolder);
       std::ofstream(runDir / study::kSettledFolder / "result.json") << syntheticResult(cfg, true).dump();
     }
-    // A layering decaying over 1.25 d_L (nscd) or 1.5 d_L (bullet), d_avg = 1, each seed with its
-    // own small ripple: the seed-averaged fit reads lambda_L/d_avg from it (study/report_lambda.hpp).
-    analysis::ProfileLaw law;
-    law.alpha = 0.08;
-    law.phiBulk = 0.6;
-    law.beta[0] = 0.2;
-    law.gamma[0] = 0.95;
-    law.lambda[0] = sameLaw || cfg.backend == "nscd" ? 1.25 : 1.5;
-    std::ofstream csv(runDir / "phi_y.csv");
-    csv << "# seed " << cfg.seed << "\ny,phi\n";
-    const int slices = static_cast<int>(std::min(cfg.box.width, 10.0) / 2.0 / 0.02);
-    for (int i = 0; i < slices; ++i) {
-      const double y = (i + 0.5) * 0.02;
-      csv << y << ',' << law(y) + 1e-4 * std::cos(37.0 * i * cfg.seed) << '\n';
-    }
+    // A layering decaying over 1.25 d_L (nscd) or 1.5 d_L (bullet).
+    writeLayeredProfile(runDir, cfg, sameLaw || cfg.backend == "nscd" ? 1.25 : 1.5);
     return r;
   };
   study::SweepOptions o;
@@ -145,6 +150,34 @@ fs::path makeStudy(const std::string& name, bool withFailures, bool sameLaw = fa
     // One run interrupted: its folder exists without a done marker.
     fs::remove(dir / "runs" / "r0000" / study::kDoneMarker);
   }
+  return dir;
+}
+
+// More replicas of makeStudy's nscd runs at one width (seeds 1 to `replicas`), apart as a user
+// runs more seeds of one family, their layering decaying over `lambda` d_L; `height` other than 4
+// makes them another configuration.
+fs::path makeReplicaSweep(const std::string& name, double width, double height, double lambda, int replicas) {
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  json doc = json::parse(R"({
+    "name": "more seeds",
+    "base": { "box": { "length_x": 6 } },
+    "biperiodic_width": 12,
+    "vary": { "backend": ["nscd"] }
+  })");
+  doc["base"]["box"]["height"] = height;
+  doc["vary"]["width"] = {width};
+  doc["vary"]["replicas"] = replicas;
+  auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
+                    const study::RunProgressFn&) {
+    json r = sizedResult(cfg, false);
+    std::ofstream(runDir / "result.json") << r.dump();
+    writeLayeredProfile(runDir, cfg, lambda);
+    return r;
+  };
+  study::SweepOptions o;
+  o.quiet = true;
+  study::runSweep(study::parseSweepSpec(doc), dir, o, runner, testing::oneGrainDeposit);
   return dir;
 }
 
@@ -935,4 +968,41 @@ TEST_CASE("report of a sweep over a setting axis groups by it: summary, runs, ta
         "MPP x_S=0 mu_w=0 W=biperiodic (20) nscd,75,0.575,0\n");
   CHECK(fs::exists(dir / "report" / "figures" / "Z_vs_alpha_deg.csv"));
   if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT")) fs::remove_all(dir);
+}
+
+TEST_CASE("report: a family's lambda_L from more replicas run apart (lambda-from), refused for another configuration") {
+  const fs::path dir = makeStudy("lambda_from", false);
+  const fs::path more = makeReplicaSweep("lambda_more", 10.0, 4.0, 2.0, 6);
+  const fs::path other = makeReplicaSweep("lambda_other", 10.0, 5.0, 2.0, 3);
+  const fs::path narrow = makeReplicaSweep("lambda_narrow", 5.0, 4.0, 2.0, 3);
+  study::checkLambdaSources(dir, {more, narrow});
+  try {
+    study::checkLambdaSources(dir, {more, other});
+    FAIL("a sweep of another box height was taken");
+  } catch (const std::invalid_argument& e) {
+    CHECK_THAT(e.what(), Catch::Contains("--lambda-from " + other.string() + ": run r0000"));
+    CHECK_THAT(e.what(), Catch::Contains("(first difference: box/height)"));
+  }
+  study::ReportOptions o;
+  o.gnuplot.clear();
+  o.lambdaFrom = {narrow, more};
+  const fs::path out = dir / "report_more";
+  study::writeReport(dir, out, o);
+  // nscd's sample at W = 10 is the six replicas of the other sweep, whose layering decays over 2 d_L;
+  // Bullet's stays the study's three at 1.5 d_L.
+  const study::CsvTable t = readTable(out, "lambda.csv");
+  const auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(t.columns.begin(), t.columns.end(), name) - t.columns.begin());
+  };
+  REQUIRE(t.rows.size() == 2);
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const bool nscd = t.text[i][col("backend")] == "nscd";
+    CHECK(t.rows[i][col("seeds")] == (nscd ? 6.0 : 3.0));
+    CHECK(t.rows[i][col("lambda_L")] == Approx(nscd ? 2.0 : 1.5).margin(0.01));
+  }
+  const std::string md = slurp(out / "report.md");
+  CHECK_THAT(md, Catch::Contains("- MSP: spheres x_S = 0, mu_w = 0 (nscd): its 6 replicas from " + more.string()));
+  CHECK_THAT(md, Catch::Contains("- " + narrow.string() + ": none, it has no finished runs of the study's families"));
+  if (!std::getenv("CONFPACK_KEEP_TEST_OUTPUT"))
+    for (const fs::path& d : {dir, more, other, narrow}) fs::remove_all(d);
 }
