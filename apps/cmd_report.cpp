@@ -54,6 +54,9 @@ void runReportCommand(const ReportState& st) {
     output.commit();
     // A figure gnuplot failed on is said in its place in the report and here; the rest stands.
     for (const std::string& e : s.figureErrors) fmt::print(stderr, "confpack report: {}\n", e);
+    for (const std::filesystem::path& dir : s.unusedLambdaSources)
+      fmt::print(stderr, "confpack report: --lambda-from {}: no family's replicas at its lambda width, not used\n",
+                 dir.string());
     const std::string drawn =
         !s.gnuplotUsed
             ? (st.noFigures ? " (not drawn: --no-figures)" : fmt::format(" (not drawn: gnuplot {})", s.gnuplotProblem))

@@ -178,6 +178,7 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   if (study.keys.count("coordination/Z")) fits.z = confinementFits(study, "coordination/Z");
   std::vector<LambdaSample> lambdas = lambdaSamples(study, fits.phi, options.lambdaWidth);
   std::vector<fs::path> unusedSources = readLambdaSources(lambdas, options.lambdaFrom);
+  summary.unusedLambdaSources = unusedSources;
   if (!options.runLinks) {  // a published report names the other sweep folders as it names the study's
     for (LambdaSample& l : lambdas)
       if (!l.source.empty()) l.source = fs::weakly_canonical(l.source).filename().string();

@@ -119,6 +119,7 @@ struct ReportSummary {
   std::vector<std::string> figureErrors;  ///< "figure STEM: gnuplot failed: ..." per figure not drawn
   bool gnuplotUsed = false;
   std::string gnuplotProblem;  ///< why a gnuplot asked for was not used (FigureWriter::problem), else empty
+  std::vector<std::filesystem::path> unusedLambdaSources;  ///< --lambda-from folders that gave no family's replicas
   std::filesystem::path html, markdown;
 };
 

@@ -272,11 +272,11 @@ std::vector<fs::path> readLambdaSources(std::vector<LambdaSample>& samples, cons
         if (seeds.empty()) continue;
         s.seeds = std::move(seeds);
         s.source = dir.string();
+        fitLambdaSample(s);
         replaced[i] = used = true;
       }
     if (!used) unused.push_back(dir);
   }
-  fitLambdaSamples(samples);
   return unused;
 }
 

@@ -52,9 +52,9 @@ std::vector<FitRow> confinementFits(const StudyView& study, const std::string& k
 std::vector<LambdaSample> lambdaSamples(const StudyView& study, const std::vector<FitRow>& phiFits, double target);
 
 // Each sample's replicas read instead from the first of `sources` (sweep folders, e.g. more seeds of
-// one family run apart) that has finished runs of its series and backend at its width, then every
-// sample fitted again. checkLambdaSources() has checked that those runs are the study's
-// configurations. Returns the sources that gave no sample.
+// one family run apart) that has finished runs of its series and backend at its width, and fitted
+// again; checkLambdaSources() has checked that those runs are the study's configurations. Returns
+// the sources that gave no sample.
 std::vector<std::filesystem::path> readLambdaSources(std::vector<LambdaSample>& samples,
                                                      const std::vector<std::filesystem::path>& sources);
 

@@ -27,20 +27,22 @@ std::optional<double> lambdaWidth(const std::vector<double>& widths, double targ
   return best;
 }
 
-void fitLambdaSamples(std::vector<LambdaSample>& samples) {
+void fitLambdaSample(LambdaSample& s) {
   // Profiles on another grid than their first replica's are runs of another build: the sample
   // is reported as not fitted rather than fitted without some of them.
-  for (LambdaSample& s : samples) {
-    analysis::ProfileFitDef def;
-    def.bidisperse = s.xs > 0.0;
-    try {
-      s.fit = analysis::fitAveragedProfile(s.seeds, def);
-    } catch (const std::invalid_argument& e) {
-      s.fit = analysis::AveragedProfileFit{};
-      s.fit.seeds = static_cast<int>(s.seeds.size());
-      s.fit.reason = e.what();
-    }
+  analysis::ProfileFitDef def;
+  def.bidisperse = s.xs > 0.0;
+  try {
+    s.fit = analysis::fitAveragedProfile(s.seeds, def);
+  } catch (const std::invalid_argument& e) {
+    s.fit = analysis::AveragedProfileFit{};
+    s.fit.seeds = static_cast<int>(s.seeds.size());
+    s.fit.reason = e.what();
   }
+}
+
+void fitLambdaSamples(std::vector<LambdaSample>& samples) {
+  for (LambdaSample& s : samples) fitLambdaSample(s);
 }
 
 namespace {

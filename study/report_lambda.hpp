@@ -43,7 +43,9 @@ struct LambdaSample {
   analysis::AveragedProfileFit fit;  ///< filled by fitLambdaSamples
 };
 
-/// Fits every sample's averaged profile (bidisperse when x_S > 0).
+/// Fits a sample's averaged profile (bidisperse when x_S > 0), or says in its fit why not.
+void fitLambdaSample(LambdaSample& sample);
+/// fitLambdaSample of every sample.
 void fitLambdaSamples(std::vector<LambdaSample>& samples);
 
 /// A test of one finding for one backend, as the summary and the section state it.
