@@ -127,21 +127,6 @@ nlohmann::json comparedConfig(const core::RunConfig& c) {
   return j;
 }
 
-// The path of the first leaf where a and b differ ("box/height"), empty when they are equal; a
-// leaf is a value that is not an object.
-std::string firstDifference(const nlohmann::json& a, const nlohmann::json& b, const std::string& path = "") {
-  if (!a.is_object() || !b.is_object()) return a == b ? "" : path;
-  const auto at = [&](const std::string& key) { return path.empty() ? key : path + "/" + key; };
-  for (const auto& [key, value] : a.items()) {
-    const auto other = b.find(key);
-    if (other == b.end()) return at(key);
-    if (std::string d = firstDifference(value, *other, at(key)); !d.empty()) return d;
-  }
-  for (const auto& [key, value] : b.items())
-    if (!a.contains(key)) return at(key);
-  return "";
-}
-
 }  // namespace
 
 void checkLambdaSources(const fs::path& sweepDir, const std::vector<fs::path>& sources) {
@@ -156,9 +141,11 @@ void checkLambdaSources(const fs::path& sweepDir, const std::vector<fs::path>& s
       const auto near = std::find_if(study.begin(), study.end(), [&](const nlohmann::json& c) {
         return c["backend"] == mine["backend"] && c["box"] == mine["box"];
       });
-      const std::string why =
-          study.empty() ? "the study has no runs"
-                        : "first difference: " + firstDifference(near != study.end() ? *near : study.front(), mine);
+      std::string why = "the study has no runs";
+      if (!study.empty()) {  // the first change of the JSON patch from it to this run, "/box/height"
+        const nlohmann::json patch = nlohmann::json::diff(near != study.end() ? *near : study.front(), mine);
+        why = "first difference: " + patch[0]["path"].get<std::string>().substr(1);
+      }
       throw std::invalid_argument(
           fmt::format("--lambda-from {}: run {} ({}) is none of the study's configurations apart from its seed ({})",
                       dir.string(), r.name, r.label(), why));
@@ -181,8 +168,8 @@ ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, cons
   summary.unusedLambdaSources = unusedSources;
   if (!options.runLinks) {  // a published report names the other sweep folders as it names the study's
     for (LambdaSample& l : lambdas)
-      if (!l.source.empty()) l.source = fs::weakly_canonical(l.source).filename().string();
-    for (fs::path& dir : unusedSources) dir = fs::weakly_canonical(dir).filename();
+      if (!l.source.empty()) l.source = folderName(l.source);
+    for (fs::path& dir : unusedSources) dir = folderName(dir);
   }
   const StudySummary results = summarize(study, fits, lambdas);
   References references(options.reference);

@@ -260,20 +260,18 @@ void addFitFigureSections(Document& doc, const StudyView& study, FigureWriter& f
 
 std::vector<fs::path> readLambdaSources(std::vector<LambdaSample>& samples, const std::vector<fs::path>& sources) {
   std::vector<fs::path> unused;
-  std::vector<char> replaced(samples.size(), 0);
   for (const fs::path& dir : sources) {
     const StudyView source(dir, "");
     bool used = false;
     for (const SeriesKey& sk : source.seriesKeys())
-      for (std::size_t i = 0; i < samples.size(); ++i) {
-        LambdaSample& s = samples[i];
-        if (replaced[i] || s.series != seriesText(sk)) continue;
+      for (LambdaSample& s : samples) {
+        if (!s.source.empty() || s.series != seriesText(sk)) continue;  // taken by an earlier source
         std::vector<analysis::SeedProfile> seeds = seedProfiles(source, sk, s.backend, s.width);
         if (seeds.empty()) continue;
         s.seeds = std::move(seeds);
         s.source = dir.string();
         fitLambdaSample(s);
-        replaced[i] = used = true;
+        used = true;
       }
     if (!used) unused.push_back(dir);
   }

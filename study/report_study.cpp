@@ -146,8 +146,12 @@ bool unequilibrated(const RunRecord& r) {
   return r.status == RunStatus::Done && it != r.values.end() && it->second && *it->second == 0.0;
 }
 
+std::string folderName(const fs::path& dir) {
+  return fs::weakly_canonical(fs::absolute(dir)).filename().string();
+}
+
 std::string sweepName(const StudyView& study) {
-  return fs::weakly_canonical(fs::absolute(study.sweepDir)).filename().string();
+  return folderName(study.sweepDir);
 }
 
 }  // namespace confpack::study

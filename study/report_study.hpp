@@ -166,7 +166,10 @@ class StudyView {
 
 bool unequilibrated(const RunRecord& r);
 
-// The sweep folder's own name (its last path component, "." and ".." resolved).
+// A folder's own name (its last path component, "." and ".." resolved).
+std::string folderName(const std::filesystem::path& dir);
+
+// The sweep folder's own name, folderName of its path.
 std::string sweepName(const StudyView& study);
 
 }  // namespace confpack::study
