@@ -11,6 +11,7 @@
 #include "compaction/compaction.hpp"
 #include "core/json_input.hpp"
 #include "study/run_pipeline.hpp"
+#include "study/sweep_runner.hpp"
 #include "tests/support/systems.hpp"
 
 using namespace confpack;
@@ -123,5 +124,50 @@ TEST_CASE("settleAndWrite: a sweep's settle_with takes a finished Bullet run on 
   const study::Reanalysed again = study::reanalyseRun(out);
   CHECK(again.after["settle"] == settled["settle"]);
   CHECK(again.after["solid_fraction"] == settled["solid_fraction"]);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("pipelineRunner: a run whose settle was cut short resumes at its settle, its own run kept and not redone") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_resume_settle_" + std::to_string(::getpid()));
+  const fs::path runDir = dir / "runs" / "r0000";
+  const fs::path kept = dir / "checkpoints" / "r0000-unsettled";
+  fs::remove_all(dir);
+  core::RunConfig cfg = testing::smallQuasiStaticRun("bullet", 0.0);
+  cfg.compaction.timeLimit = 2.0;
+  cfg.backendOptions = {{"iterations", 20}};
+  const compaction::Deposit deposit = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  // As the sweep starts every attempt: an empty folder with the run's config.json.
+  const auto freshFolder = [&](const core::RunConfig& c) {
+    fs::remove_all(runDir);
+    fs::create_directories(runDir);
+    core::writeFileAtomically(runDir / "config.json", nlohmann::json(c).dump(2));
+  };
+
+  // The first attempt's settle fails (an unknown backend), after Bullet's run is finished.
+  freshFolder(cfg);
+  CHECK_THROWS(study::pipelineRunner(1, 300.0, "no-such-backend")(cfg, runDir, deposit, {}));
+  REQUIRE(fs::exists(kept / "packing.json"));
+  nlohmann::json marked = core::readJsonFile(kept / "result.json", "result");
+  marked["kept"] = true;  // only a run restored from the kept folder can carry this
+  core::writeFileAtomically(kept / "result.json", marked.dump(2));
+
+  // The next attempt takes Bullet's run from the kept folder and goes straight to the settle.
+  freshFolder(cfg);
+  const nlohmann::json again = study::pipelineRunner(1, 300.0, "nscd")(cfg, runDir, deposit, {});
+  CHECK(again == marked);
+  CHECK(core::readJsonFile(runDir / study::kSettledFolder / "result.json", "settled")["equilibrium"]["reached"]
+            .get<bool>());
+  CHECK_FALSE(fs::exists(kept));  // the settle is done: nothing is kept
+
+  // A kept folder of another configuration is not taken: the run is made afresh.
+  fs::copy(runDir, kept, fs::copy_options::recursive);
+  core::writeFileAtomically(kept / "result.json", marked.dump(2));
+  core::RunConfig other = cfg;
+  other.compaction.timeLimit = 1.0;
+  freshFolder(other);
+  const nlohmann::json afresh = study::pipelineRunner(1, 300.0, "nscd")(other, runDir, deposit, {});
+  CHECK_FALSE(afresh.contains("kept"));
+  CHECK(afresh["equilibrium"]["simulated_time"].get<double>() < 1.5);
   fs::remove_all(dir);
 }
