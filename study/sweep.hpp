@@ -151,6 +151,17 @@ inline std::filesystem::path sweepCheckpointFile(const std::filesystem::path& sw
   return sweepDir / "checkpoints" / (run + ".json");
 }
 
+/// Where a run with a settle (settle_with) keeps its own finished folder until the settle is done:
+/// SWEEPDIR/checkpoints/rNNNN-unsettled/ (study/sweep_runner.hpp, runOrRestore).
+inline std::filesystem::path sweepKeptRunFolder(const std::filesystem::path& sweepDir, const std::string& run) {
+  return sweepDir / "checkpoints" / (run + "-unsettled");
+}
+
+/// The checkpoint of a run's settle: SWEEPDIR/checkpoints/rNNNN-settled.json.
+inline std::filesystem::path sweepSettleCheckpointFile(const std::filesystem::path& sweepDir, const std::string& run) {
+  return sweepCheckpointFile(sweepDir, run + "-settled");
+}
+
 /// The time now in UTC, ISO 8601 ("2024-05-01T12:00:00Z"), as the markers record it.
 std::string utcTimestamp();
 

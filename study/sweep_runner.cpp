@@ -41,9 +41,9 @@ SweepRunFn pipelineRunner(int threads, double checkpointEvery, const std::string
     const auto run = [&] { return runAndWrite(c, runDir, progress, &deposit, checkpointing); };
     if (settleWith.empty() || c.backend == settleWith) return run();
 
-    const fs::path kept = sweepDir / "checkpoints" / (name + "-unsettled");
+    const fs::path kept = sweepKeptRunFolder(sweepDir, name);
     nlohmann::json result = runOrRestore(runDir, kept, run);
-    checkpointing.file = sweepCheckpointFile(sweepDir, name + "-settled");
+    checkpointing.file = sweepSettleCheckpointFile(sweepDir, name);
     settleAndWrite(c, runDir, settleWith, progress, checkpointing);
     fs::remove_all(kept);
     return result;

@@ -101,6 +101,12 @@ std::vector<RunReport> sweepStatus(const fs::path& dir, const std::vector<SweepR
     const std::string logOf = f.claim && !f.claim->job.empty() ? f.claim->job : f.task;
     if (!logOf.empty()) f.taskLogLine = lastOutputLine(taskLog(dir, logOf));
     f.checkpoint = compaction::describeCheckpoint(sweepCheckpointFile(dir, r.name));
+    // With settle_with: the run's own part done and kept, and where its settle stands.
+    if (fs::exists(sweepKeptRunFolder(dir, r.name) / "result.json"))
+      f.checkpoint = "its own run done, kept for its settle";
+    if (const std::string settle = compaction::describeCheckpoint(sweepSettleCheckpointFile(dir, r.name));
+        !settle.empty())
+      f.checkpoint = (f.checkpoint.empty() ? "" : f.checkpoint + "; ") + "the settle's " + settle;
     out.push_back(classifyRun(f));
   }
   return out;

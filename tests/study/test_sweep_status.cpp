@@ -116,6 +116,9 @@ TEST_CASE("status: a sweep folder's runs, from markers, claims, submissions and 
   study::recordSubmission(dir, {"7", {{{"r0000"}}, {{"r0001"}}, {{"r0002"}}, {{"r0003"}}}, "2024-01-01T10:00:00Z"});
   fs::create_directories(dir / "slurm" / "logs");
   std::ofstream(study::taskLog(dir, "7_3")) << "sweep s: 1 runs\nslurmstepd: error: *** JOB 9 CANCELLED ***\n\n";
+  // r0004's own run finished and is kept for its settle (settle_with), which has not begun.
+  fs::create_directories(study::sweepKeptRunFolder(dir, "r0004"));
+  std::ofstream(study::sweepKeptRunFolder(dir, "r0004") / "result.json") << "{}";
   int asked = 0;
   const auto reports = study::sweepStatus(
       dir, runs, [](const study::ClaimHolder&) { return Liveness::Alive; },
@@ -133,11 +136,13 @@ TEST_CASE("status: a sweep folder's runs, from markers, claims, submissions and 
   CHECK(reports[3].job == "7_3");
   CHECK(reports[3].detail == "its task ended without finishing it: slurmstepd: error: *** JOB 9 CANCELLED ***");
   CHECK(reports[4].state == RunState::Missing);
+  CHECK(reports[4].detail == "its own run done, kept for its settle");
   CHECK(asked == 3);  // the tasks of r0001, r0002 and r0003; none for a run done
   const std::string text = study::formatStatus(runs, reports);
   CHECK(text.find("r0002   running  7_2 MSP xS=0 W=5 mu=0 s1 nscd: node3 pid 4711 (job 7_2) since") !=
         std::string::npos);
-  CHECK(text.find("r0004   missing  -   MSP xS=0 W=7 mu=0 s1 nscd\n") != std::string::npos);
+  CHECK(text.find("r0004   missing  -   MSP xS=0 W=7 mu=0 s1 nscd: its own run done, kept for its settle\n") !=
+        std::string::npos);
   CHECK(text.find("5 runs: 1 done, 1 running, 0 queued, 2 failed, 1 missing\n") != std::string::npos);
   fs::remove_all(dir);
 }
