@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The tables of docs/pinacoids-and-the-paper.md, "The experiment at 600 grains", from the sweep
+"""The tables of docs/pinacoids-and-the-paper.md, "A larger pile, and the walls", from the sweep
 folder of docs/examples/pinacoids-paper-600.json and the inflated readings of its exact piles.
 
     python3 docs/pinacoids-paper/tables600.py SWEEPDIR [INFLATEDIR] > tables.md
@@ -126,21 +126,39 @@ def main():
         print(f"| {v} | {' | '.join(cells)} | {bulk:.4f} ± {bulk_se:.4f} | {c:.3f} ± {c_se:.3f} | {chi2:.2f} |")
 
     if len(sys.argv) > 2:
-        inflated = defaultdict(list)
+        inflated = defaultdict(list)  # (width, S) -> [quantities]
         for result in sorted(Path(sys.argv[2]).glob("r*-*/result.json")):
-            scale = result.parent.name.split("-")[1]
-            inflated[scale].append(quantities(load(result)))
+            run, scale = result.parent.name.split("-")
+            w = width(load(sweep / "runs" / run / "config.json"))
+            inflated[(w, scale)].append(quantities(load(result)))
+        scales = sorted({s for _, s in inflated})
         print("\n## The exact biperiodic piles inflated (band 0.035 d)\n")
         print("| S | phi | interpenetration, exact [%] | lattice bounds [%] | Z | Z_t exact | Z_t band "
               "| Z_s + 2 Z_d + 3 Z_t band |")
         print("|---|---|---|---|---|---|---|---|")
-        for s in sorted(inflated):
-            q = inflated[s]
+        for s in scales:
+            q = inflated.get(("biperiodic", s))
+            if not q:
+                continue
             col = lambda k, d=2: text(stat(r[k] for r in q), d)
             print(f"| {s} | {col('phi', 4)} | {col('interp')} | {np.mean([r['lattice_min'] for r in q]):.2f}, "
                   f"{np.mean([r['lattice_max'] for r in q]):.2f} | {col('Z')} | {col('Zt')} | {col('Zt_band')} | "
                   f"{col('constraints_band')} |")
-
+        print("\n## The exact piles inflated: C\n")
+        print("| S | phi, W = 5 | phi, W = 10 | phi, biperiodic | phi_bulk (fit) | C [d_L] | chi² (1 dof) |")
+        print("|---|---|---|---|---|---|---|")
+        for s in scales:
+            points, cells = [], []
+            for w in (5, 10, "biperiodic"):
+                q = inflated.get((w, s))
+                st = stat(r["phi"] for r in q) if q else (math.nan, math.nan, 0)
+                cells.append(text(st))
+                if st[2] >= 2:
+                    points.append((0.0 if w == "biperiodic" else 1.0 / w, st[0], st[1]))
+            if len(points) < 3:
+                continue
+            bulk, bulk_se, c, c_se, chi2 = fit_c(points)
+            print(f"| {s} | {' | '.join(cells)} | {bulk:.4f} ± {bulk_se:.4f} | {c:.3f} ± {c_se:.3f} | {chi2:.2f} |")
 
 if __name__ == "__main__":
     main()
