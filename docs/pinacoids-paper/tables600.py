@@ -87,6 +87,21 @@ def fit_c(points):
     return coef[1], math.sqrt(cov[1, 1]), -coef[0], math.sqrt(cov[0, 0]), chi2
 
 
+def c_row(label, groups):
+    """A row of a C table: phi at W = 5, 10 and biperiodic (groups: width -> [quantities]) and the fit."""
+    points, cells = [], []
+    for w in (5, 10, "biperiodic"):
+        q = groups.get(w)
+        s = stat(r["phi"] for r in q) if q else (math.nan, math.nan, 0)
+        cells.append(text(s))
+        if s[2] >= 2:
+            points.append((0.0 if w == "biperiodic" else 1.0 / w, s[0], s[1]))
+    if len(points) < 3:
+        return None
+    bulk, bulk_se, c, c_se, chi2 = fit_c(points)
+    return f"| {label} | {' | '.join(cells)} | {bulk:.4f} ± {bulk_se:.4f} | {c:.3f} ± {c_se:.3f} | {chi2:.2f} |"
+
+
 def main():
     sweep = Path(sys.argv[1])
     runs = defaultdict(list)  # (variant, width) -> [quantities]
@@ -113,17 +128,9 @@ def main():
     print("| model | phi, W = 5 | phi, W = 10 | phi, biperiodic | phi_bulk (fit) | C [d_L] | chi² (1 dof) |")
     print("|---|---|---|---|---|---|---|")
     for v in variants:
-        points, cells = [], []
-        for w in (5, 10, "biperiodic"):
-            q = runs.get((v, w))
-            s = stat(r["phi"] for r in q) if q else (math.nan, math.nan, 0)
-            cells.append(text(s))
-            if s[2] >= 2:
-                points.append((0.0 if w == "biperiodic" else 1.0 / w, s[0], s[1]))
-        if len(points) < 3:
-            continue
-        bulk, bulk_se, c, c_se, chi2 = fit_c(points)
-        print(f"| {v} | {' | '.join(cells)} | {bulk:.4f} ± {bulk_se:.4f} | {c:.3f} ± {c_se:.3f} | {chi2:.2f} |")
+        row = c_row(v, {w: runs.get((v, w)) for w in (5, 10, "biperiodic")})
+        if row:
+            print(row)
 
     if len(sys.argv) > 2:
         inflated = defaultdict(list)  # (width, S) -> [quantities]
@@ -148,17 +155,10 @@ def main():
         print("| S | phi, W = 5 | phi, W = 10 | phi, biperiodic | phi_bulk (fit) | C [d_L] | chi² (1 dof) |")
         print("|---|---|---|---|---|---|---|")
         for s in scales:
-            points, cells = [], []
-            for w in (5, 10, "biperiodic"):
-                q = inflated.get((w, s))
-                st = stat(r["phi"] for r in q) if q else (math.nan, math.nan, 0)
-                cells.append(text(st))
-                if st[2] >= 2:
-                    points.append((0.0 if w == "biperiodic" else 1.0 / w, st[0], st[1]))
-            if len(points) < 3:
-                continue
-            bulk, bulk_se, c, c_se, chi2 = fit_c(points)
-            print(f"| {s} | {' | '.join(cells)} | {bulk:.4f} ± {bulk_se:.4f} | {c:.3f} ± {c_se:.3f} | {chi2:.2f} |")
+            row = c_row(s, {w: inflated.get((w, s)) for w in (5, 10, "biperiodic")})
+            if row:
+                print(row)
+
 
 if __name__ == "__main__":
     main()
