@@ -2,17 +2,20 @@
 """The tables of docs/pinacoids-and-the-paper.md, "A larger pile, and the walls", from the sweep
 folder of docs/examples/pinacoids-paper-600.json and the inflated readings of its exact piles.
 
-    python3 docs/pinacoids-paper/tables600.py SWEEPDIR [INFLATEDIR] > tables.md
+    python3 docs/pinacoids-paper/tables600.py SWEEPDIR [INFLATEDIR] [--csv DIR] > tables.md
 
 Every value is the mean over the seeds +- its standard error (sample standard deviation / sqrt(n)).
 C is the weighted least-squares fit phi(W) = phi_bulk - C/W through W = 5, 10 and the biperiodic
 box at 1/W = 0, each point weighted by its standard error (numpy.polyfit with w = 1/sigma and the
 covariance unscaled). INFLATEDIR holds `confpack analyze --inflate S --type-band 0.035` folders
-named rNNNN-S (S = 1.00 to 1.07) for the exact model's runs.
+named rNNNN-S (S = 1.00 to 1.07) for the exact model's runs. With --csv DIR it also writes the
+figure's data, the biperiodic means: DIR/variants600.csv (a model's phi and its largest exact
+interpenetration) and DIR/inflation600.csv (S, phi, its error and the exact interpenetration).
 """
+import argparse
+import csv
 import json
 import math
-import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -102,8 +105,20 @@ def c_row(label, groups):
     return f"| {label} | {' | '.join(cells)} | {bulk:.4f} ± {bulk_se:.4f} | {c:.3f} ± {c_se:.3f} | {chi2:.2f} |"
 
 
+def write_csv(path, header, rows):
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(header)
+        out.writerows(rows)
+
+
 def main():
-    sweep = Path(sys.argv[1])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("sweep", type=Path)
+    parser.add_argument("inflated", type=Path, nargs="?")
+    parser.add_argument("--csv", type=Path, help="write the figure's data here")
+    args = parser.parse_args()
+    sweep = args.sweep
     runs = defaultdict(list)  # (variant, width) -> [quantities]
     for done in sorted(sweep.glob("runs/r*/done.json")):
         run = done.parent
@@ -115,10 +130,12 @@ def main():
     print("| model | runs | at rest | phi | interpenetration, exact, largest [%] | Z | Z_s | Z_d | Z_t "
           "| Z_s + 2 Z_d + 3 Z_t | nematic, bulk | t [t0] | wall time [s] |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    variant_rows = []
     for v in variants:
         q = runs.get((v, "biperiodic"))
         if not q:
             continue
+        variant_rows.append([v, f"{stat(r['phi'] for r in q)[0]:.5f}", f"{max(r['interp'] for r in q):.3e}"])
         col = lambda k, d=2: text(stat(r[k] for r in q), d)
         print(f"| {v} | {len(q)} | {sum(r['rest'] for r in q)} | {col('phi', 4)} | "
               f"{max(r['interp'] for r in q):.1e} | {col('Z')} | {col('Zs')} | {col('Zd')} | {col('Zt')} | "
@@ -132,9 +149,12 @@ def main():
         if row:
             print(row)
 
-    if len(sys.argv) > 2:
+    if args.csv:
+        write_csv(args.csv / "variants600.csv", ["model", "phi", "interp_exact_max"], variant_rows)
+
+    if args.inflated:
         inflated = defaultdict(list)  # (width, S) -> [quantities]
-        for result in sorted(Path(sys.argv[2]).glob("r*-*/result.json")):
+        for result in sorted(args.inflated.glob("r*-*/result.json")):
             run, scale = result.parent.name.split("-")
             w = width(load(sweep / "runs" / run / "config.json"))
             inflated[(w, scale)].append(quantities(load(result)))
@@ -143,10 +163,13 @@ def main():
         print("| S | phi | interpenetration, exact [%] | lattice bounds [%] | Z | Z_t exact | Z_t band "
               "| Z_s + 2 Z_d + 3 Z_t band |")
         print("|---|---|---|---|---|---|---|---|")
+        inflation_rows = []
         for s in scales:
             q = inflated.get(("biperiodic", s))
             if not q:
                 continue
+            phi = stat(r["phi"] for r in q)
+            inflation_rows.append([s, f"{phi[0]:.5f}", f"{phi[1]:.5f}", f"{stat(r['interp'] for r in q)[0]:.4f}"])
             col = lambda k, d=2: text(stat(r[k] for r in q), d)
             print(f"| {s} | {col('phi', 4)} | {col('interp')} | {np.mean([r['lattice_min'] for r in q]):.2f}, "
                   f"{np.mean([r['lattice_max'] for r in q]):.2f} | {col('Z')} | {col('Zt')} | {col('Zt_band')} | "
@@ -158,6 +181,8 @@ def main():
             row = c_row(s, {w: inflated.get((w, s)) for w in (5, 10, "biperiodic")})
             if row:
                 print(row)
+        if args.csv:
+            write_csv(args.csv / "inflation600.csv", ["S", "phi", "phi_se", "interp_exact"], inflation_rows)
 
 
 if __name__ == "__main__":
