@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""The tables of docs/pinacoids-and-the-paper.md, "A larger pile, and the walls", from the sweep
-folder of docs/examples/pinacoids-paper-600.json and the inflated readings of its exact piles.
+"""The tables of docs/pinacoids-and-the-paper.md, "A larger pile, and the walls" and "The
+paper-like model on the larger piles", from the sweep folder of
+docs/examples/pinacoids-paper-600.json and the inflated readings of its exact piles.
 
     python3 docs/pinacoids-paper/tables600.py SWEEPDIR [INFLATEDIR] [--csv DIR] > tables.md
 
@@ -113,7 +114,7 @@ def write_csv(path, header, rows):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("sweep", type=Path)
     parser.add_argument("inflated", type=Path, nargs="?")
     parser.add_argument("--csv", type=Path, help="write the figure's data here")
