@@ -136,10 +136,11 @@ def main():
         q = runs.get((v, "biperiodic"))
         if not q:
             continue
-        variant_rows.append([v, f"{stat(r['phi'] for r in q)[0]:.5f}", f"{max(r['interp'] for r in q):.3e}"])
+        phi, interp_max = stat(r["phi"] for r in q), max(r["interp"] for r in q)
+        variant_rows.append([v, f"{phi[0]:.5f}", f"{interp_max:.3e}"])
         col = lambda k, d=2: text(stat(r[k] for r in q), d)
-        print(f"| {v} | {len(q)} | {sum(r['rest'] for r in q)} | {col('phi', 4)} | "
-              f"{max(r['interp'] for r in q):.1e} | {col('Z')} | {col('Zs')} | {col('Zd')} | {col('Zt')} | "
+        print(f"| {v} | {len(q)} | {sum(r['rest'] for r in q)} | {text(phi, 4)} | "
+              f"{interp_max:.1e} | {col('Z')} | {col('Zs')} | {col('Zd')} | {col('Zt')} | "
               f"{col('constraints')} | {col('nematic', 3)} | {col('t', 0)} | {col('wall_s', 0)} |")
 
     print("\n## The walls: C\n")
@@ -169,10 +170,10 @@ def main():
             q = inflated.get(("biperiodic", s))
             if not q:
                 continue
-            phi = stat(r["phi"] for r in q)
-            inflation_rows.append([s, f"{phi[0]:.5f}", f"{phi[1]:.5f}", f"{stat(r['interp'] for r in q)[0]:.4f}"])
+            phi, interp = stat(r["phi"] for r in q), stat(r["interp"] for r in q)
+            inflation_rows.append([s, f"{phi[0]:.5f}", f"{phi[1]:.5f}", f"{interp[0]:.4f}"])
             col = lambda k, d=2: text(stat(r[k] for r in q), d)
-            print(f"| {s} | {col('phi', 4)} | {col('interp')} | {np.mean([r['lattice_min'] for r in q]):.2f}, "
+            print(f"| {s} | {text(phi, 4)} | {text(interp, 2)} | {np.mean([r['lattice_min'] for r in q]):.2f}, "
                   f"{np.mean([r['lattice_max'] for r in q]):.2f} | {col('Z')} | {col('Zt')} | {col('Zt_band')} | "
                   f"{col('constraints_band')} |")
         print("\n## The exact piles inflated: C\n")
