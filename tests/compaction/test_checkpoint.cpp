@@ -93,7 +93,8 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
   REQUIRE(stages["quasi_static"]["steps"].get<long>() >= 60);
   REQUIRE(fallChecks >= 4);
 
-  const fs::path file = testing::freshDir("checkpoint_nscd") / "run.json";
+  const testing::ScratchDir scratch("checkpoint_nscd");
+  const fs::path file = scratch.path() / "run.json";
   // Killed at a check: the checkpoint is the one saved at the check before.
   killedAt(cfg, dep, file, inFinisher ? static_cast<int>(fallChecks + 2) : 3);
   REQUIRE(fs::exists(file));
@@ -120,7 +121,8 @@ TEST_CASE("checkpoint: Bullet resumes from the saved poses and velocities and st
   cfg.compaction.timeLimit = 3.0;
   const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
-  const fs::path file = testing::freshDir("checkpoint_bullet") / "run.json";
+  const testing::ScratchDir scratch("checkpoint_bullet");
+  const fs::path file = scratch.path() / "run.json";
   killedAt(cfg, dep, file, 4);
   const nlohmann::json saved = readJson(file);
   const long savedSteps = saved["steps"].get<long>();
@@ -147,7 +149,8 @@ TEST_CASE("checkpoint: another run's checkpoint, or a damaged one, is set aside 
   cfg.compaction.protocol = core::Protocol::Dynamic;
   const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
   const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
-  const fs::path file = testing::freshDir("checkpoint_other") / "run.json";
+  const testing::ScratchDir scratch("checkpoint_other");
+  const fs::path file = scratch.path() / "run.json";
   killedAt(cfg, dep, file, 2);
   compaction::Checkpointing resume;
   resume.file = file;
@@ -183,7 +186,8 @@ TEST_CASE("checkpoint: its description says the stage and how far from rest its 
   cfg.compaction.protocol = core::Protocol::Dynamic;
   cfg.compaction.timeLimit = 6.0;
   const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const fs::path file = testing::freshDir("checkpoint_describe") / "run.json";
+  const testing::ScratchDir scratch("checkpoint_describe");
+  const fs::path file = scratch.path() / "run.json";
   killedAt(cfg, dep, file, 8);
   nlohmann::json j = readJson(file);
   // The last check with ratios measured: [steps, time, wall, force, moment, kinetic, ...].

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace confpack::testing {
 
@@ -22,5 +23,22 @@ inline std::filesystem::path freshDir(const std::string& name) {
   std::filesystem::create_directories(p);
   return p;
 }
+
+/// An empty scratch folder for `name`, removed with its contents when the test leaves its scope,
+/// so that repeated runs leave nothing in the temporary folder.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& name) : path_(freshDir(name)) {}
+  ~ScratchDir() {
+    std::error_code ignored;  // a destructor must not throw; a leftover is harmless
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
 
 }  // namespace confpack::testing
