@@ -86,7 +86,8 @@ void writeSlurmArray(const SweepState& st, const study::SweepSpec& spec, const s
                  runs.size(), live);
       return;
     }
-    const std::vector<study::ArrayTask> tasks = study::planArrayTasks(runs, todo, st.slurmOptions.maxTasks);
+    const std::vector<study::ArrayTask> tasks =
+        study::planArrayTasks(runs, todo, st.slurmOptions.maxTasks, study::equalTimePartners(runs, spec.equalTime));
     const fs::path dir = fs::absolute(out).lexically_normal();
     fs::create_directories(dir / "slurm" / "logs");  // sbatch does not create the logs' folder
     const fs::path script = dir / "slurm" / "study.sbatch";
@@ -168,6 +169,11 @@ void runSweepCommand(const SweepState& st) {
       spec = study::readSweepSpec(st.file, st.maxRuns);
     runs = study::expandRuns(spec);
     study::sliceRuns(runs, st.taskIndex, st.taskCount);  // validates the slice
+    try {
+      study::equalTimePartners(runs, spec.equalTime);  // with equal_time, every run has its partner
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("{}: {}", st.file.string(), e.what()));
+    }
     // The sweep file leaves backend_options to the backend: checked here, so that a typo is bad
     // input (exit 2) rather than a failure of every run.
     const std::vector<std::string> varied = study::variedSettings(runs);

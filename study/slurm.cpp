@@ -111,16 +111,30 @@ void checkSlurmPath(const fs::path& sweepDir) {
 }
 
 std::vector<ArrayTask> planArrayTasks(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
-                                      std::size_t maxTasks) {
+                                      std::size_t maxTasks, const std::vector<std::optional<std::size_t>>& partners) {
   // One run a task: the study takes as long as its slowest run, not as its slowest deposit group
   // (up to 8 runs in series). A run reads its deposit or makes it, the same bytes either way (a
   // function of its configuration and seed); two tasks that make one at once both write it whole.
-  const std::size_t count = maxTasks > 0 ? std::min(maxTasks, todo.size()) : todo.size();
-  // Dealt in table order, each task's runs stay in table order.
+  // With equal_time a run and its partner share a task: the run needs the partner's fall time.
   std::vector<std::size_t> ordered = todo;
   std::sort(ordered.begin(), ordered.end());
+  std::vector<std::vector<std::size_t>> units;  // dealt in table order of their first run
+  std::map<std::size_t, std::size_t> unitOf;    // a partner's run index -> its unit
+  for (std::size_t i : ordered) {
+    const std::size_t key = i < partners.size() && partners[i] ? *partners[i] : i;
+    const auto [it, added] = unitOf.try_emplace(key, units.size());
+    if (added) units.emplace_back();
+    units[it->second].push_back(i);
+  }
+  const std::size_t count = maxTasks > 0 ? std::min(maxTasks, units.size()) : units.size();
+  std::vector<std::vector<std::size_t>> dealt(count);
+  for (std::size_t j = 0; j < units.size(); ++j)
+    dealt[j % count].insert(dealt[j % count].end(), units[j].begin(), units[j].end());
   std::vector<ArrayTask> tasks(count);
-  for (std::size_t j = 0; j < ordered.size(); ++j) tasks[j % count].runs.push_back(runs.at(ordered[j]).name);
+  for (std::size_t t = 0; t < count; ++t) {
+    std::sort(dealt[t].begin(), dealt[t].end());  // each task's runs in table order
+    for (std::size_t i : dealt[t]) tasks[t].runs.push_back(runs.at(i).name);
+  }
   return tasks;
 }
 

@@ -45,9 +45,12 @@ struct ArrayTask {
 
 /// Deals `todo` (indices into `runs`) into array tasks: one run per task, or with maxTasks > 0
 /// and fewer tasks than runs, the j-th run of `todo` in table order to task j mod maxTasks; each
-/// task's runs in table order.
+/// task's runs in table order. With `partners` (equalTimePartners, a sweep's equal_time), a run
+/// goes into its partner's task, which runs the partner first: the unit dealt is a partner and the
+/// runs that take their time from it.
 std::vector<ArrayTask> planArrayTasks(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
-                                      std::size_t maxTasks = 0);
+                                      std::size_t maxTasks = 0,
+                                      const std::vector<std::optional<std::size_t>>& partners = {});
 
 /// The batch script: #SBATCH lines (job name, the array, logs under SWEEPDIR/slurm/logs, the
 /// options), then each task's run list and the call of `confpack` (absolute path) on SWEEPDIR.

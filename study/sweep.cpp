@@ -1,7 +1,7 @@
 // The sweep engine (study/sweep.hpp): runSweep and its workers, which take this task's unfinished
 // runs one at a time, claim each (study/run_claim.hpp), compact it from its group's shared deposit
-// (made or read back once), and record it done or failed with its marker; the progress lines; the
-// markers' timestamps.
+// (made or read back once), and record it done or failed with its marker, a run of equal_time
+// after its partner; the progress lines; the markers' timestamps.
 #include "study/sweep.hpp"
 
 #include <fmt/format.h>
@@ -112,11 +112,14 @@ struct RunOutcome {
 class SweepWorkers {
  public:
   SweepWorkers(const std::vector<SweepRun>& runs, const std::vector<std::size_t>& todo,
-               std::map<std::size_t, DepositSlot>& slots, const fs::path& dir, const std::vector<std::string>& varied,
-               const SweepRunFn& run, const SweepDepositFn& makeDeposit, const LivenessFn& alive,
-               ProgressPrinter& printer)
+               const std::vector<std::optional<std::size_t>>& partners, std::map<std::size_t, DepositSlot>& slots,
+               const fs::path& dir, const std::vector<std::string>& varied, const SweepRunFn& run,
+               const SweepDepositFn& makeDeposit, const LivenessFn& alive, ProgressPrinter& printer)
       : runs_(runs),
         todo_(todo),
+        partners_(partners),
+        inTodo_(runs.size(), false),
+        ended_(std::make_unique<std::atomic<bool>[]>(runs.size())),
         slots_(slots),
         dir_(dir),
         varied_(varied),
@@ -124,7 +127,9 @@ class SweepWorkers {
         makeDeposit_(makeDeposit),
         alive_(alive),
         printer_(printer),
-        total_(todo.size()) {}
+        total_(todo.size()) {
+    for (std::size_t i : todo) inTodo_[i] = true;
+  }
 
   void work() {
     for (;;) {
@@ -136,11 +141,16 @@ class SweepWorkers {
       // tasks ran): only the holder of the run's claim works in its folder, and the claim is given
       // up when this iteration ends, marker written or interrupted.
       const std::optional<RunClaim> claim = claimRun(r);
-      if (!claim) continue;
+      if (!claim) {
+        ended_[r.index] = true;
+        continue;
+      }
       RunOutcome outcome = execute(r);
       release(r);
-      if (outcome.interrupted) return;
-      record(r, std::move(outcome));
+      const bool interrupted = outcome.interrupted;
+      if (!interrupted) record(r, std::move(outcome));
+      ended_[r.index] = true;  // after its marker: a run waiting for it finds the marker
+      if (interrupted) return;
     }
   }
 
@@ -179,7 +189,35 @@ class SweepWorkers {
     return std::nullopt;
   }
 
-  // Runs `r` in a fresh folder with its config.json, from its group's deposit.
+  // With equal_time: the physical time of the fall of r's partner, once that run is done. Waits
+  // while the partner is still to run, or running, in this process (partners are taken first); a
+  // partner that failed, or that is neither done nor in this process's work, fails r, which a later
+  // invocation redoes.
+  double partnerFallTime(const SweepRun& r) {
+    const SweepRun& p = runs_[*partners_[r.index]];
+    const fs::path dir = dir_ / "runs" / p.name;
+    for (;;) {
+      const bool ended = ended_[p.index];  // read before the marker: a run ends after writing it
+      const RunStatus status = runStatus(dir);
+      if (status == RunStatus::Done) {
+        try {
+          return fallTime(core::readJsonFile(dir / "result.json", "result"));
+        } catch (const std::exception& e) {
+          throw std::runtime_error(fmt::format("equal_time: its {} run {}: {}", p.config.backend, p.name, e.what()));
+        }
+      }
+      if (core::stopSignal() != 0)  // not a failure: r runs at the next invocation
+        throw core::Interrupted(core::stopSignal(), fmt::format("while {} waited for {}", r.name, p.name));
+      if (status == RunStatus::Failed || ended || !inTodo_[p.index])
+        throw std::runtime_error(
+            fmt::format("equal_time: its {} run {} {}", p.config.backend, p.name,
+                        status == RunStatus::Failed ? "failed" : "has not finished: run it, then run this one again"));
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
+
+  // Runs `r` in a fresh folder with its config.json, from its group's deposit; with equal_time,
+  // for its partner's fall time.
   RunOutcome execute(const SweepRun& r) {
     const fs::path runDir = dir_ / "runs" / r.name;
     RunOutcome out;
@@ -188,12 +226,14 @@ class SweepWorkers {
       // Anything left in an unfinished folder may be half written: start from nothing.
       fs::remove_all(runDir);
       fs::create_directories(runDir);
+      core::RunConfig config = r.config;
+      if (partners_[r.index]) config.compaction.timeLimit = partnerFallTime(r);
       json cfg;
-      core::to_json(cfg, r.config);
+      core::to_json(cfg, config);
       core::writeFileAtomically(runDir / "config.json", cfg.dump(2));
       const std::shared_ptr<const compaction::Deposit> deposit = depositFor(r);
       const std::string tag = fmt::format("{} {}", r.name, r.config.backend);
-      out.result = run_(r.config, runDir, *deposit,
+      out.result = run_(config, runDir, *deposit,
                         [&](double fraction, const std::string& status) { printer_.update(tag, fraction, status); });
       printer_.remove(tag);
     } catch (const core::Interrupted&) {
@@ -298,6 +338,9 @@ class SweepWorkers {
 
   const std::vector<SweepRun>& runs_;
   const std::vector<std::size_t>& todo_;
+  const std::vector<std::optional<std::size_t>>& partners_;  // equal_time's, by run index
+  std::vector<bool> inTodo_;                                 // by run index: in this process's work
+  std::unique_ptr<std::atomic<bool>[]> ended_;               // by run index: its turn is over
   std::map<std::size_t, DepositSlot>& slots_;
   const fs::path& dir_;
   const std::vector<std::string>& varied_;
@@ -319,6 +362,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
   const std::vector<std::size_t> slice = opt.runs.empty() ? sliceRuns(runs, opt.taskIndex, opt.taskCount) : opt.runs;
   for (std::size_t i : slice)
     if (i >= runs.size()) throw std::invalid_argument(fmt::format("run index {} is not in the table", i));
+  const std::vector<std::optional<std::size_t>> partners = equalTimePartners(runs, spec.equalTime);
   prepareSweepDir(dir, spec, runs);
   const std::vector<std::string> varied = variedSettings(runs);
 
@@ -336,6 +380,8 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
     todo.push_back(i);
     ++slots[runs[i].depositIndex].remaining;
   }
+  // equal_time's partners first, so that no run waits for one that no worker has taken yet.
+  std::stable_partition(todo.begin(), todo.end(), [&](std::size_t i) { return !partners[i]; });
 
   std::ostream& log = opt.log ? *opt.log : std::cerr;
   ProgressPrinter printer(log, opt.quiet, opt.live);
@@ -346,7 +392,7 @@ SweepSummary runSweep(const SweepSpec& spec, const fs::path& dir, const SweepOpt
 
   const LivenessFn alive = opt.alive ? opt.alive : LivenessFn(holderLiveness);
   const std::size_t total = todo.size();
-  SweepWorkers workers(runs, todo, slots, dir, varied, run, makeDeposit, alive, printer);
+  SweepWorkers workers(runs, todo, partners, slots, dir, varied, run, makeDeposit, alive, printer);
   {
     std::vector<std::jthread> pool;
     const int count =

@@ -70,6 +70,10 @@ struct SweepSpec {
   /// another backend on to rest from its final packing, kept beside it in RUN/settled/
   /// (docs/sweeps.md); empty: none.
   std::string settleWith;
+  /// "equal_time": a backend ("nscd") whose fall sets the time of the other backends' runs: each of
+  /// them runs for the physical time the fall of its partner took (equalTimePartners), in place of
+  /// its compaction.time_limit (docs/sweeps.md); empty: none.
+  std::string equalTime;
   nlohmann::json source;  ///< the document as given (kept in sweep.json)
 };
 
@@ -125,6 +129,18 @@ SweepSpec readSweepSpec(const std::filesystem::path& path, std::size_t maxRuns =
 /// duplicates of runs already in the table, and gives each run its stable name and its deposit.
 /// Each resolved configuration is validated (std::invalid_argument names the run).
 std::vector<SweepRun> expandRuns(const SweepSpec& spec);
+
+/// With a sweep's equal_time `backend`: for each run of the table, the index of its partner, the
+/// first run of `backend` with the same configuration (deposit included) whatever the backend
+/// options and compaction.time_limit; none for the runs of `backend` themselves, and for every run
+/// when `backend` is empty. Throws std::invalid_argument naming the first run that has no partner.
+std::vector<std::optional<std::size_t>> equalTimePartners(const std::vector<SweepRun>& runs,
+                                                          const std::string& backend);
+
+/// The physical time a finished run spent in its fall (result.json's
+/// timing.stages.dynamic.simulated_time, the whole run on the dynamic protocol) [t0]; throws
+/// std::runtime_error when the result has none, or none above zero.
+double fallTime(const nlohmann::json& result);
 
 /// Short name of a configuration's family: MSP, BSP, MPP, BPP (docs/model.md, "Mixtures").
 std::string familyName(const core::RunConfig& cfg);

@@ -294,7 +294,14 @@ SweepGroup parseGroup(const json& g, const std::string& where, std::string_view 
   return out;
 }
 
-// The sweep's name, base, biperiodic width and settle_with, each optional.
+// A sweep-level backend key whose one accepted value is "nscd"; `what` says why, in the message.
+std::string nscdOnly(const core::ObjectReader& doc, const char* key, std::string_view what) {
+  const json& w = doc.at(key);
+  if (w != "nscd") doc.refuse(key, fmt::format("expected \"nscd\", {} (got {})", what, core::jsonExcerpt(w)));
+  return w.get<std::string>();
+}
+
+// The sweep's name, base, biperiodic width, settle_with and equal_time, each optional.
 void readSweepSettings(const core::ObjectReader& doc, SweepSpec& spec) {
   if (doc.has("name")) {
     spec.name = doc.string("name");
@@ -310,14 +317,10 @@ void readSweepSettings(const core::ObjectReader& doc, SweepSpec& spec) {
   }
   resolveBase(spec.base, doc.source());  // refuse a bad base before anything else
   if (doc.has("biperiodic_width")) spec.biperiodicWidth = doc.number("biperiodic_width", core::Range::positive());
-  if (doc.has("settle_with")) {
-    // Only nscd has the quasi-static finisher that brings a pile to rest whatever its state.
-    const json& w = doc.at("settle_with");
-    if (w != "nscd")
-      doc.refuse("settle_with",
-                 fmt::format("expected \"nscd\", the backend with a finisher (got {})", core::jsonExcerpt(w)));
-    spec.settleWith = w.get<std::string>();
-  }
+  // Only nscd has the quasi-static finisher that brings a pile to rest whatever its state, and only
+  // its runs have a fall of their own length (to rest, then the finisher).
+  if (doc.has("settle_with")) spec.settleWith = nscdOnly(doc, "settle_with", "the backend with a finisher");
+  if (doc.has("equal_time")) spec.equalTime = nscdOnly(doc, "equal_time", "the backend whose fall sets the time");
 }
 
 // The groups of runs: "vary" (one product) or "groups" (a list of products).
@@ -343,7 +346,8 @@ void readSweepGroups(const core::ObjectReader& doc, std::size_t maxRuns, SweepSp
 SweepSpec parseSweepSpec(const json& doc, std::string_view source, std::size_t maxRuns) {
   const core::ObjectReader top = core::readDocument(
       doc, source, {kSweepFormat, kSweepVersion, core::HeaderKey::Optional, core::HeaderKey::Optional},
-      {"format", "version", "name", "description", "base", "biperiodic_width", "vary", "groups", "settle_with"});
+      {"format", "version", "name", "description", "base", "biperiodic_width", "vary", "groups", "settle_with",
+       "equal_time"});
   SweepSpec spec;
   spec.source = doc;
   readSweepSettings(top, spec);

@@ -1,6 +1,7 @@
 // The run table (study/sweep.hpp): a sweep's groups expanded into runs in a fixed order, each with
 // its stable name, its resolved and validated configuration and its deposit; the settings the runs
-// vary and their short names, a run's label and family; the slices of a job array.
+// vary and their short names, a run's label and family; the slices of a job array; equal_time's
+// partners.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -128,6 +129,17 @@ void applySettings(SweepRun& r, const std::vector<SettingAxis>& axes, const std:
     *at = *values[i];
   }
   core::from_json(cfg, r.config);
+}
+
+// A run's configuration as text without what may differ between a run and its equal-time
+// partner: the backend, its options and the time limit (which equal_time sets).
+std::string partnerKey(const core::RunConfig& cfg) {
+  json j;
+  core::to_json(j, cfg);
+  j.erase("backend");
+  j.erase("backend_options");
+  j["compaction"].erase("time_limit");
+  return j.dump();
 }
 
 }  // namespace
@@ -285,6 +297,32 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec) {
     }
   }
   return runs;
+}
+
+std::vector<std::optional<std::size_t>> equalTimePartners(const std::vector<SweepRun>& runs,
+                                                          const std::string& backend) {
+  std::vector<std::optional<std::size_t>> out(runs.size());
+  if (backend.empty()) return out;
+  std::map<std::string, std::size_t> partners;
+  for (const SweepRun& r : runs)
+    if (r.config.backend == backend) partners.try_emplace(partnerKey(r.config), r.index);
+  for (const SweepRun& r : runs) {
+    if (r.config.backend == backend) continue;
+    const auto it = partners.find(partnerKey(r.config));
+    if (it == partners.end())
+      throw std::invalid_argument(
+          fmt::format("equal_time: run {} ({}) has no {} run of the same configuration to take its time from", r.name,
+                      r.label(), backend));
+    out[r.index] = it->second;
+  }
+  return out;
+}
+
+double fallTime(const json& result) {
+  static const json::json_pointer kFall("/timing/stages/dynamic/simulated_time");
+  if (!result.contains(kFall) || !result.at(kFall).is_number() || !(result.at(kFall).get<double>() > 0.0))
+    throw std::runtime_error("its result.json gives no fall time above zero (timing.stages.dynamic.simulated_time)");
+  return result.at(kFall).get<double>();
 }
 
 std::vector<std::size_t> sliceRuns(const std::vector<SweepRun>& runs, std::size_t taskIndex, std::size_t taskCount) {

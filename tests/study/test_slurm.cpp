@@ -147,6 +147,17 @@ TEST_CASE("slurm: the runs given are dealt one per task, or over at most K tasks
   CHECK(study::planArrayTasks(runs, {}).empty());
 }
 
+TEST_CASE("slurm: with equal_time a Bullet run shares its nscd partner's task") {
+  // Its run needs the partner's fall time: apart, a task could start before the partner ended.
+  const auto runs = eightRuns();
+  const auto partners = study::equalTimePartners(runs, "nscd");
+  const std::vector<std::size_t> todo = {0, 1, 3, 4, 5, 6, 7};  // r0002 (nscd, seed 2) is done
+  CHECK(names(study::planArrayTasks(runs, todo, 0, partners)) ==
+        std::vector<std::vector<std::string>>{{"r0000", "r0001"}, {"r0003"}, {"r0004", "r0005"}, {"r0006", "r0007"}});
+  CHECK(names(study::planArrayTasks(runs, todo, 2, partners)) ==
+        std::vector<std::vector<std::string>>{{"r0000", "r0001", "r0004", "r0005"}, {"r0003", "r0006", "r0007"}});
+}
+
 TEST_CASE("slurm: sbatch's job id, and what squeue's answers mean") {
   CHECK(study::jobIdFromSbatch("1234\n") == "1234");
   CHECK(study::jobIdFromSbatch("sbatch: warning: can't honor --mem\n77;cluster2\n") == "77");

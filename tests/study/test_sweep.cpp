@@ -1,6 +1,7 @@
 // Sweep engine: run-table expansion, slicing, resume after interruption, shared deposits.
 // A fake runner (milliseconds per run) stands in for the physics; what is tested is the
 // bookkeeping that makes a study survive kills and cluster slicing.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -11,6 +12,8 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include "core/json_input.hpp"
 #include "core/packing_io.hpp"
@@ -186,7 +189,7 @@ TEST_CASE("sweep file: bad input is refused with a message naming the field") {
         "s.json: version: must be 1, the version this build reads (got 2)");
   CHECK(message(json::parse(R"({"vary": {}, "colour": 1})")) ==
         "s.json: colour: unknown key (known: format, version, name, description, base, biperiodic_width, vary, "
-        "groups, settle_with)");
+        "groups, settle_with, equal_time)");
   CHECK(message(json::parse("[]")) == "s.json: document: must be a JSON object (got array)");
   CHECK(message(json::parse(R"({"name": 3, "vary": {}})")) == "s.json: name: must be a string (got 3)");
   CHECK(message(json::parse(R"({"name": "", "vary": {}})")) == "s.json: name: must be a non-empty string (got \"\")");
@@ -641,4 +644,137 @@ TEST_CASE("a sweep file's base with box.wall_friction sets walls.friction, and b
   CHECK_THROWS_WITH(study::parseSweepSpec(json::parse(R"({"name": "both",
     "base": {"box": {"wall_friction": 0.3}, "walls": {"friction": 0.3}}, "vary": {"width": [5]}})")),
                     Catch::Contains("base: box.wall_friction: given twice"));
+}
+
+namespace {
+
+// A sweep of both backends with equal_time, Bullet first in the table (its runs must still wait
+// for nscd's): 2 widths x 2 seeds x 2 backends = 8 runs.
+json equalTimeSweep() {
+  return json::parse(R"({
+    "format": "confpack-sweep", "version": 1, "name": "equal",
+    "base": { "box": { "length_x": 6, "height": 4 }, "compaction": { "time_limit": 20 } },
+    "biperiodic_width": 6, "equal_time": "nscd",
+    "vary": { "width": [3, "biperiodic"], "replicas": 2, "backend": ["bullet", "nscd"] }
+  })");
+}
+
+// nscd's fall time on a run's deposit in the fake runner: distinct for every (width, seed) [t0].
+double fakeFallTime(const core::RunConfig& cfg) {
+  return 7.0 + static_cast<double>(cfg.seed) + 0.25 * cfg.box.width;
+}
+
+// Runs of the fake physics, recording each run's time limit and the order the runs started in;
+// nscd's result gives fakeFallTime as its fall's time, and runs named in `failOn` throw.
+struct TimeRecorder {
+  std::mutex mutex;
+  std::map<std::string, double> timeLimit;
+  std::vector<std::string> order;
+  std::set<std::string> failOn;
+
+  study::SweepRunFn runner() {
+    return [this](const core::RunConfig& cfg, const fs::path& dir, const compaction::Deposit&,
+                  const study::RunProgressFn&) {
+      const std::string name = dir.filename().string();
+      {
+        std::lock_guard lock(mutex);
+        timeLimit[name] = cfg.compaction.timeLimit;
+        order.push_back(name);
+        if (failOn.count(name)) throw std::runtime_error("the fall blew up");
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a partner still running is waited for
+      const double t = cfg.backend == "nscd" ? fakeFallTime(cfg) : cfg.compaction.timeLimit;
+      json result = {{"solid_fraction", 0.6}, {"timing", {{"stages", {{"dynamic", {{"simulated_time", t}}}}}}}};
+      std::ofstream(dir / "result.json") << result.dump();
+      return result;
+    };
+  }
+};
+
+}  // namespace
+
+TEST_CASE("equal_time: each Bullet run runs for the time of its nscd partner's fall, on one or two workers") {
+  const study::SweepSpec spec = study::parseSweepSpec(equalTimeSweep());
+  const std::vector<study::SweepRun> runs = study::expandRuns(spec);
+  REQUIRE(runs.size() == 8);
+  REQUIRE(runs[0].config.backend == "bullet");
+  const int jobs = GENERATE(1, 2);
+  INFO("jobs " << jobs);
+  const fs::path dir = confpack::testing::scratchPath("sweep_equal_time");
+  TimeRecorder rec;
+  const study::SweepSummary s = study::runSweep(spec, dir, quietOptions(jobs), rec.runner(), fakeDeposit);
+  CHECK(s.ran == 8);
+  CHECK(s.failed == 0);
+  const auto partners = study::equalTimePartners(runs, "nscd");
+  for (const study::SweepRun& r : runs) {
+    INFO(r.name);
+    if (r.config.backend == "nscd") {
+      CHECK_FALSE(partners[r.index]);
+      CHECK(rec.timeLimit[r.name] == 20.0);  // its own limit: the fall ends at rest long before
+      continue;
+    }
+    REQUIRE(partners[r.index]);
+    const study::SweepRun& p = runs[*partners[r.index]];
+    CHECK(p.config.backend == "nscd");
+    CHECK(p.depositIndex == r.depositIndex);
+    CHECK(rec.timeLimit[r.name] == fakeFallTime(r.config));
+    // Written into the run's config.json, so that `confpack run --config` reruns it.
+    const json cfg = core::readJsonFile(dir / "runs" / r.name / "config.json", "config");
+    CHECK(cfg["compaction"]["time_limit"].get<double>() == fakeFallTime(r.config));
+    const auto at = [&](const std::string& n) { return std::find(rec.order.begin(), rec.order.end(), n); };
+    CHECK(at(p.name) < at(r.name));
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("equal_time: a Bullet run whose nscd partner has not run, or failed, fails and runs once it has") {
+  const study::SweepSpec spec = study::parseSweepSpec(equalTimeSweep());
+  const std::vector<study::SweepRun> runs = study::expandRuns(spec);
+  const fs::path dir = confpack::testing::scratchPath("sweep_equal_time_alone");
+  TimeRecorder rec;
+  const auto failure = [&](const std::string& run) {
+    return core::readJsonFile(dir / "runs" / run / study::kFailedMarker, "marker")["error"].get<std::string>();
+  };
+  // r0000 (Bullet) alone: its partner r0001 is neither done nor in this invocation's work.
+  study::SweepOptions alone = quietOptions();
+  alone.runs = {0};
+  CHECK(study::runSweep(spec, dir, alone, rec.runner(), fakeDeposit).failed == 1);
+  CHECK(failure("r0000") == "equal_time: its nscd run r0001 has not finished: run it, then run this one again");
+  CHECK_FALSE(rec.timeLimit.count("r0000"));  // refused before it ran
+  // A partner that fails fails its Bullet run with it.
+  rec.failOn = {"r0003"};
+  study::SweepOptions pair = quietOptions();
+  pair.runs = {2, 3};
+  CHECK(study::runSweep(spec, dir, pair, rec.runner(), fakeDeposit).failed == 2);
+  CHECK(failure("r0002") == "equal_time: its nscd run r0003 failed");
+  // Run again, everything left runs, each Bullet run after its partner and for its fall's time.
+  rec.failOn.clear();
+  const study::SweepSummary again = study::runSweep(spec, dir, quietOptions(), rec.runner(), fakeDeposit);
+  CHECK(again.ran == 8);
+  CHECK(rec.timeLimit["r0000"] == fakeFallTime(runs[0].config));
+  CHECK(rec.timeLimit["r0002"] == fakeFallTime(runs[2].config));
+  fs::remove_all(dir);
+}
+
+TEST_CASE(
+    "equal_time: a value other than nscd, or a run without its nscd partner, is refused before anything is written") {
+  json doc = equalTimeSweep();
+  doc["equal_time"] = "bullet";
+  CHECK_THROWS_WITH(study::parseSweepSpec(doc, "e.json"),
+                    Catch::Contains("equal_time") && Catch::Contains("expected \"nscd\""));
+  // A Bullet run of a width that nscd does not run: it has no fall to take its time from.
+  doc = equalTimeSweep();
+  doc.erase("vary");
+  doc["groups"] = json::parse(R"([{ "width": [3], "replicas": 1, "backend": ["nscd", "bullet"] },
+                                  { "width": [5], "replicas": 1, "backend": ["bullet"] }])");
+  const study::SweepSpec spec = study::parseSweepSpec(doc);
+  const std::vector<study::SweepRun> runs = study::expandRuns(spec);
+  CHECK_THROWS_WITH(study::equalTimePartners(runs, "nscd"),
+                    Catch::StartsWith("equal_time: run r0002 (") && Catch::Contains("has no nscd run"));
+  const fs::path dir = confpack::testing::scratchPath("sweep_equal_time_refused");
+  TimeRecorder rec;
+  CHECK_THROWS_AS(study::runSweep(spec, dir, quietOptions(), rec.runner(), fakeDeposit), std::invalid_argument);
+  CHECK_FALSE(fs::exists(dir));
+  // Without equal_time no run has a partner.
+  for (const auto& p : study::equalTimePartners(runs, "")) CHECK_FALSE(p);
 }
