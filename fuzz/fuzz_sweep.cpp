@@ -1,5 +1,5 @@
 // Fuzz target: the sweep file reader (study/sweep.hpp): parsing, the expansion into the run table
-// and its listing (`confpack sweep FILE --list`).
+// and its listing (`confpack sweep FILE --list`), equal_time's partners.
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
@@ -33,6 +33,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::size_t i = 0; i < runs.size(); ++i) {
     fuzz::require(runs[i].index == i, "run indices are not the table order");
     if (i > 0) fuzz::require(runs[i].name > runs[i - 1].name, "run names are not increasing");
+  }
+  // equal_time's partners: refused by name, or each an nscd run of the same deposit.
+  try {
+    const auto partners = study::equalTimePartners(runs, spec.equalTime);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (!partners[i]) continue;
+      const study::SweepRun& p = runs.at(*partners[i]);
+      fuzz::require(p.config.backend == spec.equalTime && p.depositIndex == runs[i].depositIndex,
+                    "an equal_time partner of another backend or deposit");
+    }
+  } catch (const std::invalid_argument& e) {
+    fuzz::checkRefusal(e);
   }
   (void)study::formatRunTable(runs);
   return 0;
