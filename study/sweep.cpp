@@ -29,6 +29,16 @@ using nlohmann::json;
 
 namespace {
 
+// The physical time a finished run spent in its fall (result.json's
+// timing.stages.dynamic.simulated_time, the whole run on the dynamic protocol) [t0], which
+// equal_time gives the runs of the other backend; throws when the result has none above zero.
+double fallTime(const json& result) {
+  static const json::json_pointer kFall("/timing/stages/dynamic/simulated_time");
+  if (!result.contains(kFall) || !result.at(kFall).is_number() || !(result.at(kFall).get<double>() > 0.0))
+    throw std::runtime_error("its result.json gives no fall time above zero (timing.stages.dynamic.simulated_time)");
+  return result.at(kFall).get<double>();
+}
+
 // Serialises progress output of the workers: finished-run lines, and on a terminal one live line
 // that is redrawn in place (carriage return + erase-line) with the state of the running runs.
 class ProgressPrinter {

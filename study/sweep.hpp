@@ -137,11 +137,6 @@ std::vector<SweepRun> expandRuns(const SweepSpec& spec);
 std::vector<std::optional<std::size_t>> equalTimePartners(const std::vector<SweepRun>& runs,
                                                           const std::string& backend);
 
-/// The physical time a finished run spent in its fall (result.json's
-/// timing.stages.dynamic.simulated_time, the whole run on the dynamic protocol) [t0]; throws
-/// std::runtime_error when the result has none, or none above zero.
-double fallTime(const nlohmann::json& result);
-
 /// Short name of a configuration's family: MSP, BSP, MPP, BPP (docs/model.md, "Mixtures").
 std::string familyName(const core::RunConfig& cfg);
 

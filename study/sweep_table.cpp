@@ -318,13 +318,6 @@ std::vector<std::optional<std::size_t>> equalTimePartners(const std::vector<Swee
   return out;
 }
 
-double fallTime(const json& result) {
-  static const json::json_pointer kFall("/timing/stages/dynamic/simulated_time");
-  if (!result.contains(kFall) || !result.at(kFall).is_number() || !(result.at(kFall).get<double>() > 0.0))
-    throw std::runtime_error("its result.json gives no fall time above zero (timing.stages.dynamic.simulated_time)");
-  return result.at(kFall).get<double>();
-}
-
 std::vector<std::size_t> sliceRuns(const std::vector<SweepRun>& runs, std::size_t taskIndex, std::size_t taskCount) {
   if (taskCount == 0) throw std::invalid_argument("--task-count must be >= 1");
   if (taskIndex >= taskCount)

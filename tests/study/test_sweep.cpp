@@ -700,7 +700,8 @@ TEST_CASE("equal_time: each Bullet run runs for the time of its nscd partner's f
   REQUIRE(runs[0].config.backend == "bullet");
   const int jobs = GENERATE(1, 2);
   INFO("jobs " << jobs);
-  const fs::path dir = confpack::testing::scratchPath("sweep_equal_time");
+  const confpack::testing::ScratchDir scratch("sweep_equal_time");
+  const fs::path& dir = scratch.path();
   TimeRecorder rec;
   const study::SweepSummary s = study::runSweep(spec, dir, quietOptions(jobs), rec.runner(), fakeDeposit);
   CHECK(s.ran == 8);
@@ -724,13 +725,13 @@ TEST_CASE("equal_time: each Bullet run runs for the time of its nscd partner's f
     const auto at = [&](const std::string& n) { return std::find(rec.order.begin(), rec.order.end(), n); };
     CHECK(at(p.name) < at(r.name));
   }
-  fs::remove_all(dir);
 }
 
 TEST_CASE("equal_time: a Bullet run whose nscd partner has not run, or failed, fails and runs once it has") {
   const study::SweepSpec spec = study::parseSweepSpec(equalTimeSweep());
   const std::vector<study::SweepRun> runs = study::expandRuns(spec);
-  const fs::path dir = confpack::testing::scratchPath("sweep_equal_time_alone");
+  const confpack::testing::ScratchDir scratch("sweep_equal_time_alone");
+  const fs::path& dir = scratch.path();
   TimeRecorder rec;
   const auto failure = [&](const std::string& run) {
     return core::readJsonFile(dir / "runs" / run / study::kFailedMarker, "marker")["error"].get<std::string>();
@@ -753,7 +754,6 @@ TEST_CASE("equal_time: a Bullet run whose nscd partner has not run, or failed, f
   CHECK(again.ran == 8);
   CHECK(rec.timeLimit["r0000"] == fakeFallTime(runs[0].config));
   CHECK(rec.timeLimit["r0002"] == fakeFallTime(runs[2].config));
-  fs::remove_all(dir);
 }
 
 TEST_CASE(
