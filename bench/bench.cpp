@@ -309,7 +309,7 @@ nlohmann::json scalingSeries(const BenchDef& def, nlohmann::json& exponents,
 
 namespace {
 
-/// One target: its statement, what the run reached, and whether that meets it (null: not shown).
+/// One target: its statement, what the run reached, and whether that meets it (null: not judged).
 nlohmann::json target(std::string statement, std::string figure, std::optional<bool> met) {
   return {{"target", std::move(statement)},
           {"figure", std::move(figure)},
@@ -325,6 +325,13 @@ constexpr double kHalfHour = 1800.0;  // [s]
 
 }  // namespace
 
+std::string targetLine(const nlohmann::json& t) {
+  return fmt::format("{}: {} ({})", t["target"].get<std::string>(), t["figure"].get<std::string>(),
+                     t["met"].is_null()     ? "not judged by this run"
+                     : t["met"].get<bool>() ? "met"
+                                            : "not met");
+}
+
 nlohmann::json benchTargets(const BenchDef& def, const nlohmann::json& cases) {
   nlohmann::json out = nlohmann::json::array();
   const bool fullSize = def.scale == 1.0;
@@ -335,6 +342,12 @@ nlohmann::json benchTargets(const BenchDef& def, const nlohmann::json& cases) {
     std::optional<bool> met;
     if (fullSize && def.threads == 1) met = reached && wall <= 60.0;
     out.push_back(target("msp-w10: nscd at equilibrium in at most 60 s on one thread", restFigure(reached, wall), met));
+    // The multilevel solve's step on the way to 60 s (docs/performance.md, "Where the speed
+    // targets stand").
+    std::optional<bool> metOnTheWay;
+    if (fullSize && def.threads == 1) metOnTheWay = reached && wall <= 180.0;
+    out.push_back(
+        target("msp-w10: nscd at equilibrium in at most 180 s on one thread", restFigure(reached, wall), metOnTheWay));
   }
   if (cases.contains("mpp-w10")) {
     const nlohmann::json& nscd = cases["mpp-w10"]["nscd"];
@@ -406,11 +419,7 @@ nlohmann::json runBench(const BenchDef& def, const std::function<void(const std:
   }
   const nlohmann::json targets = benchTargets(def, cases);
   if (log)
-    for (const nlohmann::json& t : targets)
-      log(fmt::format("target {}: {} ({})", t["target"].get<std::string>(), t["figure"].get<std::string>(),
-                      t["met"].is_null()     ? "not shown at this size"
-                      : t["met"].get<bool>() ? "met"
-                                             : "not met"));
+    for (const nlohmann::json& t : targets) log("target " + targetLine(t));
   return {{"machine", machineInfo()}, {"cases", cases}, {"targets", targets}};
 }
 

@@ -47,11 +47,15 @@ const std::vector<std::string>& benchCaseNames();
 /// stand"), each with the figure this bench run reached: an array of {"target", "figure", "met"},
 /// "met" null where the case did not run at the target's size (another --scale, --threads or
 /// rest size) and the figure cannot say. From `cases`, runBench's "cases" object.
-///   msp-w10  nscd at equilibrium in at most 60 s on one thread (scale 1)
+///   msp-w10  nscd at equilibrium in at most 60 s on one thread (scale 1), and the step on the way,
+///            at most 180 s
 ///   mpp-w10  nscd at equilibrium without damping in at most 30 minutes (scale 1)
 ///   rest     30,400 spheres at equilibrium in at most 30 minutes (its point of about 30,400 grains)
 ///   scaling  nscd's cost per step linear in n: fitted exponent at most 1.1
 nlohmann::json benchTargets(const BenchDef& def, const nlohmann::json& cases);
+
+/// One target as a line: "statement: figure (met)", "(not met)" or "(not judged by this run)".
+std::string targetLine(const nlohmann::json& target);
 
 /// Runs the benchmark and returns bench.json (shape documented in the README). `log` gets one line
 /// per case and per finished compaction; `progress` the progress of each compaction, its status

@@ -49,7 +49,8 @@ void runMicroCommand(BenchState& st) {
       throw std::invalid_argument(fmt::format("--out {}: directory {} does not exist", st.out.string(), dir.string()));
   });
   runWork("", [&] {
-    runMicroBench(st.microDef, st.out);
+    const nlohmann::json targets = runMicroBench(st.microDef, st.out);
+    for (const nlohmann::json& t : targets) fmt::print("bench: target {}\n", targetLine(t));
     fmt::print("bench: wrote {}\n", st.out.string());
   });
 }

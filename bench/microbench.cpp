@@ -618,7 +618,72 @@ void validateMicroBench(const MicroBenchDef& def) {
   }
 }
 
-void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
+namespace {
+
+/// The creep block's target speed-up over SGS-preconditioned MPRGP: what a multilevel solve must
+/// give, a step in tens of iterations where SGS takes hundreds to a thousand.
+constexpr double kCreepBlockSpeedup = 5.0;
+
+/// One pile solve of Google Benchmark's report: its median (or only) wall time a solve [s] and
+/// its iterations and rows, by preconditioner.
+struct PileSolve {
+  double seconds = 0.0;
+  double iterations = 0.0;
+  double rows = 0.0;
+};
+
+std::map<std::string, PileSolve> pileSolves(const nlohmann::json& report) {
+  static const std::regex name("^MprgpSolve/([a-z]+)/pile$");
+  std::map<std::string, PileSolve> out;
+  for (const nlohmann::json& b : report.value("benchmarks", nlohmann::json::array())) {
+    std::smatch m;
+    const std::string runName = b.value("run_name", b.value("name", std::string()));
+    if (!std::regex_match(runName, m, name)) continue;
+    // With repetitions only the aggregates are written: take the median; with one, the run.
+    const bool aggregate = b.value("run_type", std::string()) == "aggregate";
+    if (aggregate && b.value("aggregate_name", std::string()) != "median") continue;
+    static const std::map<std::string, double> seconds = {{"ns", 1e-9}, {"us", 1e-6}, {"ms", 1e-3}, {"s", 1.0}};
+    const auto unit = seconds.find(b.value("time_unit", std::string("us")));
+    if (unit == seconds.end()) continue;
+    out[m[1].str()] = {b.value("real_time", 0.0) * unit->second, b.value("iterations_per_solve", 0.0),
+                       b.value("rows", 0.0)};
+  }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json microTargets(const nlohmann::json& report) {
+  nlohmann::json out = nlohmann::json::array();
+  const std::map<std::string, PileSolve> solves = pileSolves(report);
+  const auto sgs = solves.find("sgs");
+  if (sgs == solves.end()) return out;
+  const std::string statement = fmt::format(
+      "creep block (--micro-pile): a step solved to 1e-10 at least {:g} times faster than SGS-preconditioned MPRGP",
+      kCreepBlockSpeedup);
+  const PileSolve& base = sgs->second;
+  std::optional<std::pair<std::string, PileSolve>> best;
+  for (const auto& [p, s] : solves)
+    if (p != "sgs" && (!best || s.seconds < best->second.seconds)) best = std::make_pair(p, s);
+  if (!best) {
+    out.push_back({{"target", statement},
+                   {"figure", fmt::format("sgs alone ran: {:.1f} ms, {:.0f} iterations, {:.0f} rows",
+                                          1e3 * base.seconds, base.iterations, base.rows)},
+                   {"met", nullptr}});
+    return out;
+  }
+  const double speedup = base.seconds / best->second.seconds;
+  out.push_back(
+      {{"target", statement},
+       {"figure", fmt::format("{} {:.2g} times sgs's speed: {:.1f} ms against {:.1f} ms a solve, {:.0f} against {:.0f} "
+                              "iterations, {:.0f} rows",
+                              best->first, speedup, 1e3 * best->second.seconds, 1e3 * base.seconds,
+                              best->second.iterations, base.iterations, base.rows)},
+       {"met", speedup >= kCreepBlockSpeedup}});
+  return out;
+}
+
+nlohmann::json runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
   validateMicroBench(def);
   for (const Entry& e : entriesFor(def))
     benchmark::RegisterBenchmark(e.name.c_str(), [run = e.run, seed = def.seed](benchmark::State& s) {
@@ -628,8 +693,8 @@ void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
   benchmark::AddCustomContext("confpack_revision", core::sourceRevision());
   benchmark::AddCustomContext("confpack_seed", std::to_string(def.seed));
 
-  // Google Benchmark writes its report itself: into a temporary file next to `out`, renamed once
-  // the run has succeeded (the same file system, so the rename is atomic).
+  // Google Benchmark writes its report itself, into a temporary file next to `out`; once the run
+  // has succeeded the report goes to `out` with its targets, atomically.
   const std::filesystem::path dir = out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
   const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}", out.filename().string(), ::getpid());
   std::vector<std::string> args = {"confpack-bench-micro",
@@ -651,15 +716,21 @@ void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out) {
     const std::size_t ran = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     if (ran == 0) throw std::runtime_error(fmt::format("--micro-filter '{}' ran no benchmark", def.filter));
-    std::ifstream in(tmp);
-    const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+    nlohmann::json report;
+    {
+      std::ifstream in(tmp);
+      report = nlohmann::json::parse(in, nullptr, false);
+    }
     if (report.is_discarded() || !report.contains("benchmarks"))
       throw std::runtime_error(fmt::format("{}: Google Benchmark wrote no readable report", tmp.string()));
     for (const nlohmann::json& b : report["benchmarks"])
       if (b.value("error_occurred", false))
         throw std::runtime_error(
             fmt::format("{}: {}", b.value("name", std::string("?")), b.value("error_message", std::string("failed"))));
-    std::filesystem::rename(tmp, out);
+    report["targets"] = microTargets(report);
+    core::writeFileAtomically(out, report.dump(2));
+    std::filesystem::remove(tmp);
+    return report["targets"];
   } catch (...) {
     std::error_code ignored;
     std::filesystem::remove(tmp, ignored);

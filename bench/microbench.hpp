@@ -21,6 +21,7 @@
 // timed loops, and only for the benchmarks that the filter selects.
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -46,10 +47,19 @@ const std::vector<std::string>& microBenchNames();
 /// extended) regex, or it selects no benchmark.
 void validateMicroBench(const MicroBenchDef& def);
 
+/// The creep-block target of the multilevel contact solve (docs/performance.md, "Where the speed
+/// targets stand"): a `--micro-pile` step solved to 1e-10 at least 5 times faster than by
+/// SGS-preconditioned MPRGP. From Google Benchmark's JSON report: the fastest other
+/// MprgpSolve/<p>/pile against MprgpSolve/sgs/pile, each by its median wall time a solve (or its
+/// one run without repetitions). An array of {"target", "figure", "met"}: empty without the pile's
+/// sgs solve, "met" null when no other preconditioner ran beside it.
+nlohmann::json microTargets(const nlohmann::json& report);
+
 /// Runs the selected benchmarks, prints Google Benchmark's console table on stdout and writes its
-/// JSON report to `out` atomically (a temporary file next to it, then a rename). Throws
-/// std::runtime_error, leaving nothing at `out`, if a fixture cannot be built or a run fails.
-/// Google Benchmark keeps global state: call at most once per process.
-void runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out);
+/// JSON report, with microTargets' "targets", to `out` atomically (a temporary file next to it,
+/// then a rename); returns the targets. Throws std::runtime_error, leaving nothing at `out`, if a
+/// fixture cannot be built or a run fails. Google Benchmark keeps global state: call at most once
+/// per process.
+nlohmann::json runMicroBench(const MicroBenchDef& def, const std::filesystem::path& out);
 
 }  // namespace confpack::bench

@@ -101,5 +101,5 @@ TEST_CASE("bench --case rest compacts each size to equilibrium and fits t_rest ~
   REQUIRE(targets.size() == 2);
   CHECK(targets[0]["met"].is_null());
   CHECK(r.err.find("target rest: 30,400 spheres at equilibrium in at most 30 minutes: ") != std::string::npos);
-  CHECK(r.err.find("(not shown at this size)") != std::string::npos);
+  CHECK(r.err.find("(not judged by this run)") != std::string::npos);
 }

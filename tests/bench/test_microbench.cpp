@@ -151,6 +151,12 @@ TEST_CASE("bench --micro --micro-pile times MPRGP's solve of a given packing's s
   CHECK(exact["rows"].get<double>() == sgs["rows"].get<double>());
   CHECK(sgs["iterations_per_solve"].get<double>() >= 30.0);
   CHECK(exact["iterations_per_solve"].get<double>() < sgs["iterations_per_solve"].get<double>() / 3.0);
+  // The creep block's target is judged from the two solves' times, in the report and on stdout.
+  REQUIRE(report["targets"].size() == 1);
+  const json& target = report["targets"][0];
+  CHECK(target["met"] == (sgs["real_time"].get<double>() >= 5.0 * exact["real_time"].get<double>()));
+  CHECK(target["figure"].get<std::string>().rfind("cholesky ", 0) == 0);
+  CHECK(r.out.find("bench: target creep block (--micro-pile)") != std::string::npos);
 
   const CommandResult missing = s.run("--micro --micro-pile nowhere.json --out m2.json");
   CHECK(missing.code == 2);
