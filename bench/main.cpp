@@ -34,9 +34,25 @@ struct BenchState {
   bool micro = false;
   MicroBenchDef microDef;
   bool outGiven = false;
+  std::filesystem::path dump;  ///< --micro-dump: write the pile's block there instead of timing
 };
 
+void runDumpCommand(const BenchState& st) {
+  checkInput("", [&] {
+    if (std::filesystem::exists(st.dump))
+      throw std::invalid_argument(fmt::format("--micro-dump {}: already exists", st.dump.string()));
+    if (!std::filesystem::is_regular_file(st.microDef.pile))
+      throw std::invalid_argument(
+          fmt::format("--micro-pile: {}: not a readable packing file", st.microDef.pile.string()));
+  });
+  runWork("", [&] {
+    dumpPileBlock(st.microDef.pile, st.dump);
+    fmt::print("bench: wrote {}\n", st.dump.string());
+  });
+}
+
 void runMicroCommand(BenchState& st) {
+  if (!st.dump.empty()) return runDumpCommand(st);
   // The whole-run default name would mislabel a micro-benchmark report.
   if (!st.outGiven) st.out = "micro.json";
   checkInput("", [&] {
@@ -127,6 +143,10 @@ void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
                   "With --micro: also time MPRGP's solve of this packing's step (MprgpSolve/sgs|cholesky/pile), e.g. "
                   "of a run stopped in its creep")
       ->needs(micro);
+  auto* dump = sub->add_option("--micro-dump", st->dump,
+                               "With --micro-pile: write that pile's step (rows.csv, bodies.csv, block.json with "
+                               "MPRGP's solution) into this new folder instead of timing, for other solvers to try");
+  dump->needs(sub->get_option("--micro-pile"));
   sub->add_option("--micro-repetitions", st->microDef.repetitions,
                   "Repetitions of each micro-benchmark (reported: mean, median, stddev, cv)")
       ->needs(micro)

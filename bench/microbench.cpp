@@ -591,6 +591,60 @@ std::vector<Entry> entriesFor(const MicroBenchDef& def) {
   return e;
 }
 
+void dumpPileBlock(const std::filesystem::path& pile, const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  if (fs::exists(dir)) throw std::invalid_argument(fmt::format("--micro-dump {}: already exists", dir.string()));
+  if (!fs::is_regular_file(pile))
+    throw std::invalid_argument(fmt::format("--micro-pile: {}: not a readable packing file", pile.string()));
+  SolverFixture f = makePileFixture(pile);
+  const nscd::NscdSettings settings;  // MPRGP to 1e-10, SGS: the default
+  f.reset(settings);
+  const int iterations = f.solver.solve(f.velocities, settings);
+  const nscd::ContactRows& rows = f.solver.rows();
+  if (!rows.frictionRows().empty())
+    throw std::invalid_argument(
+        "--micro-dump: the pile has side-wall friction rows; only frictionless blocks are dumped");
+
+  std::string rowText = "a,b,nx,ny,nz,axn_x,axn_y,axn_z,bxn_x,bxn_y,bxn_z,bias,r\n";
+  for (const nscd::NormalRow& r : rows.normalRows())
+    rowText +=
+        fmt::format("{},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n",
+                    r.a, r.b, r.n.x(), r.n.y(), r.n.z(), r.axn.x(), r.axn.y(), r.axn.z(), r.bxn.x(), r.bxn.y(),
+                    r.bxn.z(), r.bias, f.solver.normalImpulse(r.c, r.p));
+  std::string bodyText = "inv_mass,i00,i01,i02,i10,i11,i12,i20,i21,i22,vx,vy,vz,wx,wy,wz,x,y,z\n";
+  for (std::size_t i = 0; i < f.bodies.size(); ++i) {
+    const nscd::BodyInverseMass& b = f.bodies[i];
+    const nscd::BodyVelocity& v = f.freeVelocities[i];
+    bodyText += fmt::format("{:.17g}", b.invMass);
+    for (int k = 0; k < 9; ++k) bodyText += fmt::format(",{:.17g}", b.invInertia(k / 3, k % 3));
+    bodyText += fmt::format(",{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", v.v.x(), v.v.y(), v.v.z(), v.w.x(),
+                            v.w.y(), v.w.z());
+    const Vec3 x = i < f.positionMid.size() ? f.positionMid[i] : Vec3::Zero();  // the walls: none
+    bodyText += fmt::format(",{:.17g},{:.17g},{:.17g}\n", x.x(), x.y(), x.z());
+  }
+  const nlohmann::json block = {{"packing", pile.string()},         {"dt", f.dt},
+                                {"rows", rows.normalRows().size()}, {"bodies", f.bodies.size()},
+                                {"mprgp_iterations", iterations},   {"mprgp_residual", f.solver.residual()},
+                                {"tolerance", settings.tolerance}};
+  // Written whole or not at all: a temporary folder beside `dir`, renamed once complete.
+  const fs::path tmp = dir.string() + fmt::format(".tmp-{}", ::getpid());
+  try {
+    fs::create_directories(tmp);
+    core::writeFileAtomically(tmp / "rows.csv", rowText);
+    core::writeFileAtomically(tmp / "bodies.csv", bodyText);
+    core::writeFileAtomically(tmp / "block.json", block.dump(2));
+    fs::rename(tmp, dir);
+  } catch (const fs::filesystem_error& e) {
+    std::error_code ignored;
+    fs::remove_all(tmp, ignored);
+    throw std::runtime_error(fmt::format("--micro-dump {}: {}", dir.string(), e.code().message()));
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(tmp, ignored);
+    throw;
+  }
+}
+
 const std::vector<std::string>& microBenchNames() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> out;

@@ -40,6 +40,19 @@ struct MicroBenchDef {
   std::filesystem::path pile;
 };
 
+/// Writes the contact problem of a packing's step (the pile of --micro-pile after kPileSteps from
+/// rest, cold, frictionless walls) and its MPRGP solution to 1e-10 into the new folder `dir`, for
+/// solvers outside confpack to be tried on the same block (bench/free_block.py):
+///   rows.csv    one frictionless row a line, in sweep order: bodies a and b (the last body index
+///               is the static walls), n, l_a x n, l_b x n, the bias c [d_L/t0] and the solved
+///               impulse r [m_L d_L/t0]; u_n = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a
+///   bodies.csv  one body a line: 1/m, the world-frame inverse inertia (row-major), the free
+///               velocities v and w of the step, the centre at q_m (the walls' line: zeros)
+///   block.json  the step dt, the iterations and the residual of the solve, rows and bodies
+/// Throws std::invalid_argument if `dir` exists or the pile has friction rows; std::runtime_error
+/// if the packing cannot be read or the folder written (nothing is left at `dir` then).
+void dumpPileBlock(const std::filesystem::path& pile, const std::filesystem::path& dir);
+
 /// Names of every micro-benchmark, in run order (without the --micro-pile ones).
 const std::vector<std::string>& microBenchNames();
 

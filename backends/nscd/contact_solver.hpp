@@ -77,6 +77,8 @@ class ContactSolver {
   /// The upper bound of ||S W S|| of the last MPRGP solve (MprgpSolver::operatorBound); 0 before any.
   double operatorBound() const { return mprgp_.operatorBound(); }
   int rowCount() const { return rows_.rowCount(); }
+  /// The rows of the last prepare(), as the solvers see them (a block's dump, bench/microbench.hpp).
+  const ContactRows& rows() const { return rows_; }
 
   /// Impulses of contact c, point p, after solve(): normal and tangential (world vector).
   double normalImpulse(int c, int p) const { return rows_.normalImpulse(c, p); }

@@ -1,11 +1,14 @@
 // `confpack-bench --micro` (bench/microbench.hpp): the Google Benchmark micro-benchmarks of the nscd
 // phases, run through the real binary (CONFPACK_BENCH_BINARY) as a user runs them.
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/support/confpack_binary.hpp"
 #include "tests/support/read_file.hpp"
@@ -163,4 +166,88 @@ TEST_CASE("bench --micro --micro-pile times MPRGP's solve of a given packing's s
   CHECK(lineCount(missing.err) == 1);
   CHECK(missing.err.find("--micro-pile: nowhere.json") != std::string::npos);
   CHECK_FALSE(fs::exists(s.dir / "m2.json"));
+}
+
+namespace {
+
+// The numbers of a dumped CSV file, a row a line, without its header.
+std::vector<std::vector<double>> csvNumbers(const fs::path& file) {
+  std::istringstream in(confpack::testing::slurp(file));
+  std::string line;
+  std::getline(in, line);  // the header
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    std::vector<double> values;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) values.push_back(std::stod(cell));
+    rows.push_back(values);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST_CASE("bench --micro-dump writes a pile's step whose dumped impulses solve the dumped problem") {
+  // The contact problem from the files alone: u = G (v_free + M^-1 G^T r), w = u + c. The solution
+  // MPRGP reached to 1e-10 must satisfy it: r >= 0, w >= 0, r.w = 0, so a row or body written
+  // wrongly (a sign, a column, another step's velocities) shows as a violated complementarity.
+  ConfpackSession s("micro_dump", CONFPACK_BENCH_BINARY);
+  const ConfpackSession maker("micro_dump_run");
+  REQUIRE(maker.run("run --length-x 4 --width 4 --periodic-y --height 5 --time-limit 6 --out p -q").code == 0);
+  const std::string packing = (maker.dir / "p" / "packing.json").string();
+  const CommandResult r = s.run("--micro --micro-pile '" + packing + "' --micro-dump block");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const json block = json::parse(confpack::testing::slurp(s.dir / "block" / "block.json"));
+  const std::vector<std::vector<double>> rows = csvNumbers(s.dir / "block" / "rows.csv");
+  const std::vector<std::vector<double>> bodies = csvNumbers(s.dir / "block" / "bodies.csv");
+  REQUIRE(rows.size() == block["rows"].get<std::size_t>());
+  REQUIRE(bodies.size() == block["bodies"].get<std::size_t>());
+  REQUIRE(rows.size() > 100);
+  CHECK(block["mprgp_residual"].get<double>() <= 1e-10);
+
+  // The velocities after the impulses, body by body (the last body, the walls, stays still).
+  const std::size_t walls = bodies.size() - 1;
+  CHECK(bodies[walls][0] == 0.0);
+  std::vector<std::array<double, 6>> v(bodies.size());
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    for (int k = 0; k < 6; ++k) v[i][k] = bodies[i][10 + k];
+  auto apply = [&](std::size_t body, double sign, const double* n, const double* arm, double impulse) {
+    for (int d = 0; d < 3; ++d) v[body][d] += sign * impulse * bodies[body][0] * n[d];
+    for (int d = 0; d < 3; ++d)
+      for (int e = 0; e < 3; ++e) v[body][3 + d] += sign * impulse * bodies[body][1 + 3 * d + e] * arm[e];
+  };
+  double largest = 0.0;
+  for (const std::vector<double>& row : rows) {
+    REQUIRE(row.size() == 13);
+    CHECK(row[12] >= 0.0);
+    largest = std::max(largest, row[12]);
+    apply(static_cast<std::size_t>(row[1]), 1.0, &row[2], &row[8], row[12]);   // +r n on b
+    apply(static_cast<std::size_t>(row[0]), -1.0, &row[2], &row[5], row[12]);  // -r n on a
+  }
+  REQUIRE(largest > 0.0);
+  double minW = 0.0, complementarity = 0.0;
+  for (const std::vector<double>& row : rows) {
+    const auto& va = v[static_cast<std::size_t>(row[0])];
+    const auto& vb = v[static_cast<std::size_t>(row[1])];
+    double u = 0.0;
+    for (int d = 0; d < 3; ++d) u += row[2 + d] * (vb[d] - va[d]) + row[8 + d] * vb[3 + d] - row[5 + d] * va[3 + d];
+    const double w = u + row[11];
+    minW = std::min(minW, w);
+    complementarity = std::max(complementarity, std::abs(w * row[12]));
+  }
+  // Velocities of order g dt = 0.05 and impulses of order m g dt: the solve's 1e-10 leaves
+  // violations many orders below them.
+  CHECK(minW > -1e-8);
+  CHECK(complementarity < 1e-8 * largest);
+
+  // Refused with one line and exit 2: an existing folder, and a dump without a pile.
+  const CommandResult again = s.run("--micro --micro-pile '" + packing + "' --micro-dump block");
+  CHECK(again.code == 2);
+  CHECK(lineCount(again.err) == 1);
+  CHECK(again.err.find("--micro-dump block: already exists") != std::string::npos);
+  const CommandResult noPile = s.run("--micro --micro-dump other");
+  CHECK(noPile.code == 2);
+  CHECK_FALSE(fs::exists(s.dir / "other"));
 }

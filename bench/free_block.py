@@ -1,0 +1,212 @@
+#!/usr/bin/env python3
+"""The free block of one nscd step, solved by solvers outside confpack.
+
+Reads a folder written by `confpack-bench --micro --micro-pile PACKING --micro-dump DIR` (the
+contact problem of a pile's step and MPRGP's solution; bench/microbench.hpp gives its columns) and
+measures what docs/performance.md, "The preconditioner and the creep's solve", reports of it:
+
+  - the problem: w = A r + q >= 0, r >= 0, r.w = 0, with A = G M^-1 G^T the Delassus operator and
+    q = G v_free + c; how well the dumped solution satisfies it;
+  - the free block A_FF (the rows with r > 0), its conditioning (Jacobi-scaled: the lowest
+    eigenvalues and the largest);
+  - conjugate gradients on A_FF r_F = -q_F to a relative residual of 1e-10: plain, Jacobi and
+    symmetric Gauss-Seidel (two sweeps, what MPRGP's "sgs" applies), and the exact solve;
+  - with petsc4py: body-space algebraic multigrid (PETSc's GAMG, and hypre's BoomerAMG where PETSc
+    has it) as the preconditioner of K_F = eps M + G_F^T G_F, whose inverse gives the regularised
+    block's, (A_FF + eps I)^-1 = (I - G_F K_F^-1 G_F^T) / eps (Woodbury), GAMG with and without the
+    grains' rigid-body motions (translations and rotations about the aggregates, from the centres)
+    as its near-null space: CG iterations on K_F y = G_F^T (-q_F).
+
+Usage: python3 bench/free_block.py DIR [--eps 1e-3] [--no-petsc]
+(python3-numpy, python3-scipy; python3-petsc4py for the multigrids).
+"""
+import argparse
+import csv
+import glob
+import json
+import os
+import sys
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+TOL = 1e-10  # the solver's default tolerance (nscd_settings.hpp)
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def load(folder):
+    with open(os.path.join(folder, "block.json")) as f:
+        block = json.load(f)
+    _, rows = read_csv(os.path.join(folder, "rows.csv"))
+    _, bodies = read_csv(os.path.join(folder, "bodies.csv"))
+    return block, rows, bodies
+
+
+def operators(rows, bodies):
+    """G (rows x dofs; the last body, the walls, left out: it does not move), M^-1, v_free, c, r and
+    the bodies' centres. Three dofs a body where no row has a lever arm across its normal (spheres:
+    |l x n| ~ 1e-16, no normal impulse turns a grain), six otherwise."""
+    n = bodies.shape[0] - 1
+    a = rows[:, 0].astype(int)
+    b = rows[:, 1].astype(int)
+    nrm, axn, bxn = rows[:, 2:5], rows[:, 5:8], rows[:, 8:11]
+    c, r = rows[:, 11], rows[:, 12]
+    dofs = 3 if max(abs(axn).max(), abs(bxn).max()) < 1e-12 else 6
+    i, j, v = [], [], []
+    # u_n = n.(v_b - v_a) + (l_b x n).w_b - (l_a x n).w_a
+    for body, sign, arm in ((b, 1.0, bxn), (a, -1.0, axn)):
+        moving = np.flatnonzero(body != n)
+        for d in range(3):
+            i.append(moving)
+            j.append(dofs * body[moving] + d)
+            v.append(sign * nrm[moving, d])
+            if dofs == 6:
+                i.append(moving)
+                j.append(dofs * body[moving] + 3 + d)
+                v.append(sign * arm[moving, d])
+    G = sp.csr_matrix((np.concatenate(v), (np.concatenate(i), np.concatenate(j))), shape=(rows.shape[0], dofs * n))
+    blocks = []
+    for body in range(n):
+        linear = sp.identity(3) * bodies[body, 0]
+        blocks.append(linear if dofs == 3 else sp.block_diag([linear, bodies[body, 1:10].reshape(3, 3)]))
+    Minv = sp.block_diag(blocks, format="csr")
+    vfree = (bodies[:n, 10:13] if dofs == 3 else bodies[:n, 10:16]).reshape(-1)
+    return G, Minv, vfree, c, r, bodies[:n, 16:19], dofs
+
+
+def pcg_iterations(A, rhs, M=None):
+    """CG iterations to ||A x - rhs|| <= 1e-10 ||rhs|| from x = 0 (scipy's cg, counted)."""
+    count = [0]
+
+    def tick(_):
+        count[0] += 1
+
+    x, info = spla.cg(A, rhs, tol=TOL, atol=0.0, maxiter=20000, M=M, callback=tick)
+    return count[0], x, info
+
+
+def sgs_operator(A):
+    """Symmetric Gauss-Seidel of A as a preconditioner: z = (D + U)^-1 D (D + L)^-1 r."""
+    D = sp.diags(A.diagonal())
+    lower = sp.tril(A, format="csr")
+    upper = sp.triu(A, format="csr")
+
+    def apply(res):
+        y = spla.spsolve_triangular(lower, res, lower=True)
+        return spla.spsolve_triangular(upper, D @ y, lower=False)
+
+    return spla.LinearOperator(A.shape, matvec=apply)
+
+
+def petsc_multigrids(G_F, Minv, rhs, eps, centres, dofs):
+    """CG iterations and wall time (one thread) on K_F y = rhs, preconditioned by PETSc's symmetric
+    SOR (the one-level reference in the same library) or one V-cycle of each multigrid."""
+    from petsc4py import PETSc  # optional: imported only here
+
+    # M is block diagonal: invert each body's block of M^-1.
+    M = sp.csr_matrix(np.linalg.inv(Minv.toarray())) if dofs == 6 else sp.diags(1.0 / Minv.diagonal())
+    K = (eps * M + G_F.T @ G_F).tocsr()
+    K.sort_indices()
+    out = {}
+    for name, pc_type, rigid in (("symmetric SOR (one-level)", "sor", False), ("GAMG", "gamg", False),
+                                 ("GAMG, rigid-body near-null space", "gamg", True), ("BoomerAMG", "hypre", False)):
+        mat = PETSc.Mat().createAIJ(size=K.shape, csr=(K.indptr, K.indices, K.data))
+        mat.setBlockSize(dofs)
+        if rigid:
+            if dofs != 3:
+                out[name] = "only for bodies that do not turn"
+                continue
+            coords = PETSc.Vec().createWithArray(np.ascontiguousarray(centres.reshape(-1)))
+            coords.setBlockSize(3)
+            mat.setNearNullSpace(PETSc.NullSpace().createRigidBody(coords))
+        ksp = PETSc.KSP().create()
+        ksp.setOperators(mat)
+        ksp.setType("cg")
+        pc = ksp.getPC()
+        pc.setType(pc_type)
+        if pc_type == "hypre":
+            try:
+                pc.setHYPREType("boomeramg")
+            except PETSc.Error:
+                out[name] = "not in this PETSc"
+                continue
+        ksp.setTolerances(rtol=TOL, atol=0.0, max_it=20000)
+        x, bb = mat.createVecs()
+        bb.setArray(rhs)
+        start = time.perf_counter()
+        ksp.setUp()
+        setup = time.perf_counter() - start
+        ksp.solve(bb, x)
+        total = time.perf_counter() - start
+        its = ksp.getIterationNumber()
+        converged = "" if ksp.getConvergedReason() > 0 else " (not converged)"
+        out[name] = f"{its} iterations{converged}, {1e3 * total:.0f} ms ({1e3 * setup:.0f} ms setup)"
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("dir")
+    ap.add_argument("--eps", type=float, default=1e-3, help="the regularisation of K_F (default 1e-3)")
+    ap.add_argument("--no-petsc", action="store_true", help="leave out the multigrids")
+    args = ap.parse_args()
+    try:
+        block, rows, bodies = load(args.dir)
+    except (OSError, ValueError, KeyError) as e:
+        sys.exit(f"free_block.py: {args.dir}: not a block folder ({e})")
+
+    G, Minv, vfree, c, r, centres, dofs = operators(rows, bodies)
+    A = (G @ Minv @ G.T).tocsr()
+    q = G @ vfree + c
+    w = A @ r + q
+    scale = max(np.linalg.norm(q), 1e-300)
+    print(f"block: {A.shape[0]} rows, {bodies.shape[0] - 1} bodies, dt {block['dt']}; "
+          f"MPRGP {block['mprgp_iterations']} iterations, residual {block['mprgp_residual']:.2e}")
+    print(f"solution: min r {r.min():.2e}, min w {w.min():.2e} (relative {w.min() / scale:.2e}), "
+          f"|r.w| {abs(r @ w) / (np.linalg.norm(r) * scale):.2e} relative")
+
+    free = np.flatnonzero(r > 1e-12 * r.max())
+    A_FF = A[free][:, free].tocsc()
+    rhs = -q[free]
+    print(f"free block: {free.size} rows of {A.shape[0]}")
+
+    d = A_FF.diagonal()
+    S = sp.diags(1.0 / np.sqrt(d))
+    B = (S @ A_FF @ S).tocsc()
+    high = spla.eigsh(B, k=1, which="LA", return_eigenvectors=False)[0]
+    low = np.sort(spla.eigsh(B, k=5, sigma=0.0, which="LM", return_eigenvectors=False))
+    print(f"Jacobi-scaled A_FF: lowest eigenvalues {', '.join(f'{x:.2e}' for x in low)}; largest {high:.2f}; "
+          f"condition {high / low[0]:.2e}")
+
+    exact = spla.spsolve(A_FF, rhs)
+    print(f"exact solve: differs from MPRGP's impulses by {np.linalg.norm(exact - r[free]) / np.linalg.norm(r):.2e} "
+          f"(relative)")
+    A_FF = A_FF.tocsr()
+    for name, M in (("plain", None), ("Jacobi", sp.diags(1.0 / d)), ("symmetric Gauss-Seidel", sgs_operator(A_FF))):
+        its, _, info = pcg_iterations(A_FF, rhs, M)
+        print(f"CG, {name}: {its} iterations{'' if info == 0 else ' (not converged)'}")
+
+    if args.no_petsc:
+        return
+    # Debian's python3-petsc4py finds its module through /usr/lib/petsc, which only libpetsc-dev's
+    # alternative provides; otherwise look in the real-scalar build's folder.
+    sys.path += glob.glob("/usr/lib/petscdir/petsc*/*-real/lib/python3/dist-packages")
+    try:
+        import petsc4py  # noqa: F401
+    except ImportError:
+        print("petsc4py not installed: the multigrids are left out (apt-get install python3-petsc4py)")
+        return
+    G_F = G[free]
+    for name, result in petsc_multigrids(G_F, Minv, G_F.T @ rhs, args.eps, centres, dofs).items():
+        print(f"CG on K_F (eps {args.eps:g}, {G_F.shape[1]} unknowns), {name}: {result}")
+
+
+if __name__ == "__main__":
+    main()
