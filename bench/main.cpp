@@ -38,13 +38,7 @@ struct BenchState {
 };
 
 void runDumpCommand(const BenchState& st) {
-  checkInput("", [&] {
-    if (std::filesystem::exists(st.dump))
-      throw std::invalid_argument(fmt::format("--micro-dump {}: already exists", st.dump.string()));
-    if (!std::filesystem::is_regular_file(st.microDef.pile))
-      throw std::invalid_argument(
-          fmt::format("--micro-pile: {}: not a readable packing file", st.microDef.pile.string()));
-  });
+  checkInput("", [&] { validatePileDump(st.microDef.pile, st.dump); });
   runWork("", [&] {
     dumpPileBlock(st.microDef.pile, st.dump);
     fmt::print("bench: wrote {}\n", st.dump.string());
@@ -156,6 +150,9 @@ void addBenchOptions(CLI::App* sub, const std::shared_ptr<BenchState>& st) {
       ->needs(micro)
       ->check(positiveNumber())
       ->capture_default_str();
+  // A dump times nothing: the timing options would be ignored, so they are refused.
+  for (const char* name : {"--out", "--micro-filter", "--micro-repetitions", "--micro-min-time"})
+    dump->excludes(sub->get_option(name));
   sub->callback([st, sub] {
     st->outGiven = sub->count("--out") > 0;
     runBenchCommand(*st);

@@ -591,11 +591,24 @@ std::vector<Entry> entriesFor(const MicroBenchDef& def) {
   return e;
 }
 
+namespace {
+
+void requirePackingFile(const std::filesystem::path& pile) {
+  if (!std::filesystem::is_regular_file(pile))
+    throw std::invalid_argument(fmt::format("--micro-pile: {}: not a readable packing file", pile.string()));
+}
+
+}  // namespace
+
+void validatePileDump(const std::filesystem::path& pile, const std::filesystem::path& dir) {
+  if (std::filesystem::exists(dir))
+    throw std::invalid_argument(fmt::format("--micro-dump {}: already exists", dir.string()));
+  requirePackingFile(pile);
+}
+
 void dumpPileBlock(const std::filesystem::path& pile, const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
-  if (fs::exists(dir)) throw std::invalid_argument(fmt::format("--micro-dump {}: already exists", dir.string()));
-  if (!fs::is_regular_file(pile))
-    throw std::invalid_argument(fmt::format("--micro-pile: {}: not a readable packing file", pile.string()));
+  validatePileDump(pile, dir);
   SolverFixture f = makePileFixture(pile);
   const nscd::NscdSettings settings;  // MPRGP to 1e-10, SGS: the default
   f.reset(settings);
@@ -655,8 +668,7 @@ const std::vector<std::string>& microBenchNames() {
 }
 
 void validateMicroBench(const MicroBenchDef& def) {
-  if (!def.pile.empty() && !std::filesystem::is_regular_file(def.pile))
-    throw std::invalid_argument(fmt::format("--micro-pile: {}: not a readable packing file", def.pile.string()));
+  if (!def.pile.empty()) requirePackingFile(def.pile);
   if (def.repetitions < 1)
     throw std::invalid_argument(fmt::format("--micro-repetitions: must be at least 1 (got {})", def.repetitions));
   if (!(def.minTime > 0.0) || !std::isfinite(def.minTime))

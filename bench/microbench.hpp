@@ -53,6 +53,10 @@ struct MicroBenchDef {
 /// if the packing cannot be read or the folder written (nothing is left at `dir` then).
 void dumpPileBlock(const std::filesystem::path& pile, const std::filesystem::path& dir);
 
+/// Throws std::invalid_argument if `dir` exists or `pile` is not a file: dumpPileBlock's refusals
+/// before any work.
+void validatePileDump(const std::filesystem::path& pile, const std::filesystem::path& dir);
+
 /// Names of every micro-benchmark, in run order (without the --micro-pile ones).
 const std::vector<std::string>& microBenchNames();
 

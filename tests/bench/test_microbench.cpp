@@ -247,7 +247,14 @@ TEST_CASE("bench --micro-dump writes a pile's step whose dumped impulses solve t
   CHECK(again.code == 2);
   CHECK(lineCount(again.err) == 1);
   CHECK(again.err.find("--micro-dump block: already exists") != std::string::npos);
-  const CommandResult noPile = s.run("--micro --micro-dump other");
-  CHECK(noPile.code == 2);
-  CHECK_FALSE(fs::exists(s.dir / "other"));
+  for (const std::string& bad :
+       {std::string("--micro --micro-dump other"),
+        "--micro --micro-pile '" + packing + "' --micro-dump other --micro-filter 'Solve/.*/pile'",
+        std::string("--micro --micro-pile nowhere.json --micro-dump other")}) {
+    const CommandResult refused = s.run(bad);
+    INFO(bad);
+    CHECK(refused.code == 2);
+    CHECK(lineCount(refused.err) == 1);
+    CHECK_FALSE(fs::exists(s.dir / "other"));
+  }
 }
