@@ -11,7 +11,8 @@ measures what docs/performance.md, "The preconditioner and the creep's solve", r
     eigenvalues and the largest);
   - conjugate gradients on A_FF r_F = -q_F to a relative residual of 1e-10: plain, Jacobi and
     symmetric Gauss-Seidel (two sweeps, what MPRGP's "sgs" applies), and the exact solve;
-  - with petsc4py: body-space algebraic multigrid (PETSc's GAMG, and hypre's BoomerAMG where PETSc
+  - with petsc4py: the same in PETSc, timed, with symmetric SOR and incomplete Cholesky (0 to 2
+    levels of fill); then body-space algebraic multigrid (PETSc's GAMG, and hypre's BoomerAMG where PETSc
     has it) as the preconditioner of K_F = eps M + G_F^T G_F, whose inverse gives the regularised
     block's, (A_FF + eps I)^-1 = (I - G_F K_F^-1 G_F^T) / eps (Woodbury), GAMG with and without the
     grains' rigid-body motions (translations and rotations about the aggregates, from the centres)
@@ -105,6 +106,44 @@ def sgs_operator(A):
     return spla.LinearOperator(A.shape, matvec=apply)
 
 
+def petsc_contact_space(A_FF, rhs):
+    """CG iterations and wall time (one thread) on A_FF r_F = rhs with PETSc's one-level
+    preconditioners: symmetric SOR (what MPRGP's "sgs" applies) and incomplete Cholesky with 0, 1
+    and 2 levels of fill."""
+    from petsc4py import PETSc  # optional: imported only here
+
+    A = A_FF.tocsr()
+    A.sort_indices()
+    out = {}
+    for name, pc_type, levels in (("symmetric SOR", "sor", None), ("ICC(0)", "icc", 0), ("ICC(1)", "icc", 1),
+                                  ("ICC(2)", "icc", 2)):
+        mat = PETSc.Mat().createAIJ(size=A.shape, csr=(A.indptr, A.indices, A.data))
+        ksp = PETSc.KSP().create()
+        ksp.setOperators(mat)
+        ksp.setType("cg")
+        pc = ksp.getPC()
+        pc.setType(pc_type)
+        if levels is not None:
+            pc.setFactorLevels(levels)
+        out[name] = timed_solve(ksp, mat, rhs)
+    return out
+
+
+def timed_solve(ksp, mat, rhs):
+    """Solves to TOL from zero: "iterations, wall time (setup)"."""
+    ksp.setTolerances(rtol=TOL, atol=0.0, max_it=20000)
+    x, b = mat.createVecs()
+    b.setArray(rhs)
+    start = time.perf_counter()
+    ksp.setUp()
+    setup = time.perf_counter() - start
+    ksp.solve(b, x)
+    total = time.perf_counter() - start
+    its = ksp.getIterationNumber()
+    converged = "" if ksp.getConvergedReason() > 0 else " (not converged)"
+    return f"{its} iterations{converged}, {1e3 * total:.0f} ms ({1e3 * setup:.0f} ms setup)"
+
+
 def petsc_multigrids(G_F, Minv, rhs, eps, centres, dofs):
     """CG iterations and wall time (one thread) on K_F y = rhs, preconditioned by PETSc's symmetric
     SOR (the one-level reference in the same library) or one V-cycle of each multigrid."""
@@ -137,17 +176,7 @@ def petsc_multigrids(G_F, Minv, rhs, eps, centres, dofs):
             except PETSc.Error:
                 out[name] = "not in this PETSc"
                 continue
-        ksp.setTolerances(rtol=TOL, atol=0.0, max_it=20000)
-        x, bb = mat.createVecs()
-        bb.setArray(rhs)
-        start = time.perf_counter()
-        ksp.setUp()
-        setup = time.perf_counter() - start
-        ksp.solve(bb, x)
-        total = time.perf_counter() - start
-        its = ksp.getIterationNumber()
-        converged = "" if ksp.getConvergedReason() > 0 else " (not converged)"
-        out[name] = f"{its} iterations{converged}, {1e3 * total:.0f} ms ({1e3 * setup:.0f} ms setup)"
+        out[name] = timed_solve(ksp, mat, rhs)
     return out
 
 
@@ -203,6 +232,8 @@ def main():
     except ImportError:
         print("petsc4py not installed: the multigrids are left out (apt-get install python3-petsc4py)")
         return
+    for name, result in petsc_contact_space(A_FF, rhs).items():
+        print(f"CG on A_FF, PETSc, {name}: {result}")
     G_F = G[free]
     for name, result in petsc_multigrids(G_F, Minv, G_F.T @ rhs, args.eps, centres, dofs).items():
         print(f"CG on K_F (eps {args.eps:g}, {G_F.shape[1]} unknowns), {name}: {result}")
