@@ -10,15 +10,16 @@ measures what docs/performance.md, "The preconditioner and the creep's solve", r
   - the free block A_FF (the rows with r > 0), its conditioning (Jacobi-scaled: the lowest
     eigenvalues and the largest);
   - conjugate gradients on A_FF r_F = -q_F to a relative residual of 1e-10: plain, Jacobi and
-    symmetric Gauss-Seidel (two sweeps, what MPRGP's "sgs" applies), and the exact solve;
-  - with petsc4py: the same in PETSc, timed, with symmetric SOR and incomplete Cholesky (0 to 2
-    levels of fill); then body-space algebraic multigrid (PETSc's GAMG, and hypre's BoomerAMG where PETSc
+    symmetric Gauss-Seidel (two sweeps, what MPRGP's "sgs" applies), and the exact solve; then
+    with symmetric Gauss-Seidel and the k softest modes against it deflated (solved exactly);
+  - with petsc4py: the same in PETSc, timed, with symmetric SOR, incomplete Cholesky (0 to 2
+    levels of fill) and smoothed aggregation over the contacts (GAMG on A_FF); then body-space algebraic multigrid (PETSc's GAMG, and hypre's BoomerAMG where PETSc
     has it) as the preconditioner of K_F = eps M + G_F^T G_F, whose inverse gives the regularised
     block's, (A_FF + eps I)^-1 = (I - G_F K_F^-1 G_F^T) / eps (Woodbury), GAMG with and without the
     grains' rigid-body motions (translations and rotations about the aggregates, from the centres)
     as its near-null space: CG iterations on K_F y = G_F^T (-q_F).
 
-Usage: python3 bench/free_block.py DIR [--eps 1e-3] [--no-petsc]
+Usage: python3 bench/free_block.py DIR [--eps 1e-3] [--no-petsc] [--deflate K ...]
 (python3-numpy, python3-scipy; python3-petsc4py for the multigrids).
 """
 import argparse
@@ -106,6 +107,33 @@ def sgs_operator(A):
     return spla.LinearOperator(A.shape, matvec=apply)
 
 
+def deflated_iterations(A, rhs, precond, modes):
+    """Deflated CG (Frank and Vuik): the coarse space of `modes` solved exactly, CG with
+    `precond` on P A x = P b, P = I - A Z (Z^T A Z)^-1 Z^T; iterations to TOL."""
+    Z = modes
+    AZ = A @ Z
+    E = Z.T @ AZ
+
+    def project(v):
+        return v - AZ @ np.linalg.solve(E, Z.T @ v)
+
+    PA = spla.LinearOperator(A.shape, matvec=lambda v: project(A @ v))
+    its, _, info = pcg_iterations(PA, project(rhs), precond)
+    return its, info
+
+
+def sgs_modes(A, count):
+    """The `count` softest modes of A against symmetric Gauss-Seidel: A v = lambda M v with
+    M = (D + L) D^-1 (D + U), the directions SGS-preconditioned CG is slowest on (dense: a few
+    thousand rows)."""
+    import scipy.linalg as la
+
+    dense = A.toarray()
+    lower = np.tril(dense)
+    M = lower @ np.diag(1.0 / np.diag(dense)) @ lower.T
+    return la.eigh(dense, M, subset_by_index=[0, count - 1])[1]
+
+
 def petsc_contact_space(A_FF, rhs):
     """CG iterations and wall time (one thread) on A_FF r_F = rhs with PETSc's one-level
     preconditioners: symmetric SOR (what MPRGP's "sgs" applies) and incomplete Cholesky with 0, 1
@@ -116,7 +144,7 @@ def petsc_contact_space(A_FF, rhs):
     A.sort_indices()
     out = {}
     for name, pc_type, levels in (("symmetric SOR", "sor", None), ("ICC(0)", "icc", 0), ("ICC(1)", "icc", 1),
-                                  ("ICC(2)", "icc", 2)):
+                                  ("ICC(2)", "icc", 2), ("GAMG (smoothed aggregation over the contacts)", "gamg", None)):
         mat = PETSc.Mat().createAIJ(size=A.shape, csr=(A.indptr, A.indices, A.data))
         ksp = PETSc.KSP().create()
         ksp.setOperators(mat)
@@ -184,7 +212,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("dir")
     ap.add_argument("--eps", type=float, default=1e-3, help="the regularisation of K_F (default 1e-3)")
-    ap.add_argument("--no-petsc", action="store_true", help="leave out the multigrids")
+    ap.add_argument("--no-petsc", action="store_true", help="leave out PETSc's solvers")
+    ap.add_argument("--deflate", type=int, nargs="*", default=[10, 50, 100, 200],
+                    help="numbers of softest modes to deflate (default 10 50 100 200; none: leave out)")
     args = ap.parse_args()
     try:
         block, rows, bodies = load(args.dir)
@@ -221,6 +251,18 @@ def main():
     for name, M in (("plain", None), ("Jacobi", sp.diags(1.0 / d)), ("symmetric Gauss-Seidel", sgs_operator(A_FF))):
         its, _, info = pcg_iterations(A_FF, rhs, M)
         print(f"CG, {name}: {its} iterations{'' if info == 0 else ' (not converged)'}")
+
+    sgs = sgs_operator(A_FF)
+    modes = sgs_modes(A_FF, max(args.deflate)) if args.deflate else None
+    if modes is not None:
+        # How many rows a mode moves: the participation ratio (sum v^2)^2 / (n sum v^4).
+        shares = [np.sum(v**2) ** 2 / (v.size * np.sum(v**4)) for v in modes[:, :10].T]
+        print(f"the 10 softest modes against SGS each spread over {100 * min(shares):.0f} to "
+              f"{100 * max(shares):.0f} % of the rows (participation ratio)")
+    for k in args.deflate:
+        its, info = deflated_iterations(A_FF, rhs, sgs, modes[:, :k])
+        print(f"CG, symmetric Gauss-Seidel, the {k} softest modes deflated: {its} iterations"
+              f"{'' if info == 0 else ' (not converged)'}")
 
     if args.no_petsc:
         return
