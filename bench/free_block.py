@@ -141,8 +141,8 @@ def sgs_modes(A, count):
 
 def petsc_contact_space(A_FF, rhs):
     """CG iterations and wall time (one thread) on A_FF r_F = rhs with PETSc's one-level
-    preconditioners: symmetric SOR (what MPRGP's "sgs" applies) and incomplete Cholesky with 0, 1
-    and 2 levels of fill."""
+    preconditioners, symmetric SOR (what MPRGP's "sgs" applies) and incomplete Cholesky with 0, 1
+    and 2 levels of fill, and with smoothed aggregation over the contacts (GAMG)."""
     from petsc4py import PETSc  # optional: imported only here
 
     A = A_FF.tocsr()
@@ -278,8 +278,8 @@ def main():
 
     if args.no_petsc:
         return
-    # Debian's python3-petsc4py finds its module through /usr/lib/petsc, which only libpetsc-dev's
-    # alternative provides; otherwise look in the real-scalar build's folder.
+    # Debian's python3-petsc4py finds its module through /usr/lib/petsc, a link that only PETSc's
+    # development package sets up; without it, look in the real-scalar build's folder.
     sys.path += glob.glob("/usr/lib/petscdir/petsc*/*-real/lib/python3/dist-packages")
     try:
         import petsc4py  # noqa: F401
