@@ -339,15 +339,14 @@ nlohmann::json benchTargets(const BenchDef& def, const nlohmann::json& cases) {
     const nlohmann::json& nscd = cases["msp-w10"]["nscd"];
     const bool reached = nscd["equilibrium_reached"].get<bool>();
     const double wall = nscd["wall_s"].get<double>();
-    std::optional<bool> met;
-    if (fullSize && def.threads == 1) met = reached && wall <= 60.0;
-    out.push_back(target("msp-w10: nscd at equilibrium in at most 60 s on one thread", restFigure(reached, wall), met));
-    // The multilevel solve's step on the way to 60 s (docs/performance.md, "Where the speed
-    // targets stand").
-    std::optional<bool> metOnTheWay;
-    if (fullSize && def.threads == 1) metOnTheWay = reached && wall <= 180.0;
-    out.push_back(
-        target("msp-w10: nscd at equilibrium in at most 180 s on one thread", restFigure(reached, wall), metOnTheWay));
+    // 60 s, and the multilevel solve's step on the way, 180 s (docs/performance.md, "Where the
+    // speed targets stand"): judged on the full-size pile on one thread only.
+    for (const double limit : {60.0, 180.0}) {
+      std::optional<bool> met;
+      if (fullSize && def.threads == 1) met = reached && wall <= limit;
+      out.push_back(target(fmt::format("msp-w10: nscd at equilibrium in at most {:g} s on one thread", limit),
+                           restFigure(reached, wall), met));
+    }
   }
   if (cases.contains("mpp-w10")) {
     const nlohmann::json& nscd = cases["mpp-w10"]["nscd"];
