@@ -27,6 +27,7 @@ struct ReportState {
   bool noRunLinks = false;
   double lambdaWidth = study::ReportOptions{}.lambdaWidth;
   std::vector<std::filesystem::path> lambdaFrom;
+  std::filesystem::path tablesFrom;
 };
 
 void runReportCommand(const ReportState& st) {
@@ -37,6 +38,7 @@ void runReportCommand(const ReportState& st) {
     if (!st.compare.empty()) study::compareSetting(st.compare, runs);
     if (!st.reference.empty()) reference = study::readReferenceValues(st.reference);
     study::checkLambdaSources(st.sweepDir, st.lambdaFrom);
+    if (!st.tablesFrom.empty()) study::checkTablesSource(st.tablesFrom);
     checkOutputTarget(out);
   });
   runWork("report", [&] {
@@ -49,6 +51,7 @@ void runReportCommand(const ReportState& st) {
     o.compare = st.compare;
     o.lambdaWidth = st.lambdaWidth;
     o.lambdaFrom = st.lambdaFrom;
+    o.tablesFrom = st.tablesFrom;
     const study::ReportSummary s = study::writeReport(st.sweepDir, output.dir(), o);
     step.next("moving the report into place");
     output.commit();
@@ -57,6 +60,11 @@ void runReportCommand(const ReportState& st) {
     for (const std::filesystem::path& dir : s.unusedLambdaSources)
       fmt::print(stderr, "confpack report: --lambda-from {}: no family's replicas at its lambda width, not used\n",
                  dir.string());
+    if (!st.tablesFrom.empty() && s.standIns == 0)
+      fmt::print(stderr,
+                 "confpack report: --tables-from {}: every configuration of the sweep has finished runs of each "
+                 "side, or none of the tables' rows is one of them: not used\n",
+                 st.tablesFrom.string());
     const std::string drawn =
         !s.gnuplotUsed
             ? (st.noFigures ? " (not drawn: --no-figures)" : fmt::format(" (not drawn: gnuplot {})", s.gnuplotProblem))
@@ -103,6 +111,11 @@ void registerReport(CLI::App& app) {
       ->check(CLI::ExistingDirectory)
       ->allow_extra_args(false)  // one folder an occurrence: the sweep folder may follow
       ->excludes("--compare")    // its replicas are matched by backend
+      ->type_name("DIR");
+  sub->add_option("--tables-from", st->tablesFrom,
+                  "tables/ folder of another report (e.g. docs/medium/tables) whose values stand in for the "
+                  "configurations and backends this sweep has no finished run of, e.g. a study's nscd runs when only "
+                  "Bullet's were rerun and settled")
       ->type_name("DIR");
   sub->callback([st] { runReportCommand(*st); });
 }

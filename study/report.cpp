@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <map>
 #include <stdexcept>
 
 #include "core/build_info.hpp"
@@ -89,6 +90,21 @@ void addIntroduction(Document& doc, const StudyView& study, const ReportSummary&
                   "(not run or interrupted), {} done but not equilibrated.",
                   folder, when, core::version(), core::sourceRevision(), summary.runs, summary.done, summary.failed,
                   summary.missing, summary.unequilibrated));
+  if (!study.standIns.empty()) {
+    std::map<std::string, std::vector<std::string>> bySide;  // side -> "MPP x_S=0 mu_w=0 W=5", in order
+    for (const auto& [where, _] : study.standIns)
+      bySide[where.second].push_back(fmt::format("{} {}{}", seriesText(seriesOf(where.first)),
+                                                 where.first.periodic ? "" : "W=", widthText(where.first)));
+    std::string parts;
+    for (const auto& [side, confs] : bySide)
+      parts += fmt::format("{}{}: {}", parts.empty() ? "" : "; ", side, fmt::join(confs, ", "));
+    const std::string source = options.runLinks ? options.tablesFrom.string() : folderName(options.tablesFrom);
+    doc.paragraph(fmt::format(
+        "Not run here, {} configurations' values are those of the tables in {} (each one's mean, standard "
+        "deviation and number of replicas, standing in for its runs in the summary, the verdict, the fits and the "
+        "tables; their profiles and figures are not here): {}.",
+        study.standIns.size(), source, parts));
+  }
   if (!study.settings.empty()) {
     std::string varied;
     for (std::size_t i = 0; i < study.settings.size(); ++i)
@@ -153,10 +169,11 @@ void checkLambdaSources(const fs::path& sweepDir, const std::vector<fs::path>& s
 }
 
 ReportSummary writeReport(const fs::path& sweepDir, const fs::path& outDir, const ReportOptions& options) {
-  const StudyView study(sweepDir, options.compare);
+  const StudyView study(sweepDir, options.compare, options.tablesFrom);
   fs::create_directories(outDir);
   FigureWriter figures(outDir / "figures", options.gnuplot, options.figureTimeout);
   ReportSummary summary = countRuns(study);
+  summary.standIns = study.standIns.size();
 
   Document doc(fmt::format("confpack study report: {}", study.spec.name));
   addIntroduction(doc, study, summary, options, figures.available(), figures.problem());

@@ -106,7 +106,19 @@ struct ReportOptions {
   /// of a family and backend at its lambda width gives all of that sample's replicas; C stays the
   /// study's. Checked first by checkLambdaSources(); the backends only (not with `compare`).
   std::vector<std::filesystem::path> lambdaFrom;
+  /// A report's tables/ folder (`--tables-from`, e.g. docs/medium/tables of the medium study) whose
+  /// values stand in for each configuration and side of the run table that has no finished run
+  /// here: a study rerun in part (Bullet's piles settled, nscd's runs left out as the study's) is
+  /// judged against the whole study's runs. A stand-in's mean, standard deviation and replica count
+  /// enter the summary, the verdict, the fits and the tables as the runs' own would; its runs'
+  /// profiles and figures are not there, and the introduction names what stood in. Checked first by
+  /// checkTablesSource(). Empty: none.
+  std::filesystem::path tablesFrom;
 };
+
+/// Refuses (std::invalid_argument naming the folder) a --tables-from folder that holds no table of
+/// a report's tables/ folder.
+void checkTablesSource(const std::filesystem::path& dir);
 
 /// Refuses (std::invalid_argument naming the folder, its run and the first setting that differs) a
 /// --lambda-from folder with a run whose configuration is none of the study's apart from its seed
@@ -120,6 +132,7 @@ struct ReportSummary {
   bool gnuplotUsed = false;
   std::string gnuplotProblem;  ///< why a gnuplot asked for was not used (FigureWriter::problem), else empty
   std::vector<std::filesystem::path> unusedLambdaSources;  ///< --lambda-from folders that gave no family's replicas
+  std::size_t standIns = 0;  ///< (configuration, side) pairs whose values came from --tables-from
   std::filesystem::path html, markdown;
 };
 

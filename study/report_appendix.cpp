@@ -105,8 +105,10 @@ void addRunsSection(Document& doc, const StudyView& study, const fs::path& repor
   else
     doc.paragraph(fmt::format(
         "{} runs are missing, failed or did not reach equilibrium: they come first, with why. Missing and failed "
-        "runs are absent from the fits and tables; unequilibrated runs are included. {}",
-        problems.size(), names));
+        "runs are absent from the fits and tables{}; unequilibrated runs are included. {}",
+        problems.size(),
+        study.standIns.empty() ? "" : " (where their configuration's values stand in, the introduction says so)",
+        names));
   problems.insert(problems.end(), std::make_move_iterator(others.begin()), std::make_move_iterator(others.end()));
   doc.table({"run", "configuration", "status", "phi", "wall [s]", "note"}, problems);
 }

@@ -5,8 +5,10 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "core/settings_table.hpp"
+#include "study/csv_table.hpp"
 
 namespace confpack::study {
 
@@ -41,7 +43,51 @@ ConfKey confKey(const core::RunConfig& c, const std::vector<std::string>& paths,
   return k;
 }
 
+// A report table's cell as a number: NaN when empty or not one (parseCsv).
+double cellOf(const CsvTable& t, const std::vector<double>& row, const std::string& column) {
+  const auto it = std::find(t.columns.begin(), t.columns.end(), column);
+  return it == t.columns.end() ? std::nan("") : row[static_cast<std::size_t>(it - t.columns.begin())];
+}
+
+// The tables of a report's tables/ folder (study/report_appendix.cpp writes them): every CSV whose
+// header starts with a configuration's columns.
+std::vector<CsvTable> reportTables(const fs::path& dir) {
+  const std::vector<std::string> lead = {"key", "family", "x_S", "W", "mu_w", "biperiodic"};
+  std::vector<CsvTable> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().extension() != ".csv") continue;
+    std::optional<CsvTable> t = readCsv(e.path());
+    if (t && t->columns.size() > lead.size() && std::equal(lead.begin(), lead.end(), t->columns.begin()))
+      out.push_back(std::move(*t));
+  }
+  return out;
+}
+
+// Whether a table row is configuration k: its family, x_S, W, mu_w, box and every varied setting.
+bool rowIs(const CsvTable& t, std::size_t i, const ConfKey& k, const std::vector<std::string>& settingPaths) {
+  const std::vector<double>& row = t.rows[i];
+  if (t.text[i][1] != familyOf(k.shape, k.xs) || row[2] != k.xs || row[3] != k.width || row[4] != k.mu ||
+      row[5] != (k.periodic ? 1.0 : 0.0))
+    return false;
+  for (std::size_t s = 0; s < settingPaths.size(); ++s) {
+    const auto it = std::find(t.columns.begin(), t.columns.end(), settingPaths[s]);
+    if (it == t.columns.end() || t.text[i][static_cast<std::size_t>(it - t.columns.begin())] != k.settings[s].text)
+      return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+void checkTablesSource(const fs::path& dir) {
+  if (!fs::is_directory(dir))
+    throw std::invalid_argument(fmt::format("--tables-from {}: not a folder", dir.string()));
+  if (reportTables(dir).empty())
+    throw std::invalid_argument(
+        fmt::format("--tables-from {}: no report table in it (a CSV of confpack report's tables/ folder, its "
+                    "columns key, family, x_S, W, mu_w, biperiodic, then each side's _mean, _std and _n)",
+                    dir.string()));
+}
 
 SeriesKey seriesOf(const ConfKey& k) {
   return {k.shape, k.xs, k.mu, k.settings};
@@ -83,7 +129,7 @@ std::string statText(const ReplicaStat& s) {
   return fmt::format("{:.4g} ± {:.2g} (n={})", s.mean, s.std, s.n);
 }
 
-StudyView::StudyView(const fs::path& sweepDir, const std::string& compareKey)
+StudyView::StudyView(const fs::path& sweepDir, const std::string& compareKey, const fs::path& tablesFrom)
     : sweepDir(sweepDir), records(loadStudy(sweepDir, &spec)) {
   std::vector<SweepRun> runs;
   for (const RunRecord& r : records)
@@ -102,9 +148,30 @@ StudyView::StudyView(const fs::path& sweepDir, const std::string& compareKey)
     for (const auto& e : fs::directory_iterator(runDir(r)))
       if (e.path().extension() == ".csv") csvNames.insert(e.path().filename().string());
   }
+  if (tablesFrom.empty()) return;
+  const std::vector<CsvTable> tables = reportTables(tablesFrom);
+  for (const auto& [k, bySide] : groups)
+    for (const auto& [side, runs] : bySide) {
+      if (std::any_of(runs.begin(), runs.end(), [](const RunRecord* r) { return r->status == RunStatus::Done; }))
+        continue;
+      std::map<std::string, ReplicaStat> values;
+      for (const CsvTable& t : tables)
+        for (std::size_t i = 0; i < t.rows.size(); ++i) {
+          if (!rowIs(t, i, k, settings)) continue;
+          const double n = cellOf(t, t.rows[i], side + "_n"), mean = cellOf(t, t.rows[i], side + "_mean");
+          if (!(n >= 1.0) || !std::isfinite(mean)) continue;
+          const double sd = cellOf(t, t.rows[i], side + "_std");  // empty below two replicas
+          values[t.text[i][0]] = {static_cast<std::size_t>(n), mean, std::isfinite(sd) ? sd : 0.0};
+        }
+      if (!values.empty()) standIns[{k, side}] = std::move(values);
+    }
 }
 
 ReplicaStat StudyView::statOf(const ConfKey& k, const std::string& side, const std::string& key) const {
+  if (const auto s = standIns.find({k, side}); s != standIns.end()) {
+    const auto it = s->second.find(key);
+    return it == s->second.end() ? ReplicaStat{} : it->second;
+  }
   const auto g = groups.find(k);
   if (g == groups.end() || !g->second.count(side)) return ReplicaStat{};
   std::vector<double> v;

@@ -126,7 +126,10 @@ std::string statText(const ReplicaStat& s);
 
 class StudyView {
  public:
-  StudyView(const std::filesystem::path& sweepDir, const std::string& compareKey);
+  // With `tablesFrom` (ReportOptions::tablesFrom), the values of that tables/ folder stand in for
+  // each configuration and side of the run table without a finished run here (standIns).
+  StudyView(const std::filesystem::path& sweepDir, const std::string& compareKey,
+            const std::filesystem::path& tablesFrom = {});
   StudyView(const StudyView&) = delete;  // groups point into records
   StudyView& operator=(const StudyView&) = delete;
 
@@ -136,7 +139,8 @@ class StudyView {
     return recordSides[static_cast<std::size_t>(&r - records.data())];
   }
 
-  // Replica statistics of one quantity over the finished runs of (configuration, side).
+  // Replica statistics of one quantity over the finished runs of (configuration, side), or its
+  // stand-in's when that side has none here.
   ReplicaStat statOf(const ConfKey& k, const std::string& side, const std::string& key) const;
 
   // The sample of series `sk` that a per-family quantity is read from: among the configurations
@@ -162,6 +166,8 @@ class StudyView {
   std::map<ConfKey, std::map<std::string, std::vector<const RunRecord*>>> groups;
   std::set<std::string> keys;      // every quantity of a finished run
   std::set<std::string> csvNames;  // every profile file of a finished run
+  // (configuration, side) without a finished run -> key -> the --tables-from folder's statistics
+  std::map<std::pair<ConfKey, std::string>, std::map<std::string, ReplicaStat>> standIns;
 };
 
 bool unequilibrated(const RunRecord& r);

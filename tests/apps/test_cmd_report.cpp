@@ -274,3 +274,25 @@ TEST_CASE(
       same.err,
       Catch::Contains("confpack report: --lambda-from same: no family's replicas at its lambda width, not used\n"));
 }
+
+TEST_CASE("report --tables-from: a folder without report tables is refused, exit 2, nothing written; unused, said") {
+  ConfpackSession s("cmd_report_tables_from");
+  makeSweep(s.dir / "sw");
+  fs::create_directories(s.dir / "empty");
+  std::ofstream(s.dir / "empty" / "notes.csv") << "a,b\n1,2\n";  // a CSV, not a report's table
+  const auto r = s.run("report sw --no-figures --tables-from empty");
+  CHECK(r.code == 2);
+  CHECK(lineCount(r.err) == 1);
+  CHECK_THAT(r.err, Catch::StartsWith("confpack report: error: --tables-from empty: no report table in it"));
+  CHECK_FALSE(fs::exists(s.dir / "sw" / "report"));
+  const auto nowhere = s.run("report sw --no-figures --tables-from nowhere");
+  CHECK(nowhere.code == 2);
+  CHECK(nowhere.err == "confpack report: error: --tables-from nowhere: not a folder\n");
+  // Every run of this sweep finished: a report's own tables have nothing to stand in for.
+  REQUIRE(s.run("report sw --no-figures --out first").code == 0);
+  const auto unused = s.run("report sw --no-figures --tables-from first/tables");
+  REQUIRE(unused.code == 0);
+  CHECK_THAT(unused.err, Catch::Contains("confpack report: --tables-from first/tables: every configuration of the "
+                                         "sweep has finished runs of each side, or none of the tables' rows is one "
+                                         "of them: not used\n"));
+}

@@ -830,6 +830,45 @@ TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json")
   fs::remove_all(dir);
 }
 
+TEST_CASE("report: a study rerun in part is judged against the whole study's tables (tables-from), as by its runs") {
+  const fs::path dir = makeStudy("tables_from", false, false, 0, true);
+  const fs::path whole = dir / "report_whole";
+  const std::string wholeMd = slurp(study::writeReport(dir, whole).markdown);
+  // nscd's runs not run here, as in a settle sweep that leaves them out: no done marker.
+  for (const auto& e : fs::directory_iterator(dir / "runs"))
+    if (json::parse(slurp(e.path() / "config.json"))["backend"] == "nscd") fs::remove(e.path() / study::kDoneMarker);
+  const std::string partMd = slurp(study::writeReport(dir, dir / "report_part").markdown);
+  study::ReportOptions o;
+  o.tablesFrom = whole / "tables";
+  const study::ReportSummary from = study::writeReport(dir, dir / "report_from", o);
+  const std::string fromMd = slurp(from.markdown);
+  CHECK(from.standIns == 5);  // nscd at W = 4, 5, 10, 20 and biperiodic
+  CHECK_THAT(fromMd, Catch::Contains("Not run here, 5 configurations' values are those of the tables in "));
+  CHECK_THAT(verdictOf(fromMd), Catch::Contains("nscd's values at 5 widths are another report's tables'"));
+  // The verdict's rows, fits of nscd's values against Bullet's as stopped and settled, are the
+  // whole study's; without the tables nscd's side is missing.
+  for (const char* q : {"phi_bulk", "C", "Z_bulk", "C_Z"}) {
+    INFO(q);
+    const std::string prefix = fmt::format("| MSP: spheres x_S = 0, mu_w = 0 | {} |", q);
+    const auto row = rowCells(verdictOf(fromMd), prefix);
+    REQUIRE(row.size() == 12);
+    CHECK(row == rowCells(verdictOf(wholeMd), prefix));
+    CHECK(row != rowCells(verdictOf(partMd), prefix));
+  }
+  // The tables give nscd's columns as the whole study's, at full precision.
+  for (const char* file : {"solid_fraction.csv", "coordination.csv"}) {
+    const study::CsvTable a = readTable(whole, file), b = readTable(dir / "report_from", file);
+    REQUIRE(a.columns == b.columns);
+    REQUIRE(a.rows.size() == b.rows.size());
+    for (const char* column : {"nscd_mean", "nscd_std", "nscd_n"}) {
+      const std::size_t c = static_cast<std::size_t>(std::find(a.columns.begin(), a.columns.end(), column) - a.columns.begin());
+      REQUIRE(c < a.columns.size());
+      for (std::size_t i = 0; i < a.rows.size(); ++i) CHECK(a.text[i][c] == b.text[i][c]);
+    }
+  }
+  fs::remove_all(dir);
+}
+
 TEST_CASE("report with reference values: a reference column beside each quantity, its sources, marks on the figures") {
   const fs::path dir = makeStudy("reference", false);
   study::ReportOptions o;
