@@ -18,9 +18,14 @@ measures what docs/performance.md, "The preconditioner and the creep's solve", r
     preconditioner of K_F = eps M + G_F^T G_F, whose inverse gives the regularised
     block's, (A_FF + eps I)^-1 = (I - G_F K_F^-1 G_F^T) / eps (Woodbury), GAMG with and without the
     grains' rigid-body motions (translations and rotations about the aggregates, from the centres)
-    as its near-null space: CG iterations on K_F y = G_F^T (-q_F).
+    as its near-null space: CG iterations on K_F y = G_F^T (-q_F);
+  - the whole problem (every row, its bounds) by truncated nonsmooth Newton multigrid (Graeser and
+    Kornhuber): a symmetric projected Gauss-Seidel sweep, then a linear correction on the free rows
+    (none, exact, or one V-cycle of GAMG or BoomerAMG), projected and line-searched; iterations to
+    MPRGP's residual of 1e-10 (its projected gradient in Jacobi-scaled impulses, relative to the
+    scaled q).
 
-Usage: python3 bench/free_block.py DIR [--eps 1e-3] [--no-petsc] [--deflate K ...]
+Usage: python3 bench/free_block.py DIR [--eps 1e-3] [--no-petsc] [--deflate K ...] [--tnnmg-iterations N]
 (python3-numpy, python3-scipy; python3-petsc4py for PETSc's solvers).
 """
 import argparse
@@ -211,6 +216,112 @@ def petsc_multigrids(G_F, M, rhs, eps, centres, dofs):
     return out
 
 
+def projected_gauss_seidel(A, y, b, order):
+    """One projected Gauss-Seidel sweep in `order` on min y.A y / 2 + b.y, y >= 0, A of unit diagonal
+    (a loop over rows: no library sweeps with bounds)."""
+    ptr, idx, val = A.indptr, A.indices, A.data
+    for i in order:
+        g = b[i] + val[ptr[i]:ptr[i + 1]] @ y[idx[ptr[i]:ptr[i + 1]]]
+        y[i] = max(0.0, y[i] - g)
+
+
+def projected_residual(A, y, b):
+    """MPRGP's residual: the projected gradient's norm relative to b's, and the gradient."""
+    g = A @ y + b
+    return np.linalg.norm(np.where(y > 0.0, g, np.minimum(g, 0.0))) / np.linalg.norm(b), g
+
+
+def tnnmg(A, b, correction, max_iterations):
+    """Truncated nonsmooth Newton multigrid from y = 0: per iteration one symmetric projected
+    Gauss-Seidel sweep, the linear correction of the free rows (y > 0) by `correction(A_FF, -g_F)`,
+    then an exact line search along its projection onto y >= 0 or along itself up to the first
+    bound, whichever lowers the energy more.
+    Returns the iterations to TOL (or max_iterations), the distinct free sets, the correction's
+    wall time and the last residual."""
+    n = A.shape[0]
+    y = np.zeros(n)
+    forward, backward = np.arange(n), np.arange(n)[::-1]
+    sets, seconds, last, residual = 0, 0.0, None, 1.0
+    for k in range(1, max_iterations + 1):
+        projected_gauss_seidel(A, y, b, forward)
+        projected_gauss_seidel(A, y, b, backward)
+        residual, g = projected_residual(A, y, b)
+        if residual < TOL:
+            return k, sets, seconds, residual
+        free = np.flatnonzero(y > 0.0)
+        if last is None or not np.array_equal(free, last):
+            sets, last = sets + 1, free
+        d = np.zeros(n)
+        start = time.perf_counter()
+        if free.size:
+            d[free] = correction(A[free][:, free].tocsr(), -g[free])
+        seconds += time.perf_counter() - start
+        # The correction projected onto y >= 0 (Graeser and Kornhuber), or as it is up to the first
+        # bound it meets: a singular free block (pinacoids) gives corrections along its null space
+        # that projection bends into stiff directions. The step that lowers the energy more is taken.
+        best, gain = None, 0.0
+        for step in (np.maximum(y + d, 0.0) - y, d):
+            curvature = step @ (A @ step)
+            falling = step < 0.0
+            reach = np.min(-y[falling] / step[falling]) if falling.any() else np.inf
+            alpha = min(-(g @ step) / curvature if curvature > 0.0 else np.inf, reach)
+            if not np.isfinite(alpha) or alpha <= 0.0:
+                continue
+            lowered = -alpha * (g @ step) - 0.5 * alpha * alpha * curvature
+            if lowered > gain:
+                best, gain = alpha * step, lowered
+        if best is not None:
+            y = np.maximum(y + best, 0.0)  # the bound met, exactly
+        residual, _ = projected_residual(A, y, b)
+        if residual < TOL:
+            return k, sets, seconds, residual
+    return max_iterations, sets, seconds, residual
+
+
+def exact_correction(A_FF, rhs):
+    """(A_FF + 1e-8 I)^-1 rhs by a sparse LU: A_FF's diagonal is 1, so this is A_FF's own solve where
+    it is regular, and the least-change one where it is singular (points of one face contact)."""
+    return spla.splu((A_FF + 1e-8 * sp.identity(A_FF.shape[0])).tocsc()).solve(rhs)
+
+
+def petsc_vcycle(pc_type):
+    """One V-cycle of PETSc's GAMG ("gamg") or hypre's BoomerAMG ("hypre") on A_FF, set up anew."""
+    from petsc4py import PETSc  # optional: imported only here
+
+    def apply(A_FF, rhs):
+        A_FF.sort_indices()
+        mat = PETSc.Mat().createAIJ(size=A_FF.shape, csr=(A_FF.indptr, A_FF.indices, A_FF.data))
+        ksp = PETSc.KSP().create()
+        ksp.setOperators(mat)
+        ksp.setType("preonly")
+        pc = ksp.getPC()
+        pc.setType(pc_type)
+        if pc_type == "hypre":
+            pc.setHYPREType("boomeramg")
+        x, b = mat.createVecs()
+        b.setArray(rhs)
+        ksp.solve(b, x)
+        return x.getArray().copy()
+
+    return apply
+
+
+def tnnmg_section(A, q, max_iterations, with_petsc):
+    """TNNMG on the whole step's problem, Jacobi-scaled as MPRGP solves it, with each correction."""
+    s = 1.0 / np.sqrt(A.diagonal())
+    A_s = (sp.diags(s) @ A @ sp.diags(s)).tocsr()
+    corrections = [("none (projected Gauss-Seidel alone)", lambda A_FF, rhs: np.zeros(rhs.size)),
+                   ("exact (a sparse LU of A_FF + 1e-8 I)", exact_correction)]
+    if with_petsc:
+        corrections += [("one V-cycle of GAMG", petsc_vcycle("gamg")),
+                        ("one V-cycle of BoomerAMG", petsc_vcycle("hypre"))]
+    for name, correction in corrections:
+        its, sets, seconds, residual = tnnmg(A_s, s * q, correction, max_iterations)
+        state = "" if residual < TOL else f" (not converged: residual {residual:.1e})"
+        print(f"TNNMG, correction {name}: {its} iterations{state}, {sets} free sets, "
+              f"{seconds:.1f} s in the corrections", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("dir")
@@ -218,6 +329,8 @@ def main():
     ap.add_argument("--no-petsc", action="store_true", help="leave out PETSc's solvers")
     ap.add_argument("--deflate", type=int, nargs="*", default=[10, 50, 100, 200],
                     help="numbers of softest modes to deflate (default 10 50 100 200; none: leave out)")
+    ap.add_argument("--tnnmg-iterations", type=int, default=1000,
+                    help="cap of the TNNMG runs (default 1000; 0: leave them out)")
     args = ap.parse_args()
     try:
         block, rows, bodies = load(args.dir)
@@ -277,6 +390,8 @@ def main():
                   f"{'' if info == 0 else ' (not converged)'}")
 
     if args.no_petsc:
+        if args.tnnmg_iterations > 0:
+            tnnmg_section(A, q, args.tnnmg_iterations, False)
         return
     # Debian's python3-petsc4py finds its module through /usr/lib/petsc, a link that only PETSc's
     # development package sets up; without it, look in the real-scalar build's folder.
@@ -285,6 +400,8 @@ def main():
         import petsc4py  # noqa: F401
     except ImportError:
         print("petsc4py not installed: PETSc's solvers are left out (apt-get install python3-petsc4py)")
+        if args.tnnmg_iterations > 0:
+            tnnmg_section(A, q, args.tnnmg_iterations, False)
         return
     if not singular:
         for name, result in petsc_contact_space(A_FF, rhs).items():
@@ -292,6 +409,8 @@ def main():
     G_F = G[free]
     for name, result in petsc_multigrids(G_F, M, G_F.T @ rhs, args.eps, centres, dofs).items():
         print(f"CG on K_F (eps {args.eps:g}, {G_F.shape[1]} unknowns), {name}: {result}")
+    if args.tnnmg_iterations > 0:
+        tnnmg_section(A, q, args.tnnmg_iterations, True)
 
 
 if __name__ == "__main__":
