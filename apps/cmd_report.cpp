@@ -113,7 +113,7 @@ void registerReport(CLI::App& app) {
       ->excludes("--compare")    // its replicas are matched by backend
       ->type_name("DIR");
   sub->add_option("--tables-from", st->tablesFrom,
-                  "tables/ folder of another report (e.g. docs/medium/tables) whose values stand in for the "
+                  "The tables/ folder of another report (e.g. docs/medium/tables) whose values stand in for the "
                   "configurations and backends this sweep has no finished run of, e.g. a study's nscd runs when only "
                   "Bullet's were rerun and settled")
       ->type_name("DIR");
