@@ -208,6 +208,12 @@ std::set<SeriesKey> StudyView::seriesKeys() const {
   return out;
 }
 
+std::size_t StudyView::standInCount(const SeriesKey& sk, const std::string& side) const {
+  return static_cast<std::size_t>(std::count_if(standIns.begin(), standIns.end(), [&](const auto& s) {
+    return s.first.second == side && seriesOf(s.first.first) == sk;
+  }));
+}
+
 bool unequilibrated(const RunRecord& r) {
   const auto it = r.values.find("equilibrium/reached");
   return r.status == RunStatus::Done && it != r.values.end() && it->second && *it->second == 0.0;

@@ -154,6 +154,9 @@ class StudyView {
 
   std::set<SeriesKey> seriesKeys() const;
 
+  // The configurations of series `sk` whose values of `side` stand in from --tables-from.
+  std::size_t standInCount(const SeriesKey& sk, const std::string& side) const;
+
   std::filesystem::path sweepDir;
   SweepSpec spec;
   std::vector<RunRecord> records;

@@ -158,8 +158,8 @@ constexpr double kMinBulkGrains = 300.0;
 constexpr double kMinWidthSpan = 3.0;
 
 // The size of what a family measured: the thinnest bulk region and the fewest bulk grains of any of
-// its configurations (each the mean over its finished runs, all backends), and the confined widths
-// its fits span.
+// its configurations (each the mean over its finished runs, all backends, and the replicas of the
+// values standing in from --tables-from), and the confined widths its fits span.
 struct FamilySize {
   double thickness = std::numeric_limits<double>::quiet_NaN();  ///< [d_L]
   double grains = std::numeric_limits<double>::quiet_NaN();
@@ -174,7 +174,18 @@ FamilySize familySize(const StudyView& study, const SeriesKey& sk) {
     double thickness = 0.0, grains = 0.0;
     int n = 0;
     bool done = false;
-    for (const auto& [side, runs] : bySide)
+    for (const auto& [side, runs] : bySide) {
+      if (study.standIns.count({k, side})) {  // another report's values (--tables-from): its replicas' means
+        done = true;
+        const ReplicaStat lo = study.statOf(k, side, "bulk_region/z_low"),
+                          hi = study.statOf(k, side, "bulk_region/z_high"),
+                          g = study.statOf(k, side, "bulk_region/grains");
+        if (lo.n == 0 || lo.n != hi.n || lo.n != g.n) continue;
+        thickness += static_cast<double>(lo.n) * std::max(0.0, hi.mean - lo.mean);
+        grains += static_cast<double>(lo.n) * g.mean;
+        n += static_cast<int>(lo.n);
+        continue;
+      }
       for (const RunRecord* r : runs) {
         if (r->status != RunStatus::Done) continue;
         done = true;
@@ -187,6 +198,7 @@ FamilySize familySize(const StudyView& study, const SeriesKey& sk) {
         grains += *g->second;
         ++n;
       }
+    }
     if (done && !k.periodic) {
       out.widthMin = out.widths == 0 ? k.width : std::min(out.widthMin, k.width);
       out.widthMax = out.widths == 0 ? k.width : std::max(out.widthMax, k.width);
@@ -290,7 +302,10 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
     for (const std::string& b : study.sides) {
       const RunCount& n = summary.runs.at({sk, b});
       if (n.total == 0) continue;
-      std::vector<std::string> row = {familyName(sk), b, fmt::format("{} / {}", n.equilibrated, n.total),
+      const std::size_t standIns = study.standInCount(sk, b);
+      std::vector<std::string> row = {familyName(sk), b,
+                                      fmt::format("{} / {}{}", n.equilibrated, n.total,
+                                                  standIns ? fmt::format(" ({} widths from tables)", standIns) : ""),
                                       bulkSizeText(size), widthSpanText(size)};
       for (const Column& c : columns) {
         if (c.kind == Column::Value) {
@@ -325,7 +340,10 @@ void addSummarySection(Document& doc, const StudyView& study, const StudySummary
   std::vector<std::string> definitions = {
       "runs at equilibrium: finished runs whose forces and moments balance (equilibrium reached), out of all the "
       "runs of the family and " +
-          study.compared.noun,
+          study.compared.noun +
+          (study.standIns.empty() ? ""
+                                  : "; \"widths from tables\": the widths whose values stand in from another "
+                                    "report's tables (--tables-from), not from runs of this sweep"),
       "bulk d_L / grains: the thickness of the bulk region (3 d_L from the floor and from the free surface) and the "
       "grains in it, the least over the family's configurations (mean over each one's runs)",
       "widths fitted: the confined widths W the fits phi(W) and Z(W) span"};

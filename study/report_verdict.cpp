@@ -113,9 +113,7 @@ std::string runsText(const StudyView& study, const StudySummary& summary, const 
   else if (missing > 0)
     text +=
         fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, side, n.total, are(missing));
-  const auto standIns = std::count_if(study.standIns.begin(), study.standIns.end(), [&](const auto& s) {
-    return s.first.second == side && seriesOf(s.first.first) == sk;
-  });
+  const std::size_t standIns = study.standInCount(sk, side);
   if (standIns > 0)
     text += fmt::format(" {}'s values at {} width{} are another report's tables' (the introduction names them).",
                         side, standIns, standIns == 1 ? "" : "s");

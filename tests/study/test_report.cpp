@@ -845,6 +845,7 @@ TEST_CASE("report: a study rerun in part is judged against the whole study's tab
   CHECK(from.standIns == 5);  // nscd at W = 4, 5, 10, 20 and biperiodic
   CHECK_THAT(fromMd, Catch::Contains("Not run here, 5 configurations' values are those of the tables in "));
   CHECK_THAT(verdictOf(fromMd), Catch::Contains("nscd's values at 5 widths are another report's tables'"));
+  CHECK(rowCells(fromMd, "| MSP: spheres x_S = 0, mu_w = 0 | nscd |")[2] == "0 / 15 (5 widths from tables)");
   // The verdict's rows, fits of nscd's values against Bullet's as stopped and settled, are the
   // whole study's; without the tables nscd's side is missing.
   for (const char* q : {"phi_bulk", "C", "Z_bulk", "C_Z"}) {
