@@ -183,13 +183,18 @@ ReplicaStat StudyView::statOf(const ConfKey& k, const std::string& side, const s
   return replicaStat(v);
 }
 
-const ConfKey* StudyView::sampleOf(const SeriesKey& sk, const std::string& side, const std::string& key,
-                                   bool biperiodicFirst) const {
+const ConfKey* StudyView::sampleOf(const SeriesKey& sk, const std::string& key) const {
   const ConfKey* sample = nullptr;
+  std::size_t sampleSides = 0;
   for (const auto& [k, _] : groups) {
-    if (seriesOf(k) != sk || (k.periodic && !biperiodicFirst) || statOf(k, side, key).n == 0) continue;
-    if (!sample || (k.periodic && !sample->periodic) || (k.periodic == sample->periodic && k.width > sample->width))
-      sample = &k;
+    if (seriesOf(k) != sk) continue;
+    const auto withValue = static_cast<std::size_t>(
+        std::count_if(sides.begin(), sides.end(), [&](const std::string& b) { return statOf(k, b, key).n > 0; }));
+    if (withValue == 0) continue;
+    const bool better = !sample || withValue > sampleSides ||
+                        (withValue == sampleSides && ((k.periodic && !sample->periodic) ||
+                                                      (k.periodic == sample->periodic && k.width > sample->width)));
+    if (better) sample = &k, sampleSides = withValue;
   }
   return sample;
 }

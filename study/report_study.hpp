@@ -143,11 +143,11 @@ class StudyView {
   // stand-in's when that side has none here.
   ReplicaStat statOf(const ConfKey& k, const std::string& side, const std::string& key) const;
 
-  // The sample of series `sk` that a per-family quantity is read from: among the configurations
-  // with a value of `key` for `side`, the widest confined one, or with `biperiodicFirst` the
-  // biperiodic one when there is one; null when none has a value.
-  const ConfKey* sampleOf(const SeriesKey& sk, const std::string& side, const std::string& key,
-                          bool biperiodicFirst) const;
+  // The one sample of series `sk` that a per-family quantity is read from for every side, so that
+  // the sides are compared at the same configuration: among the configurations with a value of
+  // `key` for the most sides, the biperiodic one, else the widest confined one; null when none has
+  // a value. A side without a value there has none for the family.
+  const ConfKey* sampleOf(const SeriesKey& sk, const std::string& key) const;
 
   // A key that is null in every run (nematic order of spheres) does not apply to this study.
   bool applies(const std::string& key) const;

@@ -104,15 +104,19 @@ StudySummary summarize(const StudyView& study, const ConfinementFits& fits, cons
   measured.push_back({"coordination/triple", "Z_t", "pinacoids: triple contacts per grain (face-face)", true});
   measured.push_back({"nematic/bulk", "S", "pinacoids: nematic order Q00^2 of the bulk region (1: aligned)", true});
   for (const Measured& m : measured) {
-    SummaryQuantity q{
-        m.name, std::string(m.definition) + ", on the biperiodic sample (or the widest confined one)", {}};
-    for (const SeriesKey& sk : study.seriesKeys())
-      for (const std::string& b : study.sides) {
-        if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;
-        const ConfKey* sample = study.sampleOf(sk, b, m.key, true);
-        if (!sample) continue;
-        q.values[{sk, b}] = replicaEstimate(study.statOf(*sample, b, m.key), 4);
-      }
+    SummaryQuantity q{m.name,
+                      std::string(m.definition) +
+                          ", on the biperiodic sample (or the widest confined one), the same for every " +
+                          study.compared.noun + " (of the samples most of them have)",
+                      {}};
+    for (const SeriesKey& sk : study.seriesKeys()) {
+      if (m.pinacoidsOnly && sk.shape != static_cast<int>(core::ShapeKind::Pinacoid)) continue;
+      const ConfKey* sample = study.sampleOf(sk, m.key);
+      if (!sample) continue;
+      for (const std::string& b : study.sides)
+        if (const ReplicaStat st = study.statOf(*sample, b, m.key); st.n > 0)
+          q.values[{sk, b}] = replicaEstimate(st, 4);
+    }
     if (!q.values.empty()) out.quantities.push_back(std::move(q));
   }
   const std::string overlap = "interpenetration_percent/exact";

@@ -830,6 +830,39 @@ TEST_CASE("tables/*.csv read back give the mean and n of the runs' result.json")
   fs::remove_all(dir);
 }
 
+TEST_CASE("a family's per-sample quantities are read at one configuration for every backend, the one most have") {
+  // Pinacoids at W = 10 and biperiodic, Bullet's piles settled at W = 10 only: the simple contacts
+  // are 5 a grain at W = 10 and 5.5 in the biperiodic box. The settled series has no biperiodic
+  // value, so all three are read at W = 10, not nscd's and Bullet's in the biperiodic box.
+  const fs::path dir = fs::temp_directory_path() / ("confpack_test_report_sample_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const study::SweepSpec spec = study::parseSweepSpec(json::parse(R"({
+    "name": "sample", "base": { "box": { "length_x": 6, "height": 4 }, "population": { "shape": "pinacoid" } },
+    "biperiodic_width": 12, "vary": { "width": [10, "biperiodic"], "replicas": 3, "backend": ["nscd", "bullet"] } })"));
+  auto runner = [&](const core::RunConfig& cfg, const fs::path& runDir, const compaction::Deposit&,
+                    const study::RunProgressFn&) {
+    json r = syntheticResult(cfg, true);
+    r["coordination"]["simple"] = (cfg.box.periodicY ? 5.5 : 5.0) + kDelta * (static_cast<double>(cfg.seed) - 2.0);
+    std::ofstream(runDir / "result.json") << r.dump();
+    if (cfg.backend == "bullet" && !cfg.box.periodicY) {
+      fs::create_directories(runDir / study::kSettledFolder);
+      std::ofstream(runDir / study::kSettledFolder / "result.json") << r.dump();
+    }
+    return r;
+  };
+  study::SweepOptions o;
+  o.quiet = true;
+  study::runSweep(spec, dir, o, runner, testing::oneGrainDeposit);
+  const std::string verdict = verdictOf(slurp(study::writeReport(dir, dir / "report").markdown));
+  const auto row = rowCells(verdict, "| MPP: pinacoids x_S = 0, mu_w = 0 | Z_s |");
+  REQUIRE(row.size() == 12);
+  CHECK(row[2] == "5 ± 0.0012");  // nscd
+  CHECK(row[3] == "5 ± 0.0012");  // bullet as it stopped
+  CHECK(row[7] == "5 ± 0.0012");  // bullet settled
+  CHECK(row[10] == "no: agree");
+  fs::remove_all(dir);
+}
+
 TEST_CASE("report: a study rerun in part is judged against the whole study's tables (tables-from), as by its runs") {
   const fs::path dir = makeStudy("tables_from", false, false, 0, true);
   const fs::path whole = dir / "report_whole";
