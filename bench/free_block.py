@@ -148,23 +148,31 @@ def petsc_contact_space(A_FF, rhs):
     """CG iterations and wall time (one thread) on A_FF r_F = rhs with PETSc's one-level
     preconditioners, symmetric SOR (what MPRGP's "sgs" applies) and incomplete Cholesky with 0, 1
     and 2 levels of fill, and with smoothed aggregation over the contacts (GAMG)."""
-    from petsc4py import PETSc  # optional: imported only here
-
-    A = A_FF.tocsr()
-    A.sort_indices()
     out = {}
     for name, pc_type, levels in (("symmetric SOR", "sor", None), ("ICC(0)", "icc", 0), ("ICC(1)", "icc", 1),
                                   ("ICC(2)", "icc", 2), ("GAMG (smoothed aggregation over the contacts)", "gamg", None)):
-        mat = PETSc.Mat().createAIJ(size=A.shape, csr=(A.indptr, A.indices, A.data))
-        ksp = PETSc.KSP().create()
-        ksp.setOperators(mat)
-        ksp.setType("cg")
-        pc = ksp.getPC()
-        pc.setType(pc_type)
+        mat, ksp = petsc_solver(A_FF.tocsr(), "cg", pc_type)
         if levels is not None:
-            pc.setFactorLevels(levels)
+            ksp.getPC().setFactorLevels(levels)
         out[name] = timed_solve(ksp, mat, rhs)
     return out
+
+
+def petsc_solver(A, ksp_type, pc_type):
+    """PETSc's matrix of the CSR matrix A and a solver of `ksp_type` on it, preconditioned by `pc_type`
+    ("hypre": BoomerAMG)."""
+    from petsc4py import PETSc  # optional: imported only here
+
+    A.sort_indices()
+    mat = PETSc.Mat().createAIJ(size=A.shape, csr=(A.indptr, A.indices, A.data))
+    ksp = PETSc.KSP().create()
+    ksp.setOperators(mat)
+    ksp.setType(ksp_type)
+    pc = ksp.getPC()
+    pc.setType(pc_type)
+    if pc_type == "hypre":
+        pc.setHYPREType("boomeramg")
+    return mat, ksp
 
 
 def timed_solve(ksp, mat, rhs):
@@ -286,18 +294,9 @@ def exact_correction(A_FF, rhs):
 
 def petsc_vcycle(pc_type):
     """One V-cycle of PETSc's GAMG ("gamg") or hypre's BoomerAMG ("hypre") on A_FF, set up anew."""
-    from petsc4py import PETSc  # optional: imported only here
 
     def apply(A_FF, rhs):
-        A_FF.sort_indices()
-        mat = PETSc.Mat().createAIJ(size=A_FF.shape, csr=(A_FF.indptr, A_FF.indices, A_FF.data))
-        ksp = PETSc.KSP().create()
-        ksp.setOperators(mat)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType(pc_type)
-        if pc_type == "hypre":
-            pc.setHYPREType("boomeramg")
+        mat, ksp = petsc_solver(A_FF, "preonly", pc_type)
         x, b = mat.createVecs()
         b.setArray(rhs)
         ksp.solve(b, x)
