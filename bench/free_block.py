@@ -21,7 +21,8 @@ measures what docs/performance.md, "The preconditioner and the creep's solve", r
     as its near-null space: CG iterations on K_F y = G_F^T (-q_F);
   - the whole problem (every row, its bounds) by truncated nonsmooth Newton multigrid (Graeser and
     Kornhuber): a symmetric projected Gauss-Seidel sweep, then a linear correction on the free rows
-    (none, exact, or one V-cycle of GAMG or BoomerAMG), projected and line-searched; iterations to
+    (none, exact, or one V-cycle of GAMG or BoomerAMG), line-searched along its projection onto the
+    bounds or along itself up to the first bound, whichever lowers the energy more; iterations to
     MPRGP's residual of 1e-10 (its projected gradient in Jacobi-scaled impulses, relative to the
     scaled q).
 
@@ -288,7 +289,8 @@ def tnnmg(A, b, correction, max_iterations):
 
 def exact_correction(A_FF, rhs):
     """(A_FF + 1e-8 I)^-1 rhs by a sparse LU: A_FF's diagonal is 1, so this is A_FF's own solve where
-    it is regular, and the least-change one where it is singular (points of one face contact)."""
+    it is regular. Where it is singular (points of one face contact) the shift gives a solve whose
+    part along the null space is large, and which the step up to the first bound cuts (tnnmg)."""
     return spla.splu((A_FF + 1e-8 * sp.identity(A_FF.shape[0])).tocsc()).solve(rhs)
 
 
@@ -388,10 +390,20 @@ def main():
             print(f"CG, symmetric Gauss-Seidel, the {k} softest modes deflated: {its} iterations"
                   f"{'' if info == 0 else ' (not converged)'}")
 
-    if args.no_petsc:
-        if args.tnnmg_iterations > 0:
-            tnnmg_section(A, q, args.tnnmg_iterations, False)
-        return
+    petsc = not args.no_petsc and petsc_available()
+    if petsc:
+        if not singular:
+            for name, result in petsc_contact_space(A_FF, rhs).items():
+                print(f"CG on A_FF, PETSc, {name}: {result}")
+        G_F = G[free]
+        for name, result in petsc_multigrids(G_F, M, G_F.T @ rhs, args.eps, centres, dofs).items():
+            print(f"CG on K_F (eps {args.eps:g}, {G_F.shape[1]} unknowns), {name}: {result}")
+    if args.tnnmg_iterations > 0:
+        tnnmg_section(A, q, args.tnnmg_iterations, petsc)
+
+
+def petsc_available():
+    """Whether petsc4py imports, said when not."""
     # Debian's python3-petsc4py finds its module through /usr/lib/petsc, a link that only PETSc's
     # development package sets up; without it, look in the real-scalar build's folder.
     sys.path += glob.glob("/usr/lib/petscdir/petsc*/*-real/lib/python3/dist-packages")
@@ -399,18 +411,8 @@ def main():
         import petsc4py  # noqa: F401
     except ImportError:
         print("petsc4py not installed: PETSc's solvers are left out (apt-get install python3-petsc4py)")
-        if args.tnnmg_iterations > 0:
-            tnnmg_section(A, q, args.tnnmg_iterations, False)
-        return
-    if not singular:
-        for name, result in petsc_contact_space(A_FF, rhs).items():
-            print(f"CG on A_FF, PETSc, {name}: {result}")
-    G_F = G[free]
-    for name, result in petsc_multigrids(G_F, M, G_F.T @ rhs, args.eps, centres, dofs).items():
-        print(f"CG on K_F (eps {args.eps:g}, {G_F.shape[1]} unknowns), {name}: {result}")
-    if args.tnnmg_iterations > 0:
-        tnnmg_section(A, q, args.tnnmg_iterations, True)
-
+        return False
+    return True
 
 if __name__ == "__main__":
     main()
