@@ -80,8 +80,7 @@ bool rowIs(const CsvTable& t, std::size_t i, const ConfKey& k, const std::vector
 }  // namespace
 
 void checkTablesSource(const fs::path& dir) {
-  if (!fs::is_directory(dir))
-    throw std::invalid_argument(fmt::format("--tables-from {}: not a folder", dir.string()));
+  if (!fs::is_directory(dir)) throw std::invalid_argument(fmt::format("--tables-from {}: not a folder", dir.string()));
   if (reportTables(dir).empty())
     throw std::invalid_argument(
         fmt::format("--tables-from {}: no report table in it (a CSV of confpack report's tables/ folder, its "

@@ -115,8 +115,8 @@ std::string runsText(const StudyView& study, const StudySummary& summary, const 
         fmt::format(" {} of {}'s {} runs {} missing (not run or interrupted).", missing, side, n.total, are(missing));
   const std::size_t standIns = study.standInCount(sk, side);
   if (standIns > 0)
-    text += fmt::format(" {}'s values at {} width{} are another report's tables' (the introduction names them).",
-                        side, standIns, standIns == 1 ? "" : "s");
+    text += fmt::format(" {}'s values at {} width{} are another report's tables' (the introduction names them).", side,
+                        standIns, standIns == 1 ? "" : "s");
   return text;
 }
 

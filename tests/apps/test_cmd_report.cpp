@@ -275,7 +275,9 @@ TEST_CASE(
       Catch::Contains("confpack report: --lambda-from same: no family's replicas at its lambda width, not used\n"));
 }
 
-TEST_CASE("report --tables-from: a folder without report tables is refused, exit 2, nothing written, and one unused is said") {
+TEST_CASE(
+    "report --tables-from: a folder without report tables is refused, exit 2, nothing written, and one unused is "
+    "said") {
   ConfpackSession s("cmd_report_tables_from");
   makeSweep(s.dir / "sw");
   fs::create_directories(s.dir / "empty");

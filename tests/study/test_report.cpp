@@ -895,7 +895,8 @@ TEST_CASE("report: a study rerun in part is judged against the whole study's tab
     REQUIRE(a.columns == b.columns);
     REQUIRE(a.rows.size() == b.rows.size());
     for (const char* column : {"nscd_mean", "nscd_std", "nscd_n"}) {
-      const std::size_t c = static_cast<std::size_t>(std::find(a.columns.begin(), a.columns.end(), column) - a.columns.begin());
+      const std::size_t c =
+          static_cast<std::size_t>(std::find(a.columns.begin(), a.columns.end(), column) - a.columns.begin());
       REQUIRE(c < a.columns.size());
       for (std::size_t i = 0; i < a.rows.size(); ++i) CHECK(a.text[i][c] == b.text[i][c]);
     }
