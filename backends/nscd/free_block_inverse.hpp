@@ -8,7 +8,7 @@
 // where K_F is a body-space matrix (3 unknowns a grain for spheres, 6 otherwise) with a block per
 // grain and per touching pair: a contact network's stiffness, which CHOLMOD factors with little
 // fill, where A_FF itself (a row per contact point, coupled to every row on its two grains) fills
-// in badly (docs/performance.md, "What we tried").
+// in badly (a sparse LDL^T of it filled about n^2).
 // Why an exact inverse and not a multigrid: near jamming the soft modes of A_FF form a continuum
 // with no gap (a 1,648-sphere creep block: lambda_1 = 1.2e-4, lambda_100 = 4.3e-3, ||A|| = 3.1,
 // each mode spread over 2 to 13 % of the rows), which neither Gauss-Seidel sweeps (545 conjugate

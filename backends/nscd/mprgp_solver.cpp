@@ -329,7 +329,7 @@ double MprgpSolver::precondition(const ContactRows& rows, std::size_t bodyCount,
   // The forward sweep reads row k's own y_k and g_k only, so the conjugate gradient step can be
   // made row by row as the sweep reaches it (and z_k zeroed there), with the same values as a
   // pass of its own: one pass over y, g, p, A p and z fewer per iteration (0.97x the wall time of
-  // a whole 8,000-sphere run, docs/performance.md, "What we tried").
+  // a whole 8,000-sphere run when it was written).
   const bool step = alphaCg.has_value();
   const double alpha = alphaCg.value_or(0.0);
   // Both sweeps over the free rows; `visit(k)` updates unknown k. The rows of the two blocks
