@@ -197,30 +197,23 @@ def petsc_multigrids(G_F, M, rhs, eps, centres, dofs):
     from petsc4py import PETSc  # optional: imported only here
 
     K = (eps * M + G_F.T @ G_F).tocsr()
-    K.sort_indices()
     out = {}
     for name, pc_type, rigid in (("symmetric SOR (one-level)", "sor", False), ("GAMG", "gamg", False),
                                  ("GAMG, rigid-body near-null space", "gamg", True), ("BoomerAMG", "hypre", False)):
-        mat = PETSc.Mat().createAIJ(size=K.shape, csr=(K.indptr, K.indices, K.data))
+        if rigid and dofs != 3:
+            out[name] = "only for bodies that do not turn"
+            continue
+        try:
+            mat, ksp = petsc_solver(K, "cg", pc_type)
+        except PETSc.Error:  # a PETSc built without hypre
+            out[name] = "not in this PETSc"
+            continue
+        # Read by the preconditioner when it is set up (timed_solve), not before.
         mat.setBlockSize(dofs)
         if rigid:
-            if dofs != 3:
-                out[name] = "only for bodies that do not turn"
-                continue
             coords = PETSc.Vec().createWithArray(np.ascontiguousarray(centres.reshape(-1)))
             coords.setBlockSize(3)
             mat.setNearNullSpace(PETSc.NullSpace().createRigidBody(coords))
-        ksp = PETSc.KSP().create()
-        ksp.setOperators(mat)
-        ksp.setType("cg")
-        pc = ksp.getPC()
-        pc.setType(pc_type)
-        if pc_type == "hypre":
-            try:
-                pc.setHYPREType("boomeramg")
-            except PETSc.Error:
-                out[name] = "not in this PETSc"
-                continue
         out[name] = timed_solve(ksp, mat, rhs)
     return out
 
