@@ -1,8 +1,8 @@
 #pragma once
-// How far the grains moved between two packings of the same grains (docs/model.md, "Settling"):
-// what a pile left by one backend had to do to reach rest under another. The displacement of a
-// grain is that of its centre, |x_after - x_before| taken as the minimum image in the periodic
-// directions [d_L]; rotations are not counted.
+// How far the grains moved between two packings of the same grains (docs/model.md, "Settling a
+// pile from another backend"): what a pile left by one backend had to do to reach rest under
+// another. The displacement of a grain is that of its centre, |x_after - x_before| taken as the
+// minimum image in the periodic directions [d_L]; rotations are not counted.
 #include <vector>
 
 #include "core/box.hpp"

@@ -25,7 +25,7 @@ namespace confpack::compaction {
 struct Checkpointing {
   std::filesystem::path file;  ///< empty: no checkpoint
   /// 5 min: at most that much work lost to a machine that dies, for a save of about 1 MB and
-  /// 10 to 20 ms per 1,650 spheres (docs/performance.md, "Checkpoints").
+  /// 10 to 20 ms per 1,650 spheres (measured).
   double everySeconds = 300.0;
 };
 

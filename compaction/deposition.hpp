@@ -34,7 +34,8 @@ struct Deposit {
   /// The packing file the grains were read from (`confpack run --from`); empty for a deposit.
   std::string source;
   /// That packing's contacts with their forces, as the backend that made it left them: what the
-  /// settle record measures "before" (docs/model.md, "Settling"). None for a deposit.
+  /// settle record measures "before" (docs/model.md, "Settling a pile from another backend").
+  /// None for a deposit.
   std::optional<std::vector<core::Contact>> contacts;
 };
 

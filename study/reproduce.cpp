@@ -83,10 +83,10 @@ json reproductionSweep(std::string_view scale) {
     // 1e-8), the fall bounded at 300 t0, and the finisher only ends it (a last rattler, the last
     // balance of forces): the finisher cannot do the creep of a large pile, and the dynamic
     // protocol alone leaves some piles not at rest at 300 t0 (docs/performance.md, "The medium
-    // scale"). The finisher stops once a step moves no grain more than 1e-5 d instead of the
-    // default 1e-6: still a force imbalance tens of times below the equilibrium bound, and half
-    // a pinacoid pile's run time for the same packing (docs/performance.md, "The medium scale's
-    // settle tolerance").
+    // scale: how its piles reach rest"). The finisher stops once a step moves no grain more than
+    // 1e-5 d instead of the default 1e-6: still a force imbalance tens of times below the
+    // equilibrium bound, and half a pinacoid pile's run time for the same packing (docs/model.md,
+    // "Quasi-static compaction").
     // Bullet, which has no finisher, stops at 20 t0 and is reported as not at rest.
     json sweep = studySweep(
         "medium",

@@ -34,11 +34,11 @@ void checkRunCells(const core::RunConfig& cfg, double grains);
 nlohmann::json makeResult(const core::RunConfig& cfg, const compaction::Deposit& deposit,
                           const compaction::CompactionOutcome& out, const analysis::Analysis& measured);
 
-/// result.json's settle block of a run from a packing (`run --from`, docs/model.md, "Settling"):
-/// how far its grains moved to reach rest (largest and mean centre displacement [d_L]), in how
-/// many steps, and phi of the bulk and Z by type of the packing as it came (`before`, with the
-/// forces of the backend that made it: `from`'s contacts) and as it ended (`after`), measured as
-/// the analysis measures them.
+/// result.json's settle block of a run from a packing (`run --from`, docs/model.md, "Settling a
+/// pile from another backend"): how far its grains moved to reach rest (largest and mean centre
+/// displacement [d_L]), in how many steps, and phi of the bulk and Z by type of the packing as it
+/// came (`before`, with the forces of the backend that made it: `from`'s contacts) and as it ended
+/// (`after`), measured as the analysis measures them.
 nlohmann::json settleRecord(const core::RunConfig& cfg, const compaction::Deposit& from,
                             const compaction::CompactionOutcome& out);
 

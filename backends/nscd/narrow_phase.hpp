@@ -95,8 +95,7 @@ class NarrowPhase {
 
   // Each pinacoid in world coordinates for the step collideAll is detecting: a grain has some ten
   // candidate pairs in a pile, and placing its polyhedron for each of them (vertices, normals,
-  // edge topology) took a tenth of a pinacoid pile's fall (docs/performance.md, "What we
-  // tried").
+  // edge topology) took a tenth of a pinacoid pile's fall (measured).
   std::vector<collision::WorldPolyhedron> world_;
   // Contacts found by one thread (thread 0 writes its pair contacts straight into `out`).
   struct ThreadContacts {

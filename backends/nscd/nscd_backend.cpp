@@ -348,7 +348,8 @@ class NscdBackend final : public core::ContactBackend {
     // Capping each grain alone would leave a capped grain's neighbours their whole move: overlaps
     // of about the trust radius at the next step (median 8.7e-3 d against 1e-3 d on a 1,064-pinacoid
     // pile), moves that reverse, metric weights without bound and a pile that never settles; scaled
-    // whole, that pile is at rest in 479 steps (docs/performance.md, "The medium scale").
+    // whole, that pile is at rest in 479 steps (docs/performance.md, "The medium scale: how its
+    // piles reach rest").
     // The grain that set the scale gets heavier (FinisherState::updateMetricWeight), so that one grain still
     // rearranging does not hold the whole pile to its pace for long.
     double largest = 0.0;

@@ -95,7 +95,7 @@ struct NscdSettings {
   /// preconditioned on the free set (mprgp_solver.cpp). "sgs" applies one forward and one
   /// backward Gauss-Seidel sweep over the free rows per iteration, which about doubles the cost of
   /// an iteration and cuts the iterations 2.5 to 3.5 times: a step's solve takes about a third
-  /// less time (docs/performance.md, "The preconditioner").
+  /// less time (docs/performance.md, "The preconditioner and the creep's solve").
   /// "cholesky" applies (A_FF + eps I)^-1 exactly through a sparse Cholesky factorisation of the
   /// body-space matrix eps M + G_F^T G_F (free_block_inverse.hpp), refactored when the free set
   /// changes: 6 to 12 iterations where "sgs" needs hundreds near jamming, for a factorisation
