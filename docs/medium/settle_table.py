@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""The per-width tables of docs/medium.md, "Bullet's piles brought to rest".
+
+    python3 docs/medium/settle_table.py SWEEP REPORT FAMILY [X_S]
+
+SWEEP is a settle sweep's folder (`settle_with`), REPORT the folder `confpack report SWEEP`
+wrote; FAMILY is MSP, BSP or MPP and X_S the percentage of small grains (default 0). Prints one
+Markdown row a width: phi and Z of the bulk region, nscd, Bullet as it stopped and Bullet at rest,
+each the mean ± standard error (std / sqrt(n)) of REPORT's tables/solid_fraction.csv and
+coordination.csv, and the grains' moves to rest: the mean over the settled seeds of each settle's
+mean displacement, and the largest displacement of any of them (each finished run's
+settled/result.json, `settle`) [d_L]. Standard library only.
+"""
+import csv
+import json
+import math
+import pathlib
+import sys
+
+HEADER = ("| W | phi, nscd | phi, Bullet as it stopped | phi, Bullet at rest | Z, nscd "
+          "| Z, Bullet as it stopped | Z, Bullet at rest "
+          "| grains moved to rest, mean / largest (d_L) |")
+SIDES = ("nscd", "bullet", "bullet_settled")
+
+
+def table_rows(path, key, family, xs):
+    """{(W, biperiodic): row} of one report table's rows for `key`, `family` and `xs`."""
+    rows = {}
+    with open(path, newline="") as f:
+        for row in csv.DictReader(f):
+            if row["key"] == key and row["family"] == family and float(row["x_S"]) == xs and \
+                    float(row["mu_w"]) == 0.0:
+                rows[(float(row["W"]), row["biperiodic"] == "1")] = row
+    return rows
+
+
+def stat(row, side, digits):
+    n = int(row[side + "_n"] or 0)
+    if n == 0:
+        return "-"
+    mean, std = float(row[side + "_mean"]), float(row[side + "_std"] or 0.0)
+    return f"{mean:.{digits}f} ± {std / math.sqrt(n):.{digits}f}"
+
+
+def settle_moves(sweep, family, xs):
+    """{(W, biperiodic): (mean displacement, largest displacement)} over the settled Bullet runs."""
+    table = json.loads((sweep / "sweep.json").read_text())
+    moves = {}
+    for run in table["runs"]:
+        cfg = run["config"]
+        if cfg["backend"] != "bullet" or not run["label"].startswith(f"{family} xS={xs:g} "):
+            continue
+        if cfg["walls"]["friction"] != 0.0:
+            continue
+        settled = sweep / "runs" / run["name"] / "settled" / "result.json"
+        if not (sweep / "runs" / run["name"] / "done.json").exists() or not settled.exists():
+            continue
+        settle = json.loads(settled.read_text())["settle"]
+        where = (cfg["box"]["width"], bool(cfg["box"]["periodic_y"]))
+        moves.setdefault(where, []).append((settle["mean_displacement"], settle["max_displacement"]))
+    return {w: (sum(m for m, _ in v) / len(v), max(x for _, x in v)) for w, v in moves.items()}
+
+
+def main(argv):
+    if len(argv) not in (4, 5):
+        sys.exit(__doc__.strip().splitlines()[2].strip())
+    sweep, report, family = pathlib.Path(argv[1]), pathlib.Path(argv[2]), argv[3]
+    xs = float(argv[4]) if len(argv) == 5 else 0.0
+    phi = table_rows(report / "tables" / "solid_fraction.csv", "solid_fraction", family, xs)
+    z = table_rows(report / "tables" / "coordination.csv", "coordination/Z", family, xs)
+    moves = settle_moves(sweep, family, xs)
+    print(HEADER)
+    print("|---" * 8 + "|")
+    for where in sorted(phi, key=lambda w: (w[1], w[0])):
+        width = "biperiodic" if where[1] else f"{where[0]:g}"
+        moved = moves.get(where)
+        cells = [width] + [stat(phi[where], s, 4) for s in SIDES] + [stat(z[where], s, 3) for s in SIDES]
+        cells.append(f"{moved[0]:.3f} / {moved[1]:.2f}" if moved else "-")
+        print("| " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main(sys.argv)
