@@ -3,13 +3,13 @@
 
     python3 docs/medium/settle_table.py SWEEP REPORT FAMILY [X_S]
 
-SWEEP is a settle sweep's folder (`settle_with`), REPORT the folder `confpack report SWEEP`
-wrote; FAMILY is MSP, BSP or MPP and X_S the percentage of small grains (default 0). Prints one
-Markdown row a width: phi and Z of the bulk region, nscd, Bullet as it stopped and Bullet at rest,
-each the mean ± standard error (std / sqrt(n)) of REPORT's tables/solid_fraction.csv and
-coordination.csv, and the grains' moves to rest: the mean over the settled seeds of each settle's
-mean displacement, and the largest displacement of any of them (each finished run's
-settled/result.json, `settle`) [d_L]. Standard library only.
+SWEEP is a settle sweep's folder (`settle_with`), REPORT the folder `confpack report SWEEP` wrote;
+FAMILY is MSP, BSP or MPP and X_S the percentage of small grains (default 0). Prints one Markdown
+row a width: phi and Z of the bulk region, nscd, Bullet as it stopped and Bullet at rest, each the
+mean ± standard error (std / sqrt(n); a lone seed's value alone) of REPORT's
+tables/solid_fraction.csv and coordination.csv, and the grains' moves to rest: the mean over the
+settled seeds of each settle's mean displacement, and the largest displacement of any of them (each
+finished run's settled/result.json, `settle`) [d_L]. Standard library only.
 """
 import csv
 import json
@@ -38,8 +38,10 @@ def stat(row, side, digits):
     n = int(row[side + "_n"] or 0)
     if n == 0:
         return "-"
-    mean, std = float(row[side + "_mean"]), float(row[side + "_std"] or 0.0)
-    return f"{mean:.{digits}f} ± {std / math.sqrt(n):.{digits}f}"
+    mean = float(row[side + "_mean"])
+    if n == 1:
+        return f"{mean:.{digits}f} (1 seed)"
+    return f"{mean:.{digits}f} ± {float(row[side + '_std']) / math.sqrt(n):.{digits}f}"
 
 
 def settle_moves(sweep, family, xs):
@@ -80,4 +82,7 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    main(sys.argv)
+    try:
+        main(sys.argv)
+    except (OSError, KeyError, ValueError, json.JSONDecodeError) as e:
+        sys.exit(f"settle_table.py: {e} (SWEEP and REPORT: a settle sweep's folder and its report's)")
