@@ -5,11 +5,11 @@
 
 SWEEP is a settle sweep's folder (`settle_with`), REPORT the folder `confpack report SWEEP` wrote;
 FAMILY is MSP, BSP or MPP and X_S the percentage of small grains (default 0). Prints one Markdown
-row a width: phi and Z of the bulk region, nscd, Bullet as it stopped and Bullet at rest, each the
-mean ± standard error (std / sqrt(n); a lone seed's value alone) of REPORT's
-tables/solid_fraction.csv and coordination.csv, and the grains' moves to rest: the mean over the
-settled seeds of each settle's mean displacement, and the largest displacement of any of them (each
-finished run's settled/result.json, `settle`) [d_L]. Standard library only.
+row a width (side walls without friction): phi and Z of the bulk region, nscd, Bullet as it stopped
+and Bullet at rest, each the mean ± standard error (std / sqrt(n); a lone seed's value alone) of
+REPORT's tables/solid_fraction.csv and coordination.csv, and the grains' moves to rest: the mean
+over the settled seeds of each settle's mean displacement, and the largest displacement of any of
+them (each finished run's settled/result.json, `settle`) [d_L]. Standard library only.
 """
 import csv
 import json
