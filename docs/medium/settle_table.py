@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The per-width tables of docs/medium.md, "Bullet's piles brought to rest".
 
-    python3 docs/medium/settle_table.py SWEEP REPORT FAMILY [X_S]
+    PYTHONPATH=build/python python3 docs/medium/settle_table.py SWEEP REPORT FAMILY [X_S]
 
 SWEEP is a settle sweep's folder (`settle_with`), REPORT the folder `confpack report SWEEP` wrote;
 FAMILY is MSP, BSP or MPP and X_S the percentage of small grains (default 0). Prints one Markdown
@@ -9,13 +9,14 @@ row a width (side walls without friction): phi and Z of the bulk region, nscd, B
 and Bullet at rest, each the mean ± standard error (std / sqrt(n); a lone seed's value alone) of
 REPORT's tables/solid_fraction.csv and coordination.csv, and the grains' moves to rest: the mean
 over the settled seeds of each settle's mean displacement, and the largest displacement of any of
-them (each finished run's settled/result.json, `settle`) [d_L]. Standard library only.
+them (the sweep's `bullet_settled` runs as confpack.study.load reads them, docs/python.md) [d_L].
 """
 import csv
-import json
 import math
 import pathlib
 import sys
+
+import confpack.study
 
 HEADER = ("| W | phi, nscd | phi, Bullet as it stopped | phi, Bullet at rest | Z, nscd "
           "| Z, Bullet as it stopped | Z, Bullet at rest "
@@ -46,26 +47,18 @@ def stat(row, side, digits):
 
 def settle_moves(sweep, family, xs):
     """{(W, biperiodic): (mean displacement, largest displacement)} over the settled Bullet runs."""
-    table = json.loads((sweep / "sweep.json").read_text())
     moves = {}
-    for run in table["runs"]:
-        cfg = run["config"]
-        if cfg["backend"] != "bullet" or not run["label"].startswith(f"{family} xS={xs:g} "):
-            continue
-        if cfg["walls"]["friction"] != 0.0:
-            continue
-        settled = sweep / "runs" / run["name"] / "settled" / "result.json"
-        if not (sweep / "runs" / run["name"] / "done.json").exists() or not settled.exists():
-            continue
-        settle = json.loads(settled.read_text())["settle"]
-        where = (cfg["box"]["width"], bool(cfg["box"]["periodic_y"]))
-        moves.setdefault(where, []).append((settle["mean_displacement"], settle["max_displacement"]))
+    for run in confpack.study.load(sweep):
+        if run["backend"] == "bullet_settled" and run["status"] == "done" and run["family"] == family \
+                and abs(100 * run["x_S"] - xs) < 1e-9 and run["mu_w"] == 0.0:
+            moves.setdefault((run["W"], run["biperiodic"]), []).append(
+                (run["settle/mean_displacement"], run["settle/max_displacement"]))
     return {w: (sum(m for m, _ in v) / len(v), max(x for _, x in v)) for w, v in moves.items()}
 
 
 def main(argv):
     if len(argv) not in (4, 5):
-        sys.exit(__doc__.strip().splitlines()[2].strip())
+        sys.exit("usage: " + __doc__.strip().splitlines()[2].strip())
     sweep, report, family = pathlib.Path(argv[1]), pathlib.Path(argv[2]), argv[3]
     xs = float(argv[4]) if len(argv) == 5 else 0.0
     phi = table_rows(report / "tables" / "solid_fraction.csv", "solid_fraction", family, xs)
@@ -84,5 +77,5 @@ def main(argv):
 if __name__ == "__main__":
     try:
         main(sys.argv)
-    except (OSError, KeyError, ValueError, json.JSONDecodeError) as e:
+    except (OSError, KeyError, ValueError, RuntimeError) as e:
         sys.exit(f"settle_table.py: {e} (SWEEP and REPORT: a settle sweep's folder and its report's)")
