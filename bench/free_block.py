@@ -407,5 +407,6 @@ def petsc_available():
         return False
     return True
 
+
 if __name__ == "__main__":
     main()
