@@ -10,6 +10,7 @@ and Bullet at rest, each the mean ± standard error (std / sqrt(n); a lone seed'
 REPORT's tables/solid_fraction.csv and coordination.csv, and the grains' moves to rest: the mean
 over the settled seeds of each settle's mean displacement, and the largest displacement of any of
 them (the sweep's `bullet_settled` runs as confpack.study.load reads them, docs/python.md) [d_L].
+A width with fewer settled Bullet seeds than nscd's says how many.
 """
 import csv
 import math
@@ -68,6 +69,9 @@ def main(argv):
     print("|---" * 8 + "|")
     for where in sorted(phi, key=lambda w: (w[1], w[0])):
         width = "biperiodic" if where[1] else f"{where[0]:g}"
+        settled, ran = (int(phi[where][s + "_n"] or 0) for s in ("bullet_settled", "nscd"))
+        if 0 < settled < ran:  # a width whose settles are not all done yet
+            width += f" (Bullet: {settled} seed{'s' if settled > 1 else ''})"
         moved = moves.get(where)
         cells = [width] + [stat(phi[where], s, 4) for s in SIDES] + [stat(z[where], s, 3) for s in SIDES]
         cells.append(f"{moved[0]:.3f} / {moved[1]:.2f}" if moved else "-")
