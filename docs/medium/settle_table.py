@@ -36,8 +36,13 @@ def table_rows(path, key, family, xs):
     return rows
 
 
+def seeds(row, side):
+    """How many seeds a report table's row averages for `side` (0 when it has none)."""
+    return int(row[side + "_n"] or 0)
+
+
 def stat(row, side, digits):
-    n = int(row[side + "_n"] or 0)
+    n = seeds(row, side)
     if n == 0:
         return "-"
     mean = float(row[side + "_mean"])
@@ -69,8 +74,9 @@ def main(argv):
     print("|---" * 8 + "|")
     for where in sorted(phi, key=lambda w: (w[1], w[0])):
         width = "biperiodic" if where[1] else f"{where[0]:g}"
-        settled, ran = (int(phi[where][s + "_n"] or 0) for s in ("bullet_settled", "nscd"))
-        if 0 < settled < ran:  # a width whose settles are not all done yet
+        # A Bullet run and its settle finish as one sweep run, so both Bullet columns have `settled`.
+        settled, ran = seeds(phi[where], "bullet_settled"), seeds(phi[where], "nscd")
+        if 0 < settled < ran:
             width += f" (Bullet: {settled} seed{'s' if settled > 1 else ''})"
         moved = moves.get(where)
         cells = [width] + [stat(phi[where], s, 4) for s in SIDES] + [stat(z[where], s, 3) for s in SIDES]
