@@ -59,28 +59,32 @@ def printed_rows(sweep, report):
     return [[cell.strip() for cell in line.strip("|").split("|")] for line in lines[2:]]
 
 
-def expected_cell(values, digits):
-    if len(values) == 1:
-        return f"{values[0]:.{digits}f} (1 seed)"
-    error = statistics.stdev(values) / math.sqrt(len(values))
-    return f"{statistics.mean(values):.{digits}f} ± {error:.{digits}f}"
+def values(runs, backend, key):
+    """`key` of each of `runs` with this backend, in the order confpack.study.load gives them."""
+    return [r[key] for r in runs if r["backend"] == backend]
+
+
+def expected_cell(numbers, digits):
+    if len(numbers) == 1:
+        return f"{numbers[0]:.{digits}f} (1 seed)"
+    error = statistics.stdev(numbers) / math.sqrt(len(numbers))
+    return f"{statistics.mean(numbers):.{digits}f} ± {error:.{digits}f}"
 
 
 def test_cells_are_the_seeds_mean_and_standard_error(settle_sweep):
     sweep, report = settle_sweep
     rows = printed_rows(sweep, report)
     runs = [r for r in confpack.study.load(sweep) if r["status"] == "done"]
+    sides = ("nscd", "bullet", "bullet_settled")
     assert [row[0] for row in rows] == ["3 (Bullet: 1 seed)", "4"]
     for row, width in zip(rows, (3, 4)):
-        def values(backend, key):
-            return [r[key] for r in runs if r["W"] == width and r["backend"] == backend]
-        sides = ("nscd", "bullet", "bullet_settled")
-        assert len(values("nscd", "solid_fraction")) == 2
-        assert len(values("bullet_settled", "solid_fraction")) == (1 if width == 3 else 2)
-        assert row[1:4] == [expected_cell(values(s, "solid_fraction"), 4) for s in sides]
-        assert row[4:7] == [expected_cell(values(s, "coordination/Z"), 3) for s in sides]
-        means = values("bullet_settled", "settle/mean_displacement")
-        largest = values("bullet_settled", "settle/max_displacement")
+        mine = [r for r in runs if r["W"] == width]
+        assert len(values(mine, "nscd", "solid_fraction")) == 2
+        assert len(values(mine, "bullet_settled", "solid_fraction")) == (1 if width == 3 else 2)
+        assert row[1:4] == [expected_cell(values(mine, s, "solid_fraction"), 4) for s in sides]
+        assert row[4:7] == [expected_cell(values(mine, s, "coordination/Z"), 3) for s in sides]
+        means = values(mine, "bullet_settled", "settle/mean_displacement")
+        largest = values(mine, "bullet_settled", "settle/max_displacement")
         assert all(m > 0 for m in means)  # Bullet's piles, stopped at 2 t0, were not at rest
         assert row[7] == f"{statistics.mean(means):.3f} / {max(largest):.2f}"
 
