@@ -51,15 +51,21 @@ def stat(row, side, digits):
     return f"{mean:.{digits}f} ± {float(row[side + '_std']) / math.sqrt(n):.{digits}f}"
 
 
+def family_runs(sweep, backend, family, xs):
+    """{(W, biperiodic): [run]}: the sweep's runs of `backend` that are done, of `family` and `xs`,
+    side walls without friction (as confpack.study.load reads them)."""
+    runs = {}
+    for run in confpack.study.load(sweep):
+        if run["backend"] == backend and run["status"] == "done" and run["family"] == family \
+                and abs(100 * run["x_S"] - xs) < 1e-9 and run["mu_w"] == 0.0:
+            runs.setdefault((run["W"], run["biperiodic"]), []).append(run)
+    return runs
+
+
 def settle_moves(sweep, family, xs):
     """{(W, biperiodic): (mean displacement, largest displacement)} over the settled Bullet runs."""
-    moves = {}
-    for run in confpack.study.load(sweep):
-        if run["backend"] == "bullet_settled" and run["status"] == "done" and run["family"] == family \
-                and abs(100 * run["x_S"] - xs) < 1e-9 and run["mu_w"] == 0.0:
-            moves.setdefault((run["W"], run["biperiodic"]), []).append(
-                (run["settle/mean_displacement"], run["settle/max_displacement"]))
-    return {w: (sum(m for m, _ in v) / len(v), max(x for _, x in v)) for w, v in moves.items()}
+    return {w: (sum(r["settle/mean_displacement"] for r in v) / len(v), max(r["settle/max_displacement"] for r in v))
+            for w, v in family_runs(sweep, "bullet_settled", family, xs).items()}
 
 
 def main(argv):
