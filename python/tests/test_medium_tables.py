@@ -22,7 +22,6 @@ import confpack.study
 from conftest import run_cli
 
 SCRIPTS = pathlib.Path(__file__).resolve().parents[2] / "docs" / "medium"
-SCRIPT = SCRIPTS / "settle_table.py"
 
 SWEEP = {
     "format": "confpack-sweep", "version": 1, "name": "tiny-settle",
@@ -100,14 +99,16 @@ def test_cells_are_the_seeds_mean_and_standard_error(settle_sweep):
         assert row[7] == f"{statistics.mean(means):.3f} / {max(largest):.2f}"
 
 
-def test_a_folder_without_a_report_is_one_message(tmp_path):
-    # As docs/medium.md runs it: one line on stderr, a non-zero exit, nothing on stdout.
+@pytest.mark.parametrize("name, reports", [("settle_table", 1), ("equal_time_table", 2)])
+def test_a_folder_without_a_report_is_one_message(tmp_path, name, reports):
+    # As docs/medium.md runs them: one line on stderr, a non-zero exit, nothing on stdout.
     env = dict(os.environ, PYTHONPATH=str(pathlib.Path(confpack.__file__).resolve().parents[1]))
-    done = subprocess.run([sys.executable, str(SCRIPT), str(tmp_path), str(tmp_path / "report"), "MSP"],
+    args = [str(tmp_path)] + [str(tmp_path / "report")] * reports + ["MSP"]
+    done = subprocess.run([sys.executable, str(SCRIPTS / f"{name}.py"), *args],
                           capture_output=True, text=True, env=env)
     assert done.returncode != 0 and done.stdout == ""
     assert done.stderr.strip().count("\n") == 0
-    assert done.stderr.startswith("settle_table.py: ") and "solid_fraction.csv" in done.stderr
+    assert done.stderr.startswith(f"{name}.py: ") and "solid_fraction.csv" in done.stderr
 
 
 # nscd's fall ends at 3 t0 (then its finisher), so Bullet's runs here have 3 t0 where the settle
