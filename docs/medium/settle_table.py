@@ -37,8 +37,9 @@ def table_rows(path, key, family, xs):
 
 
 def seeds(row, side):
-    """How many seeds a report table's row averages for `side` (0 when it has none)."""
-    return int(row[side + "_n"] or 0)
+    """How many seeds a report table's row averages for `side` (0 when it has none, or when the
+    table has no such series, as a study without `settle_with` has no bullet_settled)."""
+    return int(row.get(side + "_n") or 0)
 
 
 def stat(row, side, digits):

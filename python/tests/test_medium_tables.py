@@ -159,3 +159,19 @@ def test_equal_time_cells_are_each_sweeps_own_runs(equal_time_sweep, settle_swee
         assert own and all(t == pytest.approx(2, abs=0.01) for t in own)
         spans.append(f"{width}: 3")
     assert times == "Bullet's time at nscd's [t0]: " + "; ".join(spans)
+
+
+def test_equal_time_without_a_settle_leaves_the_at_rest_column_empty(equal_time_sweep, settle_sweep):
+    # SETTLED may be a report without bullet_settled (the study's own tables, docs/medium): Bullet at
+    # its own limit is read from it and the at-rest column says it has nothing.
+    sweep, report = equal_time_sweep
+    _, settled_report = settle_sweep
+    from_full = printed_lines("equal_time_table", sweep, report, settled_report, "MSP")
+    # The equal-time report has no bullet_settled: as SETTLED it gives '-' at rest, and its own
+    # Bullet runs (at nscd's time) in the 20 t0 column.
+    lines = printed_lines("equal_time_table", sweep, report, report, "MSP")
+    for line, full in zip(lines[:-1], from_full[:-1]):
+        row, full_row = cells(line), cells(full)
+        assert row[7] == "-" and full_row[7] != "-"
+        assert row[2] == row[3] and row[5] == row[6]
+        assert row[1] == full_row[1] and row[3:5] == full_row[3:5] and row[8] == full_row[8]
