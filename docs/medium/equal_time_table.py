@@ -6,14 +6,13 @@
 EQUAL is an equal-time sweep's folder (`equal_time`), REPORT the folder `confpack report EQUAL`
 wrote, SETTLED the report folder of the settle sweep of the same family (`settle_with`), whose
 Bullet runs stopped at their own time limit and were then brought to rest (or any folder whose
-tables/ hold the same family's Bullet runs at their own limit, e.g. docs/medium for the study's
-own: the at-rest column is then '-'); FAMILY is MSP, BSP or
-MPP and X_S the percentage of small grains (default 0). Prints one Markdown row a width (side
-walls without friction): phi and Z of the bulk region of nscd (REPORT), of Bullet at its time limit
-(SETTLED), of Bullet at nscd's time (REPORT) and Z of Bullet brought to rest (SETTLED), each the
-mean ± standard error over the seeds, as settle_table.py gives them, then the largest force ratio
-of Bullet's runs at nscd's time, lowest to highest. A last line gives the time each width's Bullet
-runs were given [t0], lowest to highest.
+tables/ hold the same family's Bullet runs at their own limit, e.g. docs/medium for the study's own:
+the at-rest column is then '-'); FAMILY is MSP, BSP or MPP and X_S the percentage of small grains
+(default 0). Prints one Markdown row a width (side walls without friction): phi and Z of the bulk
+region of nscd (REPORT), of Bullet at its time limit (SETTLED), of Bullet at nscd's time (REPORT)
+and Z of Bullet brought to rest (SETTLED), each the mean ± standard error over the seeds, as
+settle_table.py gives them, then the largest force ratio of Bullet's runs at nscd's time, lowest to
+highest. A last line gives the time each width's Bullet runs were given [t0], lowest to highest.
 """
 import pathlib
 import sys
