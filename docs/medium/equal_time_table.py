@@ -18,7 +18,7 @@ import pathlib
 import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from settle_table import family_runs, seeds, stat, table_rows  # noqa: E402  (the same cells as the settle's table)
+from settle_table import family_runs, report_tables, stat, table_order, width_label, width_name  # noqa: E402
 
 HEADER = ("| W | phi, nscd | phi, Bullet 20 t0 | phi, Bullet at nscd's time | Z, nscd | Z, Bullet 20 t0 "
           "| Z, Bullet at nscd's time | Z, Bullet at rest (settled) "
@@ -35,15 +35,6 @@ def ratio(v):
     return f"{v:.2f}" if v >= 0.01 else f"{v:.1e}"
 
 
-def cell(row, side, digits):
-    """settle_table.py's cell of `row` for `side`; '-' where the table has no row."""
-    return stat(row, side, digits) if row else "-"
-
-
-def width_name(where):
-    return "biperiodic" if where[1] else f"{where[0]:g}"
-
-
 def main(argv):
     if len(argv) not in (5, 6):
         sys.exit("usage: " + __doc__.strip().splitlines()[2].strip())
@@ -51,24 +42,17 @@ def main(argv):
                                       argv[4])
     xs = float(argv[5]) if len(argv) == 6 else 0.0
 
-    def tables(folder):
-        return (table_rows(folder / "tables" / "solid_fraction.csv", "solid_fraction", family, xs),
-                table_rows(folder / "tables" / "coordination.csv", "coordination/Z", family, xs))
-
-    (phi, z), (settle_phi, settle_z) = tables(report), tables(settled)
+    (phi, z), (settle_phi, settle_z) = report_tables(report, family, xs), report_tables(settled, family, xs)
     runs = family_runs(sweep, "bullet", family, xs)
     print(HEADER)
     print("|---" * 9 + "|")
     times = []
-    for where in sorted(phi, key=lambda w: (w[1], w[0])):
-        width = width_name(where)
-        ran, given = seeds(phi[where], "nscd"), seeds(phi[where], "bullet")
-        if 0 < given < ran:
-            width += f" (Bullet: {given} seed{'s' if given > 1 else ''})"
-        phi_s, z_s = settle_phi.get(where), settle_z.get(where)
-        cells = [width, cell(phi[where], "nscd", 4), cell(phi_s, "bullet", 4), cell(phi[where], "bullet", 4),
-                 cell(z[where], "nscd", 3), cell(z_s, "bullet", 3), cell(z[where], "bullet", 3),
-                 cell(z_s, "bullet_settled", 3)]
+    for where in table_order(phi):
+        # A width SETTLED lacks reads as one without seeds: stat() gives '-'.
+        phi_s, z_s = settle_phi.get(where, {}), settle_z.get(where, {})
+        cells = [width_label(where, phi[where], "bullet"), stat(phi[where], "nscd", 4), stat(phi_s, "bullet", 4),
+                 stat(phi[where], "bullet", 4), stat(z[where], "nscd", 3), stat(z_s, "bullet", 3),
+                 stat(z[where], "bullet", 3), stat(z_s, "bullet_settled", 3)]
         mine = runs.get(where, [])
         # A pile with no force (none yet touching) has no ratio: null in result.json.
         ratios = [r["equilibrium/max_force_ratio"] for r in mine if r["equilibrium/max_force_ratio"] is not None]

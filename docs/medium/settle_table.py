@@ -52,6 +52,28 @@ def stat(row, side, digits):
     return f"{mean:.{digits}f} ± {float(row[side + '_std']) / math.sqrt(n):.{digits}f}"
 
 
+def report_tables(folder, family, xs):
+    """(phi rows, Z rows) of the tables/ of a report folder, by table_rows."""
+    return (table_rows(folder / "tables" / "solid_fraction.csv", "solid_fraction", family, xs),
+            table_rows(folder / "tables" / "coordination.csv", "coordination/Z", family, xs))
+
+
+def width_name(where):
+    return "biperiodic" if where[1] else f"{where[0]:g}"
+
+
+def width_label(where, row, side):
+    """The W cell: the width, and how many seeds `side` has where it has fewer than nscd's."""
+    given, ran = seeds(row, side), seeds(row, "nscd")
+    plural = "s" if given > 1 else ""
+    return width_name(where) + (f" (Bullet: {given} seed{plural})" if 0 < given < ran else "")
+
+
+def table_order(rows):
+    """The widths of `rows` in the tables' order: walled widths rising, then the biperiodic box."""
+    return sorted(rows, key=lambda w: (w[1], w[0]))
+
+
 def family_runs(sweep, backend, family, xs):
     """{(W, biperiodic): [run]}: the sweep's runs of `backend` that are done, of `family` and `xs`,
     side walls without friction (as confpack.study.load reads them)."""
@@ -74,17 +96,13 @@ def main(argv):
         sys.exit("usage: " + __doc__.strip().splitlines()[2].strip())
     sweep, report, family = pathlib.Path(argv[1]), pathlib.Path(argv[2]), argv[3]
     xs = float(argv[4]) if len(argv) == 5 else 0.0
-    phi = table_rows(report / "tables" / "solid_fraction.csv", "solid_fraction", family, xs)
-    z = table_rows(report / "tables" / "coordination.csv", "coordination/Z", family, xs)
+    phi, z = report_tables(report, family, xs)
     moves = settle_moves(sweep, family, xs)
     print(HEADER)
     print("|---" * 8 + "|")
-    for where in sorted(phi, key=lambda w: (w[1], w[0])):
-        width = "biperiodic" if where[1] else f"{where[0]:g}"
+    for where in table_order(phi):
         # A Bullet run and its settle finish as one sweep run, so both Bullet columns have `settled`.
-        settled, ran = seeds(phi[where], "bullet_settled"), seeds(phi[where], "nscd")
-        if 0 < settled < ran:
-            width += f" (Bullet: {settled} seed{'s' if settled > 1 else ''})"
+        width = width_label(where, phi[where], "bullet_settled")
         moved = moves.get(where)
         cells = [width] + [stat(phi[where], s, 4) for s in SIDES] + [stat(z[where], s, 3) for s in SIDES]
         cells.append(f"{moved[0]:.3f} / {moved[1]:.2f}" if moved else "-")
