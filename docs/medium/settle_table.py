@@ -80,7 +80,7 @@ def family_runs(sweep, backend, family, xs):
     runs = {}
     for run in confpack.study.load(sweep):
         if run["backend"] == backend and run["status"] == "done" and run["family"] == family \
-                and abs(100 * run["x_S"] - xs) < 1e-9 and run["mu_w"] == 0.0:
+                and abs(run["x_S"] - xs) < 1e-9 and run["mu_w"] == 0.0:
             runs.setdefault((run["W"], run["biperiodic"]), []).append(run)
     return runs
 

@@ -99,6 +99,20 @@ def test_cells_are_the_seeds_mean_and_standard_error(settle_sweep):
         assert row[7] == f"{statistics.mean(means):.3f} / {max(largest):.2f}"
 
 
+def test_runs_are_picked_by_their_percentage_of_small_grains(cli, tmp_path):
+    # x_S is a percentage in the sweep file, in confpack.study.load and on the scripts' command
+    # line (BSP 25): a bidisperse Bullet pile, stopped at 0.5 t0, is found by 25 and not by 0.25.
+    sweep = {"format": "confpack-sweep", "version": 1, "name": "tiny-bsp",
+             "base": {"box": {"length_x": 3, "height": 7}, "compaction": {"time_limit": 0.5}},
+             "vary": {"width": [3], "backend": ["bullet"], "small_fraction": [25]}}
+    (tmp_path / "bsp.json").write_text(json.dumps(sweep))
+    run_cli(cli, "sweep", tmp_path / "bsp.json", "--out", tmp_path / "study", "-q")
+    script = load_script("settle_table")
+    runs = script.family_runs(tmp_path / "study", "bullet", "BSP", 25.0)
+    assert list(runs) == [(3.0, False)] and [r["x_S"] for r in runs[(3.0, False)]] == [25.0]
+    assert script.family_runs(tmp_path / "study", "bullet", "BSP", 0.25) == {}
+
+
 @pytest.mark.parametrize("name, reports", [("settle_table", 1), ("equal_time_table", 2)])
 def test_a_folder_without_a_report_is_one_message(tmp_path, name, reports):
     # As docs/medium.md runs them: one line on stderr, a non-zero exit, nothing on stdout.
