@@ -25,12 +25,18 @@ HEADER = ("| W | phi, nscd | phi, Bullet as it stopped | phi, Bullet at rest | Z
 SIDES = ("nscd", "bullet", "bullet_settled")
 
 
+def same_percentage(a, b):
+    """Whether two x_S percentages (of a report table's CSV, of confpack.study.load, of the command
+    line) are the same one, whichever of them went through a decimal string."""
+    return abs(float(a) - float(b)) < 1e-9
+
+
 def table_rows(path, key, family, xs):
     """{(W, biperiodic): row} of one report table's rows for `key`, `family` and `xs`."""
     rows = {}
     with open(path, newline="") as f:
         for row in csv.DictReader(f):
-            if row["key"] == key and row["family"] == family and float(row["x_S"]) == xs and \
+            if row["key"] == key and row["family"] == family and same_percentage(row["x_S"], xs) and \
                     float(row["mu_w"]) == 0.0:
                 rows[(float(row["W"]), row["biperiodic"] == "1")] = row
     return rows
@@ -80,7 +86,7 @@ def family_runs(sweep, backend, family, xs):
     runs = {}
     for run in confpack.study.load(sweep):
         if run["backend"] == backend and run["status"] == "done" and run["family"] == family \
-                and abs(run["x_S"] - xs) < 1e-9 and run["mu_w"] == 0.0:
+                and same_percentage(run["x_S"], xs) and run["mu_w"] == 0.0:
             runs.setdefault((run["W"], run["biperiodic"]), []).append(run)
     return runs
 

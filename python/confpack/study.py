@@ -7,9 +7,9 @@ its run table, read by the C++ study code that the report uses.
 
 Configuration columns: run, deposit, family, status, shape, x_S (the small grains' volume
 percentage, 25 for 25 %), W (wall gap, or the period when biperiodic), biperiodic, mu_w, seed,
-backend. Result columns: every numeric leaf of result.json
-(booleans as 0/1), named by its path joined with "/" ("solid_fraction", "coordination/Z",
-"equilibrium/reached"), None (NaN in the array) where a run has no value.
+backend. Result columns: every numeric leaf of result.json (booleans as 0/1), named by its path
+joined with "/" ("solid_fraction", "coordination/Z", "equilibrium/reached"), None (NaN in the
+array) where a run has no value.
 """
 import json
 
