@@ -3,6 +3,7 @@
 // step's contact problem, and the broad phase's candidate pairs.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -136,6 +137,47 @@ inline std::unique_ptr<ColdStep> checkBeadColumn(const nscd::NscdSettings& setti
     INFO("contact " << c << " between " << g.a << " and " << g.b);
     CHECK(step->solver.normalImpulse(static_cast<int>(c), 0) == Approx(carried * weight).epsilon(relative));
   }
+  return step;
+}
+
+/// A bidisperse pyramid, one cold step with `settings`, checked to `relative` of a step's fall:
+/// four unit spheres on the floor of a box of length 4 (periodic in x, so they touch in a ring)
+/// and width 1.2, and two spheres of d_S = 1/2 each resting in the groove of a pair, their
+/// centres (1/2 + 1/2) d apart horizontally and h = sqrt(((1 + d_S) / 2)^2 - 1/4) above the unit
+/// ones'. Stopped dead, and (unique, where the ring's compression is not) each small sphere's two
+/// contacts carry m_S g dt / (2 cos theta) with cos theta = h / ((1 + d_S) / 2), the floor under
+/// each unit sphere (m_L + m_S / 2) g dt. Returns the step for further checks.
+inline std::unique_ptr<ColdStep> checkBidispersePyramid(const nscd::NscdSettings& settings, double relative) {
+  constexpr double kSmall = 0.5;
+  const double reach = 0.5 * (1.0 + kSmall);
+  const double h = std::sqrt(reach * reach - 0.25);
+  core::SystemDef s = boxSystem(4.0, 1.2, false, 0.0);
+  for (int k = 0; k < 4; ++k) s.grains.push_back(sphere(1.0, Vec3(0.5 + k, 0.6, 0.5)));
+  for (double x : {1.0, 3.0}) s.grains.push_back(sphere(kSmall, Vec3(x, 0.6, 0.5 + h)));
+  auto step = std::make_unique<ColdStep>(s, settings);
+  CHECK(step->solver.residual() < settings.tolerance);
+  double largest = 0.0;
+  for (std::size_t i = 0; i + 1 < step->velocities.size(); ++i)
+    largest = std::max({largest, step->velocities[i].v.norm(), step->velocities[i].w.norm()});
+  CHECK(largest < relative * ColdStep::kDt);
+  const double massLarge = s.grains[0].volume(), massSmall = s.grains[4].volume();  // rho = 1
+  const double onGroove = massSmall * ColdStep::kDt / (2.0 * h / reach);
+  const double onFloor = (massLarge + 0.5 * massSmall) * ColdStep::kDt;
+  int grooves = 0, floors = 0;
+  for (std::size_t c = 0; c < step->contacts.size(); ++c) {
+    const nscd::ContactGeometry& g = step->contacts[c];
+    const double r = step->solver.normalImpulse(static_cast<int>(c), 0);
+    INFO("contact " << c << " between " << g.a << " and " << g.b << ", normal " << g.normal.transpose());
+    if (g.b < 0 && std::abs(g.normal.z()) > 0.5) {
+      ++floors;
+      CHECK(r == Approx(onFloor).epsilon(relative));
+    } else if (g.b >= 4 || g.a >= 4) {
+      ++grooves;
+      CHECK(r == Approx(onGroove).epsilon(relative));
+    }
+  }
+  CHECK(floors == 4);
+  CHECK(grooves == 4);
   return step;
 }
 

@@ -1,8 +1,8 @@
 // The interior-point solver (backends/nscd/ipm_solver.hpp) on one cold step's contact problem: a
-// resting column is stopped exactly with the weight above each contact, and on piles of spheres
-// and of pinacoids between rough walls it reaches the velocities of MPRGP, the other solver of
-// the same problem; on pinacoid face contacts (more points than constraints) its polish ends the
-// solve at round-off.
+// resting column and a bidisperse pyramid are stopped exactly with their exact impulses, and on
+// piles of spheres and of pinacoids between rough walls it reaches the velocities of MPRGP, the
+// other solver of the same problem; on pinacoid face contacts (more points than constraints) its
+// polish ends the solve at round-off.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -47,6 +47,13 @@ void checkFaceContactSolve(const core::SystemDef& s, const nscd::NscdSettings& s
 TEST_CASE("nscd ipm: a column of touching beads is stopped dead, its k-th contact from the top carrying k m g dt",
           "[nscd]") {
   testing::checkBeadColumn(ipm(), 6, 1e-12);
+}
+
+TEST_CASE(
+    "nscd ipm: a bidisperse pyramid is stopped dead, each small sphere carried by its two contacts at "
+    "m_S g dt / (2 cos theta)",
+    "[nscd]") {
+  testing::checkBidispersePyramid(ipm(), 1e-10);
 }
 
 TEST_CASE("nscd ipm: on a touching sphere pile it reaches the velocities MPRGP reaches, in a few dozen iterations",

@@ -1,5 +1,6 @@
 // The MPRGP contact solver (backends/nscd/mprgp_solver.hpp) on one cold step's contact problem:
-// its preconditioner's blocks, its norm bound, and the velocities its variants reach.
+// its preconditioner's blocks, its norm bound, the velocities its variants reach, and the exact
+// impulses of a bead column and a bidisperse pyramid.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -233,4 +234,19 @@ TEST_CASE(
   settings.preconditioner = nscd::PreconditionerKind::Cholesky;
   const auto step = testing::checkBeadColumn(settings, 8, 1e-10);
   CHECK(step->solver.mprgpSteps().factorisations == 1);
+}
+
+TEST_CASE(
+    "nscd mprgp: a bidisperse pyramid is stopped dead, each small sphere carried by its two contacts at "
+    "m_S g dt / (2 cos theta), with each preconditioner",
+    "[nscd]") {
+  // Unequal masses and an oblique load: the Delassus rows differ in scale, which the Jacobi
+  // scaling and each preconditioner must leave the same unique impulses.
+  const auto preconditioner = GENERATE(nscd::PreconditionerKind::SymmetricGaussSeidel, nscd::PreconditionerKind::None,
+                                       nscd::PreconditionerKind::Cholesky);
+  nscd::NscdSettings settings;
+  settings.tolerance = 1e-12;
+  settings.preconditioner = preconditioner;
+  INFO("preconditioner " << static_cast<int>(preconditioner));
+  testing::checkBidispersePyramid(settings, 1e-10);
 }
