@@ -1,17 +1,22 @@
 #!/usr/bin/env python3
-"""Compares the dynamic and quasi-static protocols on the runs docs/validation/run.sh wrote.
+"""Compares the dynamic and quasi-static protocols on the runs docs/validation/run.sh wrote, or
+nscd's two preconditioners on those of COMPARE=preconditioners docs/validation/run.sh.
 
 Usage: python3 docs/validation/compare.py OUT_DIR  (standard library only)
 
-For each pile and each quantity: mean +- standard error over the seeds of each protocol, their
-difference +- its standard error, and whether the difference is within two standard errors.
-Only seeds whose two runs both reached equilibrium are compared (the others are counted).
+For each pile and each quantity: mean +- standard error over the seeds of each variant (protocol
+or preconditioner), their difference +- its standard error, and whether the difference is within
+two standard errors. Only seeds whose two runs both reached equilibrium are compared (the others
+are counted).
 """
 import csv
 import json
 import math
 import pathlib
 import sys
+
+# The two variants a pile's runs compare, by the names of their folders (run.sh).
+VARIANT_PAIRS = (("dynamic", "quasi-static"), ("sgs", "cholesky"))
 
 
 def force_stats(packing_path):
@@ -77,42 +82,46 @@ def main():
         sys.exit("usage: compare.py OUT_DIR")
     root = pathlib.Path(sys.argv[1])
     for pile_dir in sorted(p for p in root.iterdir() if p.is_dir()):
+        pair = next((p for p in VARIANT_PAIRS if any((pile_dir / v).is_dir() for v in p)), None)
+        if pair is None:
+            continue
+        first, second = pair
         runs = {}
-        for proto in ("dynamic", "quasi-static"):
-            for run in sorted((pile_dir / proto).glob("s*")):
+        for variant in pair:
+            for run in sorted((pile_dir / variant).glob("s*")):
                 if (run / "result.json").exists():
-                    runs.setdefault(run.name, {})[proto] = run
-        both, values, cost, missed = [], {}, {"dynamic": [], "quasi-static": []}, []
+                    runs.setdefault(run.name, {})[variant] = run
+        both, values, cost, missed = [], {}, {first: [], second: []}, []
         for seed, pr in sorted(runs.items(), key=lambda kv: int(kv[0][1:])):
             if len(pr) < 2:
                 continue
-            res = {proto: quantities(d) for proto, d in pr.items()}
-            for proto, (r, _) in res.items():
-                cost[proto].append(r["timing"]["wall_s"])
+            res = {variant: quantities(d) for variant, d in pr.items()}
+            for variant, (r, _) in res.items():
+                cost[variant].append(r["timing"]["wall_s"])
             if not all(r["equilibrium"]["reached"] for r, _ in res.values()):
                 missed.append(seed + "".join(f" {p}:{'yes' if r['equilibrium']['reached'] else 'no'}"
                                              for p, (r, _) in res.items()))
                 continue
             both.append(seed)
-            for proto, (_, q) in res.items():
+            for variant, (_, q) in res.items():
                 for k, v in q.items():
-                    values.setdefault(k, {}).setdefault(proto, []).append(v)
+                    values.setdefault(k, {}).setdefault(variant, []).append(v)
         print(f"## {pile_dir.name}\n")
         print(f"Seeds compared (both at equilibrium): {len(both)} ({', '.join(both)}).")
         if missed:
             print(f"Left out (a run not at equilibrium): {'; '.join(missed)}.")
-        for proto, c in cost.items():
+        for variant, c in cost.items():
             if c:
                 c = sorted(c)
-                print(f"Median wall time, {proto}: {c[len(c) // 2]:.1f} s over {len(c)} runs.")
+                print(f"Median wall time, {variant}: {c[len(c) // 2]:.1f} s over {len(c)} runs.")
         print()
-        print("| quantity | dynamic | quasi-static | difference | within 2 SE |")
+        print(f"| quantity | {first} | {second} | difference | within 2 SE |")
         print("|---|---|---|---|---|")
         for k, per in values.items():
-            if len(per.get("dynamic", [])) < 2 or len(per.get("quasi-static", [])) < 2:
+            if len(per.get(first, [])) < 2 or len(per.get(second, [])) < 2:
                 continue
-            md, sd = mean_se(per["dynamic"])
-            mq, sq = mean_se(per["quasi-static"])
+            md, sd = mean_se(per[first])
+            mq, sq = mean_se(per[second])
             diff, se = mq - md, math.hypot(sd, sq)
             ok = "yes" if abs(diff) <= 2 * se else "no"
             print(f"| {k} | {md:.4g} ± {sd:.2g} | {mq:.4g} ± {sq:.2g} | {diff:+.3g} ± {se:.2g} | {ok} |")

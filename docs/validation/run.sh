@@ -8,6 +8,10 @@
 # A run already present (its result.json) is kept, so the script resumes after an interruption.
 # QS_FLAGS adds flags to the quasi-static runs only, e.g. QS_FLAGS=--adaptive-dt for a fall on the
 # adaptive step (use another OUT_DIR: runs already there are kept whatever their flags).
+# COMPARE=preconditioners compares nscd's two preconditioners of MPRGP instead of the protocols:
+# each seed once with "sgs" and once with "cholesky", both on the dynamic protocol and the
+# adaptive step (the faster way to rest of these piles) with a time limit of 400 t0 (on the
+# adaptive step a pile creeps for longer in t0), into OUT_DIR/<pile>/<preconditioner>/.
 # Then: python3 docs/validation/compare.py OUT_DIR
 set -euo pipefail
 out=${1:?usage: docs/validation/run.sh OUT_DIR [SEEDS] [PILE ...]}
@@ -16,6 +20,12 @@ shift $(( $# >= 2 ? 2 : $# ))
 piles=("$@")
 [[ ${#piles[@]} -gt 0 ]] || piles=(msp-bi6)
 confpack=${CONFPACK:-build/apps/confpack}
+compare=${COMPARE:-protocols}
+case "$compare" in
+  protocols) variants=(dynamic quasi-static) ;;
+  preconditioners) variants=(sgs cholesky) ;;
+  *) echo "COMPARE is protocols or preconditioners, not '$compare'" >&2; exit 2 ;;
+esac
 
 flags_of() {
   case "$1" in
@@ -30,10 +40,17 @@ flags_of() {
 for pile in "${piles[@]}"; do
   flags=$(flags_of "$pile")
   for seed in $seeds; do
-    for protocol in dynamic quasi-static; do
-      dir="$out/$pile/$protocol/s$seed"
+    for variant in "${variants[@]}"; do
+      dir="$out/$pile/$variant/s$seed"
       [[ -f "$dir/result.json" ]] && continue
-      echo "== $pile $protocol seed $seed" >&2
+      echo "== $pile $variant seed $seed" >&2
+      if [[ $compare == preconditioners ]]; then
+        # shellcheck disable=SC2086
+        "$confpack" run ${flags% --time-limit *} --time-limit 400 --seed "$seed" --protocol dynamic --adaptive-dt \
+          --backend-options "{\"preconditioner\": \"$variant\"}" --quiet --out "$dir"
+        continue
+      fi
+      protocol=$variant
       # Pinacoids settle dynamically only with damping (README, Known limitations): their
       # dynamic reference is damped, the quasi-static runs are not.
       extra=()
