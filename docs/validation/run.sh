@@ -12,6 +12,7 @@
 # each seed once with "sgs" and once with "cholesky", both on the dynamic protocol and the
 # adaptive step (the faster way to rest of these piles) with a time limit of 400 t0 (on the
 # adaptive step a pile creeps for longer in t0), into OUT_DIR/<pile>/<preconditioner>/.
+# TOLERANCE sets MPRGP's tolerance of both (default 1e-10), e.g. TOLERANCE=1e-12.
 # Then: python3 docs/validation/compare.py OUT_DIR
 set -euo pipefail
 out=${1:?usage: docs/validation/run.sh OUT_DIR [SEEDS] [PILE ...]}
@@ -47,7 +48,8 @@ for pile in "${piles[@]}"; do
       if [[ $compare == preconditioners ]]; then
         # shellcheck disable=SC2086
         "$confpack" run ${flags% --time-limit *} --time-limit 400 --seed "$seed" --protocol dynamic --adaptive-dt \
-          --backend-options "{\"preconditioner\": \"$variant\"}" --quiet --out "$dir"
+          --backend-options "{\"preconditioner\": \"$variant\"${TOLERANCE:+, \"tolerance\": $TOLERANCE}}" \
+          --quiet --out "$dir"
         continue
       fi
       protocol=$variant
