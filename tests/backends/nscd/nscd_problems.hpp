@@ -142,9 +142,9 @@ inline std::unique_ptr<ColdStep> checkBeadColumn(const nscd::NscdSettings& setti
 
 /// A bidisperse pyramid, one cold step with `settings`, checked to `relative` of a step's fall:
 /// four unit spheres on the floor of a box of length 4 (periodic in x, so they touch in a ring)
-/// and width 1.2, and two spheres of d_S = 1/2 each resting in the groove of a pair, their
-/// centres (1/2 + 1/2) d apart horizontally and h = sqrt(((1 + d_S) / 2)^2 - 1/4) above the unit
-/// ones'. Stopped dead, and (unique, where the ring's compression is not) each small sphere's two
+/// and width 1.2, and two spheres of d_S = 1/2 each resting in the groove of a pair: a small
+/// centre 1/2 from each of its two supports' along x and h = sqrt(((1 + d_S) / 2)^2 - 1/4) above
+/// them. Stopped dead, and (unique, where the ring's compression is not) each small sphere's two
 /// contacts carry m_S g dt / (2 cos theta) with cos theta = h / ((1 + d_S) / 2), the floor under
 /// each unit sphere (m_L + m_S / 2) g dt. Returns the step for further checks.
 inline std::unique_ptr<ColdStep> checkBidispersePyramid(const nscd::NscdSettings& settings, double relative) {
