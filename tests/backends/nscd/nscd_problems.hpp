@@ -101,6 +101,14 @@ struct ColdStep {
   }
 };
 
+/// Largest linear or angular speed of any grain after the step (the static-walls body left out).
+inline double largestSpeed(const ColdStep& step) {
+  double largest = 0.0;
+  for (std::size_t i = 0; i + 1 < step.velocities.size(); ++i)
+    largest = std::max({largest, step.velocities[i].v.norm(), step.velocities[i].w.norm()});
+  return largest;
+}
+
 /// Largest grain speed of step a, and largest difference of grain velocities between steps a and
 /// b of the same system (the static-walls body left out).
 struct VelocityComparison {
@@ -126,10 +134,7 @@ inline std::unique_ptr<ColdStep> checkBeadColumn(const nscd::NscdSettings& setti
   auto step = std::make_unique<ColdStep>(s, settings);
   REQUIRE(step->contacts.size() == static_cast<std::size_t>(beads));  // floor + beads - 1 pairs
   CHECK(step->solver.residual() < settings.tolerance);
-  double largest = 0.0;
-  for (std::size_t i = 0; i + 1 < step->velocities.size(); ++i)
-    largest = std::max({largest, step->velocities[i].v.norm(), step->velocities[i].w.norm()});
-  CHECK(largest < relative * ColdStep::kDt);
+  CHECK(largestSpeed(*step) < relative * ColdStep::kDt);
   const double weight = s.grains[0].volume() * ColdStep::kDt;
   for (std::size_t c = 0; c < step->contacts.size(); ++c) {
     const nscd::ContactGeometry& g = step->contacts[c];
@@ -156,10 +161,7 @@ inline std::unique_ptr<ColdStep> checkBidispersePyramid(const nscd::NscdSettings
   for (double x : {1.0, 3.0}) s.grains.push_back(sphere(kSmall, Vec3(x, 0.6, 0.5 + h)));
   auto step = std::make_unique<ColdStep>(s, settings);
   CHECK(step->solver.residual() < settings.tolerance);
-  double largest = 0.0;
-  for (std::size_t i = 0; i + 1 < step->velocities.size(); ++i)
-    largest = std::max({largest, step->velocities[i].v.norm(), step->velocities[i].w.norm()});
-  CHECK(largest < relative * ColdStep::kDt);
+  CHECK(largestSpeed(*step) < relative * ColdStep::kDt);
   const double massLarge = s.grains[0].volume(), massSmall = s.grains[4].volume();  // rho = 1
   const double onGroove = massSmall * ColdStep::kDt / (2.0 * h / reach);
   const double onFloor = (massLarge + 0.5 * massSmall) * ColdStep::kDt;
