@@ -7,8 +7,8 @@ Usage, after `confpack run ... --out DIR` (any backend, any protocol):
 
 It reads result.json's timing history (one entry per equilibrium check) and finds the first check
 from which phi stays within D (default 1e-4) of its final value. Prints one Markdown row per run:
-the time of that check and of rest, the steps and solver iterations after it (and their share of
-the run's), the iterations a step before and after it, and Z at that check and at rest.
+the time of that check and of the last (rest, if the run reached it), the steps and solver iterations after it (and their share of
+the run's), the iterations a step before and after it, and Z at that check and at the end.
 """
 import argparse
 import json
@@ -28,8 +28,8 @@ def main():
     parser.add_argument("results", nargs="+", help="result.json files")
     parser.add_argument("--within", type=float, default=1e-4, help="phi's band around its final value")
     args = parser.parse_args()
-    print("| run | phi final from t | rest at t | steps after | iterations after | "
-          "iterations a step, before / after | Z then / at rest |")
+    print("| run | phi final from t | end at t | steps after | iterations after | "
+          "iterations a step, before / after | Z then / at the end |")
     print("|---|---|---|---|---|---|---|")
     for path in args.results:
         with open(path) as f:
