@@ -134,7 +134,8 @@ void ContactRows::build(const std::vector<ContactGeometry>& contacts, const std:
   const int n = static_cast<int>(normalRows_.size());
   const double L = box.lengthX, half = 0.5 * L;
   const bool split = settings.solver == SolverKind::Mprgp &&
-                     settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel &&
+                     (settings.preconditioner == PreconditionerKind::SymmetricGaussSeidel ||
+                      settings.preconditioner == PreconditionerKind::Switching) &&
                      L >= kSweepSplitLength * leverMax;
   for (NormalRow& row : normalRows_) {
     const double x = core::BoxDef::wrapCoordinate(row.x, L);

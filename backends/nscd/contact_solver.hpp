@@ -76,6 +76,9 @@ class ContactSolver {
   const MprgpSteps& mprgpSteps() const { return mprgp_.steps(); }
   /// The upper bound of ||S W S|| of the last MPRGP solve (MprgpSolver::operatorBound); 0 before any.
   double operatorBound() const { return mprgp_.operatorBound(); }
+  /// The "switching" preconditioner's state (MprgpSolver::switchState), for checkpoints.
+  SwitchState switchState() const { return mprgp_.switchState(); }
+  void setSwitchState(SwitchState state) { mprgp_.setSwitchState(state); }
   int rowCount() const { return rows_.rowCount(); }
   /// The rows of the last prepare(), as the solvers see them (a block's dump, bench/microbench.hpp).
   const ContactRows& rows() const { return rows_; }

@@ -470,7 +470,8 @@ double MprgpSolver::preconditionExactly(const ContactRows& rows, std::size_t bod
 // changes. Near jamming the free block's soft modes form a continuum spread over the pile, which a
 // coarse correction or a deflation does not remove; "cholesky" inverts the shifted free block
 // exactly (preconditionExactly) in a few iterations, for a factorisation whose cost exceeds what it
-// saves (docs/performance.md, "The preconditioner and the creep's solve").
+// saves but on the last steps to rest, which "switching" hands to it (docs/performance.md, "The
+// preconditioner and the creep's solve").
 int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const NscdSettings& settings, int maxThreads,
                        const std::vector<BodyInverseMass>* bodies) {
   residual_ = 0.0;
@@ -485,17 +486,38 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   const int threads = m >= kParallelMin ? threadChoice_.next() : 1;
   const auto start = std::chrono::steady_clock::now();
   steps_ = MprgpSteps{};
+  // "switching": sgs with a budget of iterations, unless the last solve ended on "cholesky" (then
+  // "cholesky" from the start, but for every kSwitchProbeInterval-th solve, which tries sgs again).
+  const bool switching = settings.preconditioner == PreconditionerKind::Switching && bodies != nullptr;
+  int sgsBudget = settings.maxIterations;
   exact_ = settings.preconditioner == PreconditionerKind::Cholesky && bodies != nullptr;
+  if (switching) {
+    exact_ = switch_.onCholesky && ++switch_.solves % kSwitchProbeInterval != 0;
+    sgsBudget = std::max(1, static_cast<int>(settings.preconditionerSwitch * static_cast<double>(nN)));
+  }
   Iteration it = setUp(rows, vel, settings, threads);
-  if (exact_) {
+  const auto buildFreeBlock = [&] {
     std::vector<JacobianRow> jacobians(m);
     for (std::size_t k = 0; k < m; ++k) {
       const GatherRow& row = gatherRows_[k];
       jacobians[k] = {row.n, row.axn, row.bxn, row.a, row.b};
     }
     freeBlock_.build(std::move(jacobians), *bodies, !linearOnly_, settings.preconditionerShift);
-  }
+  };
+  if (exact_) buildFreeBlock();
   int iterations = 0;
+  // minimise() under the "switching" budget: past it, the rest of the solve runs on "cholesky",
+  // from the iterate reached and a restarted direction.
+  const auto minimiseSwitching = [&](double tolerance) {
+    if (switching && !exact_) {
+      iterations = minimise(it, tolerance, std::min(settings.maxIterations, sgsBudget), iterations);
+      if (residual_ < tolerance || iterations < sgsBudget || iterations >= settings.maxIterations) return;
+      exact_ = true;
+      buildFreeBlock();
+      freeGradientToP(it);
+    }
+    iterations = minimise(it, tolerance, settings.maxIterations, iterations);
+  };
   double tangentChange = 0.0;
   const int outerCap = frictionRows.empty() ? 1 : settings.maxIterations;
   // With wall friction the normal solves inside the block iteration are inexact (Dembo-Eisenstat-
@@ -505,7 +527,7 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
   for (int outer = 0; outer < outerCap; ++outer) {
     if (outer > 0) contactVelocities(vel, scratch_.g, threads);  // the tangential pass moved vel
     freeGradientToP(it);
-    iterations = minimise(it, innerTolerance, settings.maxIterations, iterations);
+    minimiseSwitching(innerTolerance);
     syncVelocities(it);
     if (frictionRows.empty()) break;
     // Block Gauss-Seidel with the tangential impulses of the wall points (their discs use the new
@@ -518,6 +540,10 @@ int MprgpSolver::solve(ContactRows& rows, std::vector<BodyVelocity>& vel, const 
     innerTolerance = std::max(settings.tolerance, std::min(innerTolerance, 0.1 * tangentChange));
   }
   residual_ = std::max(residual_, tangentChange);
+  if (switching) {
+    if (exact_ != switch_.onCholesky) switch_.solves = 0;
+    switch_.onCholesky = exact_;  // false also after a failed factorisation
+  }
   if (exact_) {
     steps_.factorisations = freeBlock_.factorisations();
     steps_.factorUpdates = freeBlock_.updates();

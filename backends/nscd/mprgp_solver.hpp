@@ -11,7 +11,8 @@
 // Gauss-Seidel sweep (NscdSettings::preconditioner): the sweeps of nlgs serve inside MPRGP, where
 // they cut the iterations 2.5 to 3.5 times. For two threads they run over blocks of rows that
 // share no grain (contact_rows.hpp). Or ("cholesky", free_block_inverse.hpp) by the shifted free
-// block's exact inverse, with projected steps searched back by halves.
+// block's exact inverse, with projected steps searched back by halves. Or ("switching") by the
+// sweeps until a solve has taken a budget of iterations, then by the exact inverse.
 // Wall friction (Coulomb, not a quadratic program) is handled by block Gauss-Seidel: MPRGP on
 // every normal impulse with the tangential ones fixed, then one projected pass over the
 // tangential impulses, over-relaxed by NscdSettings::frictionRelaxation, until both have
@@ -37,6 +38,12 @@ struct MprgpSteps {
   int proportioning = 0;   ///< proportioning steps (release of bound unknowns)
   int factorisations = 0;  ///< "cholesky" preconditioner: factorisations afresh
   int factorUpdates = 0;   ///< "cholesky" preconditioner: updates and downdates for a changed free set
+};
+
+/// What a "switching" preconditioner carries from one solve to the next (its choice for the next).
+struct SwitchState {
+  bool onCholesky = false;  ///< the last solve ended on "cholesky"
+  int solves = 0;           ///< solves started on "cholesky" since it switched (every 16th tries "sgs")
 };
 
 /// Dostal's MPRGP on the normal impulses of a ContactRows (with a tangential pass for side-wall
@@ -65,6 +72,10 @@ class MprgpSolver {
   /// The upper bound of ||S W S|| (S = diag(W_kk^-1/2)) that set the expansion step of the last
   /// MPRGP solve (alpha_bar = 1.95 / bound); 0 before any.
   double operatorBound() const { return operatorBound_; }
+  /// The "switching" preconditioner's state, which a checkpoint keeps so that a resumed run takes
+  /// the same steps.
+  SwitchState switchState() const { return switch_; }
+  void setSwitchState(SwitchState state) { switch_ = state; }
 
  private:
   // Building blocks over the normal unknowns (frictionless rows, then the normal part of the
@@ -185,6 +196,7 @@ class MprgpSolver {
   ThreadChoice threadChoice_;   // MPRGP's team against one thread, timed
   FreeBlockInverse freeBlock_;  // the "cholesky" preconditioner's factor
   bool exact_ = false;          // this solve preconditions with freeBlock_ (until a factorisation fails)
+  SwitchState switch_;
   std::vector<LinearRow> linearRows_;
   std::vector<LinearEntry> linearEntries_;
   std::vector<int> bodyEntryStart_, bodyCursor_;

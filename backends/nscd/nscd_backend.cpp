@@ -262,13 +262,15 @@ class NscdBackend final : public core::ContactBackend {
     nlohmann::json lastMove = nlohmann::json::array();
     for (const BodyVelocity& m : finisher_.lastMove)
       lastMove.push_back({m.v.x(), m.v.y(), m.v.z(), m.w.x(), m.w.y(), m.w.z()});
+    const SwitchState switchState = solver_.switchState();
     return {{"grains", core::bodyStatesToJson(states_)},
             {"cache", cache_.toJson()},
             {"loaded", damping_.loaded},
             {"metric_weights", finisher_.metricWeight},
             {"last_moves", std::move(lastMove)},
             {"last_finisher_step_clipped", finisher_.lastStepClipped},
-            {"finisher_fell_back", finisher_.fellBack}};
+            {"finisher_fell_back", finisher_.fellBack},
+            {"preconditioner_switch", {{"on_cholesky", switchState.onCholesky}, {"solves", switchState.solves}}}};
   }
 
   void restoreState(const nlohmann::json& state) override {
@@ -288,6 +290,14 @@ class NscdBackend final : public core::ContactBackend {
     // Absent from the checkpoints of earlier versions, which had no fallback.
     const nlohmann::json& fellBack = state.value("finisher_fell_back", nlohmann::json(false));
     if (!fellBack.is_boolean()) throw bad("finisher_fell_back");
+    // Absent from the checkpoints of earlier versions, which had no "switching" preconditioner.
+    const nlohmann::json& switching = state.value("preconditioner_switch", nlohmann::json::object());
+    if (!switching.is_object()) throw bad("preconditioner_switch");
+    const nlohmann::json& onCholesky = switching.value("on_cholesky", nlohmann::json(false));
+    const nlohmann::json& solves = switching.value("solves", nlohmann::json(0));
+    if (!onCholesky.is_boolean() || !solves.is_number_integer() || solves.get<long>() < 0 ||
+        solves.get<long>() > std::numeric_limits<int>::max())
+      throw bad("preconditioner_switch");
     cache_.fromJson(state.value("cache", nlohmann::json()), n_);
     // The poses again, although the SystemDef had them: the constructor wraps and normalises them,
     // which may change their last bits.
@@ -309,6 +319,7 @@ class NscdBackend final : public core::ContactBackend {
     damping_.loaded = loaded.get<std::vector<char>>();
     finisher_.lastStepClipped = state["last_finisher_step_clipped"].get<bool>();
     if (fellBack.get<bool>()) finisher_.fallBackToInteriorPoint(settings_, world_.walls);
+    solver_.setSwitchState({onCholesky.get<bool>(), solves.get<int>()});
     poses_.positionMid = poses_.position;
     poses_.orientationMid = poses_.orientation;
     writeStates();

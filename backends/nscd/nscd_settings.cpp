@@ -29,11 +29,15 @@ const core::SettingsTable<NscdSettings>& settingsTable() {
         .choice("preconditioner", &S::preconditioner,
                 {{"sgs", PreconditionerKind::SymmetricGaussSeidel},
                  {"none", PreconditionerKind::None},
-                 {"cholesky", PreconditionerKind::Cholesky}},
-                "mprgp: symmetric Gauss-Seidel sweeps over the free rows, Jacobi scaling only, or the shifted free "
-                "block's exact inverse by a sparse Cholesky factorisation in body space")
+                 {"cholesky", PreconditionerKind::Cholesky},
+                 {"switching", PreconditionerKind::Switching}},
+                "mprgp: symmetric Gauss-Seidel sweeps over the free rows, Jacobi scaling only, the shifted free "
+                "block's exact inverse by a sparse Cholesky factorisation in body space, or sgs until a solve is "
+                "dear, then cholesky")
+        .number("preconditioner_switch", &S::preconditionerSwitch, Range::positive(), "-",
+                "mprgp, switching: sgs iterations per normal row a solve may take before it goes on with cholesky")
         .number("preconditioner_shift", &S::preconditionerShift, Range::positive(), "-",
-                "mprgp, cholesky: the shift eps of (A_FF + eps I)^-1")
+                "mprgp, cholesky and switching: the shift eps of (A_FF + eps I)^-1")
         .number("tolerance", &S::tolerance, Range::positive(), "-",
                 "stopping threshold: mprgp and ipm relative projected gradient (1e-10), nlgs relative impulse change "
                 "(1e-6)")

@@ -36,6 +36,7 @@ enum class PreconditionerKind {
   SymmetricGaussSeidel,  ///< "sgs": one forward and one backward Gauss-Seidel sweep over the free rows
   None,                  ///< "none": Jacobi scaling only (A has a unit diagonal)
   Cholesky,              ///< "cholesky": (A_FF + eps I)^-1 exactly, by a sparse Cholesky factorisation in body space
+  Switching,             ///< "switching": "sgs" until a solve is dear, then "cholesky" (NscdSettings::preconditioner)
 };
 
 /// What the contact law does with an overlap (docs/model.md, "The paper-like contact model").
@@ -100,8 +101,20 @@ struct NscdSettings {
   /// body-space matrix eps M + G_F^T G_F (free_block_inverse.hpp), refactored when the free set
   /// changes: 6 to 12 iterations where "sgs" needs hundreds near jamming, for a factorisation
   /// or more per step (docs/performance.md, "The preconditioner and the creep's solve").
+  /// "switching" starts with "sgs" and hands a solve to "cholesky" once it has taken
+  /// preconditioner_switch x (its rows) iterations without converging; the next solves then start
+  /// with "cholesky", and every kSwitchProbeInterval-th of them tries "sgs" again, kept if it converges
+  /// within that budget. A deterministic rule (iteration counts, not timings), so a run repeats to
+  /// the bit: it takes "cholesky" for the last stretch to rest, where "sgs" needs thousands of
+  /// iterations a step; msp-w10 came to rest 1.5 times faster, but one msp-w5 pile of five not
+  /// within 200 t0, so "sgs" stays the default (docs/performance.md, "The preconditioner and the
+  /// creep's solve").
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
-  /// ["preconditioner_shift"] (mprgp, "cholesky") eps > 0 [-, A has a unit diagonal]. 1e-5: the
+  /// ["preconditioner_switch"] (mprgp, "switching") iterations a solve may take with "sgs", per
+  /// normal row, before it goes on with "cholesky" [-], > 0. 0.2: a "cholesky" step cost about as
+  /// much as 0.2 to 0.3 x rows "sgs" iterations on piles of 912 to 3,655 spheres (the same page).
+  double preconditionerSwitch = 0.2;
+  /// ["preconditioner_shift"] (mprgp, "cholesky" and "switching") eps > 0 [-, A has a unit diagonal]. 1e-5: the
   /// creep blocks' softest eigenvalues are ~1e-4, so all but a few become ~1 (6 iterations to 1e-10
   /// on a 1,648-sphere block against 12 at 1e-4), and eps M keeps K positive definite where grains
   /// have fewer than 3 contacts; K's conditioning (~||A|| / eps) still leaves z ten digits.
@@ -182,6 +195,9 @@ struct NscdSettings {
   /// Throws std::invalid_argument naming the field if a value is out of range.
   void validate() const;
 };
+
+/// "switching": every this many solves started with "cholesky", one starts with "sgs" again [-].
+inline constexpr int kSwitchProbeInterval = 16;
 
 /// fall_tolerance's "auto" for pinacoid piles [-].
 inline constexpr double kPinacoidFallTolerance = 1e-6;

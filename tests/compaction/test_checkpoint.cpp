@@ -116,6 +116,28 @@ TEST_CASE("checkpoint: an nscd run resumed in its fall or in its finisher ends o
   }
 }
 
+TEST_CASE("checkpoint: an nscd run on the \"switching\" preconditioner resumed in its fall ends on the same bits") {
+  // A budget of one sgs iteration: the solves switch to "cholesky", and the state that decides
+  // the next solve's preconditioner (on "cholesky", solves since) is in the checkpoint.
+  core::RunConfig cfg = smallPile("nscd", core::ShapeKind::Sphere);
+  cfg.backendOptions = {{"preconditioner", "switching"}, {"preconditioner_switch", 1e-4}};
+  cfg.compaction.finisherMaxSteps = 20;
+  cfg.compaction.fallTimeLimit = 4.0;
+  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
+  const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
+  const testing::ScratchDir scratch("checkpoint_switching");
+  const fs::path file = scratch.path() / "run.json";
+  killedAt(cfg, dep, file, 4);
+  REQUIRE(fs::exists(file));
+  const nlohmann::json saved = readJson(file)["backend"]["preconditioner_switch"];
+  INFO(saved.dump());
+  CHECK(saved["on_cholesky"] == true);
+  CHECK(saved["solves"].get<int>() > 0);
+  compaction::Checkpointing resume;
+  resume.file = file;
+  checkSamePacking(whole, compaction::compact(cfg, dep, {}, {}, resume));
+}
+
 TEST_CASE("checkpoint: Bullet resumes from the saved poses and velocities and still runs its time") {
   core::RunConfig cfg = smallPile("bullet", core::ShapeKind::Sphere);
   cfg.compaction.timeLimit = 3.0;

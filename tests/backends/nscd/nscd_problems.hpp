@@ -67,9 +67,12 @@ inline std::vector<nscd::CandidatePair> candidatePairs(const core::SystemDef& s,
 /// One step's contact problem of the grains of `s` at rest, solved cold (no warm start) with
 /// `settings`: contacts from the broad and narrow phases at the grains' positions, inverse masses
 /// (the last body is the static walls), velocities kicked by gravity over dt = 2e-3 and then
-/// corrected by the solve.
+/// corrected by the solve. solveAgain() solves the same problem again with the same solver, which
+/// keeps what its solves carry from one to the next (the "switching" preconditioner's state).
 struct ColdStep {
   static constexpr double kDt = 2e-3;
+  core::SystemDef system;
+  std::vector<Vec3> positions;
   std::vector<nscd::BodyInverseMass> bodies;
   std::vector<nscd::BodyVelocity> velocities;
   std::vector<nscd::ContactGeometry> contacts;
@@ -77,10 +80,9 @@ struct ColdStep {
   int iterations = 0;
 
   ColdStep(const core::SystemDef& s, const nscd::NscdSettings& settings, int threads = 1)
-      : bodies(s.grains.size() + 1), velocities(s.grains.size() + 1) {
+      : system(s), bodies(s.grains.size() + 1), velocities(s.grains.size() + 1) {
     nscd::NarrowPhase narrow(s.box, s.grains, settings.alertDistance);
     nscd::BroadPhase broad(s.box, narrow.maxReach());
-    std::vector<Vec3> positions;
     std::vector<core::Quat> orientations;
     std::vector<double> reach;
     for (std::size_t i = 0; i < s.grains.size(); ++i) {
@@ -90,14 +92,20 @@ struct ColdStep {
       reach.push_back(narrow.reach(static_cast<int>(i)));
       bodies[i].invMass = 1.0 / (s.density * g.volume());
       bodies[i].invInertia = g.bodyInertia(s.density).inverse();
-      velocities[i].v = Vec3(0.0, 0.0, -kDt);  // g = 1
     }
     std::vector<nscd::CandidatePair> pairs;
     broad.findPairs(positions, reach, pairs);
     narrow.collideAll(pairs, positions, orientations, contacts, 1);
-    solver.prepare(contacts, positions, bodies, s.box, s.walls, kDt, settings);
+    iterations = solveAgain(settings, threads);
+  }
+
+  /// The step solved afresh from the grains at rest; returns (and keeps) its iterations.
+  int solveAgain(const nscd::NscdSettings& settings, int threads = 1) {
+    for (std::size_t i = 0; i + 1 < velocities.size(); ++i)
+      velocities[i] = {Vec3(0.0, 0.0, -kDt), Vec3::Zero()};  // g = 1
+    solver.prepare(contacts, positions, bodies, system.box, system.walls, kDt, settings);
     solver.warmStart(nscd::ContactCache{}, contacts, kDt, velocities);
-    iterations = solver.solve(velocities, settings, threads);
+    return iterations = solver.solve(velocities, settings, threads);
   }
 };
 

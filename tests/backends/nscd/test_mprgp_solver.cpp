@@ -226,6 +226,46 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "nscd mprgp, switching: a solve past its sgs budget ends on cholesky at sgs's velocities, the next solves "
+    "start on cholesky, and every 16th tries sgs again",
+    "[nscd]") {
+  const core::SystemDef s = touchingSpheres(6.0, 6.0, false, 250, 7);
+  nscd::NscdSettings sgs;
+  sgs.tolerance = 1e-12;
+  nscd::NscdSettings switching = sgs;
+  switching.preconditioner = nscd::PreconditionerKind::Switching;
+  // A budget far above what sgs needs: the solve never leaves sgs, and is its solve to the bit.
+  switching.preconditionerSwitch = 100.0;
+  const ColdStep plain(s, sgs), generous(s, switching);
+  CHECK(generous.iterations == plain.iterations);
+  CHECK(generous.solver.mprgpSteps().factorisations == 0);
+  CHECK(testing::compareVelocities(generous, plain).difference == 0.0);
+  // A budget of a few iterations (0.02 a row): the first solve switches on its way.
+  switching.preconditionerSwitch = 0.02;
+  ColdStep step(s, switching);
+  const int budget = static_cast<int>(0.02 * static_cast<double>(step.solver.rowCount()));
+  INFO("rows " << step.solver.rowCount() << ", budget " << budget << ", sgs " << plain.iterations << ", switched "
+               << step.iterations);
+  REQUIRE(budget < plain.iterations);
+  CHECK(step.solver.residual() < sgs.tolerance);
+  CHECK(step.solver.mprgpSteps().factorisations >= 1);
+  const auto [largest, difference] = testing::compareVelocities(step, plain);
+  CHECK(largest > 0.5 * ColdStep::kDt);
+  CHECK(difference < 1e-7 * largest);
+  // The switched solve spent its budget on sgs first; the next 15 start on cholesky and take the
+  // same (fewer) iterations each; the 16th spends the budget on sgs again.
+  const int switched = step.iterations;
+  std::vector<int> counts;
+  for (int solve = 0; solve < nscd::kSwitchProbeInterval; ++solve) counts.push_back(step.solveAgain(switching));
+  INFO("iterations of the next solves: " << Catch::Detail::stringify(counts));
+  const int onCholesky = counts.front();
+  CHECK(onCholesky < switched);
+  CHECK(std::count(counts.begin(), counts.end() - 1, onCholesky) == nscd::kSwitchProbeInterval - 1);
+  CHECK(counts.back() == switched);
+  CHECK(step.solver.residual() < sgs.tolerance);
+}
+
+TEST_CASE(
     "nscd mprgp, cholesky: a column of touching beads is stopped dead, its k-th contact from the top carrying "
     "k m g dt",
     "[nscd]") {
@@ -243,7 +283,7 @@ TEST_CASE(
   // Unequal masses and an oblique load: the Delassus rows differ in scale, which the Jacobi
   // scaling and each preconditioner must leave the same unique impulses.
   const auto preconditioner = GENERATE(nscd::PreconditionerKind::SymmetricGaussSeidel, nscd::PreconditionerKind::None,
-                                       nscd::PreconditionerKind::Cholesky);
+                                       nscd::PreconditionerKind::Cholesky, nscd::PreconditionerKind::Switching);
   nscd::NscdSettings settings;
   settings.tolerance = 1e-12;
   settings.preconditioner = preconditioner;
