@@ -106,9 +106,9 @@ struct NscdSettings {
   /// with "cholesky", and every kSwitchProbeInterval-th of them tries "sgs" again, kept if it converges
   /// within that budget. A deterministic rule (iteration counts, not timings), so a run repeats to
   /// the bit: it takes "cholesky" for the last stretch to rest, where "sgs" needs thousands of
-  /// iterations a step; msp-w10 came to rest 1.5 times faster, but one msp-w5 pile of five not
-  /// within 200 t0, so "sgs" stays the default (docs/performance.md, "The preconditioner and the
-  /// creep's solve").
+  /// iterations a step; msp-w10 came to rest 1.5 times faster, but the medium study's r0008 crept
+  /// on to its fall's limit and took 2.8 times longer, so "sgs" stays the default
+  /// (docs/performance.md, "The preconditioner and the creep's solve").
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
   /// ["preconditioner_switch"] (mprgp, "switching") iterations a solve may take with "sgs", per
   /// normal row, before it goes on with "cholesky" [-], > 0. 0.2: a "cholesky" step cost about as

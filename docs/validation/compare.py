@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Compares the dynamic and quasi-static protocols on the runs docs/validation/run.sh wrote, or
-nscd's two preconditioners on those of COMPARE=preconditioners docs/validation/run.sh.
+two of nscd's preconditioners on those of COMPARE=preconditioners docs/validation/run.sh.
 
 Usage: python3 docs/validation/compare.py OUT_DIR  (standard library only)
 
@@ -16,7 +16,7 @@ import pathlib
 import sys
 
 # The two variants a pile's runs compare, by the names of their folders (run.sh).
-VARIANT_PAIRS = (("dynamic", "quasi-static"), ("sgs", "cholesky"))
+VARIANT_PAIRS = (("dynamic", "quasi-static"), ("sgs", "cholesky"), ("sgs", "switching"))
 
 
 def force_stats(packing_path):
@@ -82,7 +82,9 @@ def main():
         sys.exit("usage: compare.py OUT_DIR")
     root = pathlib.Path(sys.argv[1])
     for pile_dir in sorted(p for p in root.iterdir() if p.is_dir()):
-        pair = next((p for p in VARIANT_PAIRS if any((pile_dir / v).is_dir() for v in p)), None)
+        # The pair whose two folders are there, else one with either (its runs are then counted missing).
+        pair = next((p for p in VARIANT_PAIRS if all((pile_dir / v).is_dir() for v in p)), None) or next(
+            (p for p in VARIANT_PAIRS if any((pile_dir / v).is_dir() for v in p)), None)
         if pair is None:
             continue
         first, second = pair

@@ -12,6 +12,7 @@
 # each seed once with "sgs" and once with "cholesky", both on the dynamic protocol and the
 # adaptive step (the faster way to rest of these piles) with a time limit of 400 t0 (on the
 # adaptive step a pile creeps for longer in t0), into OUT_DIR/<pile>/<preconditioner>/.
+# PRECONDITIONERS names the two compared (default "sgs cholesky"), e.g. PRECONDITIONERS="sgs switching".
 # TOLERANCE sets MPRGP's tolerance of both (default 1e-10), e.g. TOLERANCE=1e-12.
 # Then: python3 docs/validation/compare.py OUT_DIR
 set -euo pipefail
@@ -24,7 +25,7 @@ confpack=${CONFPACK:-build/apps/confpack}
 compare=${COMPARE:-protocols}
 case "$compare" in
   protocols) variants=(dynamic quasi-static) ;;
-  preconditioners) variants=(sgs cholesky) ;;
+  preconditioners) read -r -a variants <<< "${PRECONDITIONERS:-sgs cholesky}" ;;
   *) echo "COMPARE is protocols or preconditioners, not '$compare'" >&2; exit 2 ;;
 esac
 
