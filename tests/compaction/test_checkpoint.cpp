@@ -51,6 +51,22 @@ void killedAt(const core::RunConfig& cfg, const compaction::Deposit& dep, const 
                   Killed);
 }
 
+/// A run of `cfg` from its deposit, whole, and again stopped at its `killAt`-th check with a
+/// checkpoint saved at every check, in a scratch folder named `name`.
+struct WholeAndStopped {
+  compaction::Deposit dep;
+  compaction::CompactionOutcome whole;
+  testing::ScratchDir scratch;
+  fs::path file;
+  WholeAndStopped(const core::RunConfig& cfg, const std::string& name, int killAt)
+      : dep(compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed)),
+        whole(compaction::compact(cfg, dep)),
+        scratch(name),
+        file(scratch.path() / "run.json") {
+    killedAt(cfg, dep, file, killAt);
+  }
+};
+
 nlohmann::json readJson(const fs::path& p) {
   std::ifstream in(p);
   return nlohmann::json::parse(in);
@@ -123,34 +139,27 @@ TEST_CASE("checkpoint: an nscd run on the \"switching\" preconditioner resumed i
   cfg.backendOptions = {{"preconditioner", "switching"}, {"preconditioner_switch", 1e-4}};
   cfg.compaction.finisherMaxSteps = 20;
   cfg.compaction.fallTimeLimit = 4.0;
-  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
-  const testing::ScratchDir scratch("checkpoint_switching");
-  const fs::path file = scratch.path() / "run.json";
-  killedAt(cfg, dep, file, 4);
-  REQUIRE(fs::exists(file));
-  const nlohmann::json saved = readJson(file)["backend"]["preconditioner_switch"];
+  const WholeAndStopped run(cfg, "checkpoint_switching", 4);
+  REQUIRE(fs::exists(run.file));
+  const nlohmann::json saved = readJson(run.file)["backend"]["preconditioner_switch"];
   INFO(saved.dump());
   CHECK(saved["on_cholesky"] == true);
   CHECK(saved["solves"].get<int>() > 0);
   compaction::Checkpointing resume;
-  resume.file = file;
-  checkSamePacking(whole, compaction::compact(cfg, dep, {}, {}, resume));
+  resume.file = run.file;
+  checkSamePacking(run.whole, compaction::compact(cfg, run.dep, {}, {}, resume));
 }
 
 TEST_CASE("checkpoint: Bullet resumes from the saved poses and velocities and still runs its time") {
   core::RunConfig cfg = smallPile("bullet", core::ShapeKind::Sphere);
   cfg.compaction.timeLimit = 3.0;
-  const compaction::Deposit dep = compaction::deposit(cfg.box, cfg.population, cfg.deposition, cfg.seed);
-  const compaction::CompactionOutcome whole = compaction::compact(cfg, dep);
-  const testing::ScratchDir scratch("checkpoint_bullet");
-  const fs::path file = scratch.path() / "run.json";
-  killedAt(cfg, dep, file, 4);
-  const nlohmann::json saved = readJson(file);
+  const WholeAndStopped run(cfg, "checkpoint_bullet", 4);
+  const compaction::CompactionOutcome& whole = run.whole;
+  const nlohmann::json saved = readJson(run.file);
   const long savedSteps = saved["steps"].get<long>();
   compaction::Checkpointing resume;
-  resume.file = file;
-  const compaction::CompactionOutcome resumed = compaction::compact(cfg, dep, {}, {}, resume);
+  resume.file = run.file;
+  const compaction::CompactionOutcome resumed = compaction::compact(cfg, run.dep, {}, {}, resume);
   CHECK(resumed.timing["checkpoint"]["exact"] == false);
   CHECK(resumed.timing["checkpoint"]["resumes"] == 1);
   // The same step count to the same time limit, the history of the first attempt kept.
