@@ -112,7 +112,7 @@ struct NscdSettings {
   PreconditionerKind preconditioner = PreconditionerKind::SymmetricGaussSeidel;
   /// ["preconditioner_switch"] (mprgp, "switching") iterations a solve may take with "sgs", per
   /// normal row, before it goes on with "cholesky" [-], > 0. 0.2: a "cholesky" step cost about as
-  /// much as 0.2 to 0.3 x rows "sgs" iterations on piles of 912 to 3,655 spheres (the same page).
+  /// much as 0.2 x rows "sgs" iterations on r0008 and msp-w10 (the same page).
   double preconditionerSwitch = 0.2;
   /// ["preconditioner_shift"] (mprgp, "cholesky" and "switching") eps > 0 [-, A has a unit diagonal]. 1e-5: the
   /// creep blocks' softest eigenvalues are ~1e-4, so all but a few become ~1 (6 iterations to 1e-10
